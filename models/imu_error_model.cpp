@@ -1,0 +1,150 @@
+#include "models/imu_error_model.hpp"
+
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <stdexcept>
+
+#include "models/units.hpp"
+
+namespace sinscal {
+
+Eigen::Matrix3d TriadErrors::linear() const {
+  Eigen::Matrix3d A = Eigen::Matrix3d::Identity() + misalignment;
+  A.diagonal() = Eigen::Vector3d::Ones() + scale;
+  return A;
+}
+
+Eigen::Vector3d TriadErrors::apply(const Eigen::Vector3d& x, const Eigen::Vector3d& extra) const {
+  return linear() * x + scale_asym.cwiseProduct(x.cwiseAbs()) + k2.cwiseProduct(x.cwiseAbs2()) +
+         bias + extra;
+}
+
+Eigen::Vector3d TriadErrors::invert_step(const Eigen::Vector3d& y, const Eigen::Vector3d& extra,
+                                         const Eigen::Vector3d& x_guess) const {
+  const Eigen::Vector3d rhs = y - bias - extra - scale_asym.cwiseProduct(x_guess.cwiseAbs()) -
+                              k2.cwiseProduct(x_guess.cwiseAbs2());
+  return linear().partialPivLu().solve(rhs);
+}
+
+Eigen::Vector3d ImuErrorModel::size_effect(const Eigen::Vector3d& omega_ib_b,
+                                           const Eigen::Vector3d& omega_dot_ib_b) const {
+  Eigen::Vector3d out;
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d r = accel_lever_arm_b.col(i);
+    out(i) = (omega_dot_ib_b.cross(r) + omega_ib_b.cross(omega_ib_b.cross(r)))(i);
+  }
+  return out;
+}
+
+Eigen::Vector3d ImuErrorModel::gyro_output(const KinematicSample& s) const {
+  return gyro.apply(s.omega_ib_b, gyro_g_sensitivity * s.f_ib_b);
+}
+
+Eigen::Vector3d ImuErrorModel::accel_output(const KinematicSample& s) const {
+  return accel.apply(s.f_ib_b, size_effect(s.omega_ib_b, s.omega_dot_ib_b));
+}
+
+void ImuErrorModel::compensate(const Eigen::Vector3d& y_gyro, const Eigen::Vector3d& y_accel,
+                               const Eigen::Vector3d& omega_dot_ib_b, Eigen::Vector3d& omega_ib_b,
+                               Eigen::Vector3d& f_ib_b) const {
+  Eigen::Vector3d w = y_gyro, f = y_accel;
+  for (int iter = 0; iter < 60; ++iter) {
+    const Eigen::Vector3d f_new = accel.invert_step(y_accel, size_effect(w, omega_dot_ib_b), f);
+    const Eigen::Vector3d w_new = gyro.invert_step(y_gyro, gyro_g_sensitivity * f_new, w);
+    const double change = std::max((f_new - f).norm() / (1.0 + f_new.norm()),
+                                   (w_new - w).norm() / (1.0 + w_new.norm()));
+    w = w_new;
+    f = f_new;
+    if (change < 1e-16) {
+      omega_ib_b = w;
+      f_ib_b = f;
+      return;
+    }
+  }
+  // Rounding may keep the last digit oscillating; accept a tiny final change.
+  const Eigen::Vector3d f_chk = accel.invert_step(y_accel, size_effect(w, omega_dot_ib_b), f);
+  if ((f_chk - f).norm() > 1e-13 * (1.0 + f.norm()))
+    throw std::runtime_error("IMU error model inverse does not converge: coefficients too large");
+  omega_ib_b = w;
+  f_ib_b = f;
+}
+
+namespace {
+const char* kAxis[3] = {"x", "y", "z"};
+
+template <class Visit>
+void visit_coefficients(ImuErrorModel& m, Visit&& visit) {
+  using namespace units;
+  struct Triad {
+    const char* name;
+    TriadErrors* e;
+    const char* bias_unit;
+    double bias_si;
+  };
+  const Triad triads[2] = {{"gyro", &m.gyro, "deg/h", deg_per_h}, {"accel", &m.accel, "ug", ug}};
+  for (const auto& t : triads) {
+    const std::string p = t.name;
+    for (int i = 0; i < 3; ++i)
+      visit(CoefficientInfo{p + ".bias." + kAxis[i], t.bias_unit, t.bias_si, "base"}, t.e->bias(i));
+    for (int i = 0; i < 3; ++i)
+      visit(CoefficientInfo{p + ".scale." + kAxis[i], "ppm", ppm, "base"}, t.e->scale(i));
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (i != j)
+          visit(CoefficientInfo{p + ".misalignment." + kAxis[i] + kAxis[j], "arcsec", arcsec, "base"},
+                t.e->misalignment(i, j));
+  }
+  for (int i = 0; i < 3; ++i)
+    visit(CoefficientInfo{std::string("accel.k2.") + kAxis[i], "ug/g^2", ug_per_g2, "k2"},
+          m.accel.k2(i));
+  for (const auto& t : triads)
+    for (int i = 0; i < 3; ++i)
+      visit(CoefficientInfo{std::string(t.name) + ".scale_asym." + kAxis[i], "ppm", ppm, "scale_asym"},
+            t.e->scale_asym(i));
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      visit(CoefficientInfo{std::string("gyro.g_sensitivity.") + kAxis[i] + kAxis[j], "deg/h/g",
+                            deg_per_h_per_g, "g_sensitivity"},
+            m.gyro_g_sensitivity(i, j));
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      visit(CoefficientInfo{std::string("accel.lever_arm.") + kAxis[i] + "." + kAxis[j], "mm", mm,
+                            "lever_arm"},
+            m.accel_lever_arm_b(j, i));
+  visit(CoefficientInfo{"time_delay", "ms", ms, "time_delay"}, m.time_delay);
+}
+}  // namespace
+
+std::vector<std::pair<CoefficientInfo, double*>> ImuErrorModel::coefficient_refs() {
+  std::vector<std::pair<CoefficientInfo, double*>> out;
+  visit_coefficients(*this, [&](const CoefficientInfo& info, double& v) { out.emplace_back(info, &v); });
+  return out;
+}
+
+std::map<std::string, double> ImuErrorModel::coefficients() const {
+  ImuErrorModel copy = *this;
+  std::map<std::string, double> out;
+  for (const auto& [info, ptr] : copy.coefficient_refs()) out[info.name] = *ptr / info.si_per_unit;
+  return out;
+}
+
+void ImuErrorModel::set(const std::string& name, double value_in_unit) {
+  for (auto& [info, ptr] : coefficient_refs())
+    if (info.name == name) {
+      *ptr = value_in_unit * info.si_per_unit;
+      return;
+    }
+  throw std::invalid_argument("unknown coefficient '" + name + "'");
+}
+
+const std::vector<CoefficientInfo>& coefficient_catalog() {
+  static const std::vector<CoefficientInfo> catalog = [] {
+    ImuErrorModel m;
+    std::vector<CoefficientInfo> out;
+    for (const auto& ref : m.coefficient_refs()) out.push_back(ref.first);
+    return out;
+  }();
+  return catalog;
+}
+
+}  // namespace sinscal

@@ -1,0 +1,94 @@
+// The IMU error model: one formula for both triads, used by the simulator, the filter and `apply`.
+//
+//   y = (I + diag(k) + M) x + a .* |x| + k2 .* x .* x + b + extra
+//
+//   x      true input along body axes: omega_ib_b (rad/s) for gyros, f_ib_b (m/s^2) for accels
+//   y      sensor output, same units
+//   b      bias;  k  scale-factor error;  M  misalignment (off-diagonal; M(i,j) = angle of sensor
+//          axis i towards body axis j);  a  scale-factor asymmetry (half the difference between the
+//          scale factors for positive and negative input);  k2  quadratic scale factor
+//   extra  gyros: g-sensitivity G * f_ib_b (G(i,j): gyro axis i, acceleration axis j)
+//          accels: size effect, accelerometer i sees e_i . (dw/dt x r_i + w x (w x r_i)) with r_i
+//          the position of its proof mass relative to the IMU reference point (body axes)
+//
+// Coefficients are errors (not corrections). The gyro-to-accelerometer time delay tau shifts the
+// accelerometer input in time: the accelerometers output the model applied to the motion at t - tau
+// (tau > 0: accelerometer samples late). The simulator evaluates the motion at t - tau; compensate()
+// works on samples already aligned in time. Units of members are SI; names and engineering units of
+// every coefficient are listed by coefficient_refs() and in docs/conventions.md.
+#pragma once
+
+#include <Eigen/Core>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace sinscal {
+
+/// Errors of one sensor triad (gyro or accelerometer), SI units of its input.
+struct TriadErrors {
+  Eigen::Vector3d bias = Eigen::Vector3d::Zero();          // rad/s | m/s^2
+  Eigen::Vector3d scale = Eigen::Vector3d::Zero();         // dimensionless
+  Eigen::Matrix3d misalignment = Eigen::Matrix3d::Zero();  // rad, diagonal unused (zero)
+  Eigen::Vector3d scale_asym = Eigen::Vector3d::Zero();    // dimensionless
+  Eigen::Vector3d k2 = Eigen::Vector3d::Zero();            // 1/(input unit)
+
+  /// I + diag(k) + M.
+  Eigen::Matrix3d linear() const;
+  /// The model formula (truth to output).
+  Eigen::Vector3d apply(const Eigen::Vector3d& x, const Eigen::Vector3d& extra) const;
+  /// One fixed-point step of the inverse: the input x that gives output y, from a guess of x.
+  Eigen::Vector3d invert_step(const Eigen::Vector3d& y, const Eigen::Vector3d& extra,
+                              const Eigen::Vector3d& x_guess) const;
+};
+
+/// True kinematics at the IMU reference point at one instant, body axes.
+struct KinematicSample {
+  Eigen::Vector3d omega_ib_b = Eigen::Vector3d::Zero();      // rad/s
+  Eigen::Vector3d omega_dot_ib_b = Eigen::Vector3d::Zero();  // rad/s^2
+  Eigen::Vector3d f_ib_b = Eigen::Vector3d::Zero();          // m/s^2
+};
+
+/// Name, unit and group of one coefficient; value_si = value_in_unit * si_per_unit.
+struct CoefficientInfo {
+  std::string name;   // e.g. "gyro.bias.x"
+  std::string unit;   // e.g. "deg/h"
+  double si_per_unit;
+  std::string group;  // base | scale_asym | k2 | g_sensitivity | lever_arm | time_delay
+};
+
+class ImuErrorModel {
+ public:
+  TriadErrors gyro;
+  TriadErrors accel;
+  Eigen::Matrix3d gyro_g_sensitivity = Eigen::Matrix3d::Zero();  // rad/s per m/s^2
+  Eigen::Matrix3d accel_lever_arm_b = Eigen::Matrix3d::Zero();   // m; column i = r_i of accel i
+  double time_delay = 0.0;                                       // s
+
+  /// Gyro output for the kinematics at the gyro sampling instant.
+  Eigen::Vector3d gyro_output(const KinematicSample& s) const;
+  /// Accelerometer output for the kinematics at the accelerometer sampling instant (t - tau).
+  Eigen::Vector3d accel_output(const KinematicSample& s) const;
+  /// Size-effect term added to the accelerometer outputs (m/s^2).
+  Eigen::Vector3d size_effect(const Eigen::Vector3d& omega_ib_b,
+                              const Eigen::Vector3d& omega_dot_ib_b) const;
+  /// Inverse of the model for time-aligned outputs: solves for omega_ib_b and f_ib_b.
+  /// Converges to rounding for any coefficients of realistic size (each step gains the size of
+  /// the errors, ~1e-3 or less). Throws std::runtime_error if it does not converge.
+  void compensate(const Eigen::Vector3d& y_gyro, const Eigen::Vector3d& y_accel,
+                  const Eigen::Vector3d& omega_dot_ib_b, Eigen::Vector3d& omega_ib_b,
+                  Eigen::Vector3d& f_ib_b) const;
+
+  /// Every coefficient with its name, unit and a pointer to its SI value, in the contract order.
+  std::vector<std::pair<CoefficientInfo, double*>> coefficient_refs();
+  /// Values in engineering units by name.
+  std::map<std::string, double> coefficients() const;
+  /// Sets one coefficient by name, value in its engineering unit; throws std::invalid_argument
+  /// for an unknown name.
+  void set(const std::string& name, double value_in_unit);
+};
+
+/// Names, units and groups of all coefficients in contract order.
+const std::vector<CoefficientInfo>& coefficient_catalog();
+
+}  // namespace sinscal

@@ -1,0 +1,45 @@
+// IMU simulator: incremental angles and velocities at a fixed rate, integrated through the truth
+// motion with Gauss-Legendre quadrature between the motion's knots (exact to rounding for the
+// smooth pieces), the error model applied at every quadrature node (so nonlinear terms, size
+// effect and time delay are exact), then noise and quantization.
+#pragma once
+
+#include <cstdint>
+
+#include "models/imu_error_model.hpp"
+#include "models/noise_model.hpp"
+#include "rig/imu_sample.hpp"
+#include "rig/motion.hpp"
+
+namespace sinscal {
+
+struct SimulatorOptions {
+  double rate_hz = 100.0;
+  bool noise = true;
+  std::uint64_t noise_seed = 1;
+  double gyro_range = 0.0;   // rad/s; outputs beyond it are clipped (0: no limit)
+  double accel_range = 0.0;  // m/s^2
+};
+
+class ImuSimulator : public SampleSource {
+ public:
+  ImuSimulator(const Motion& motion, const ImuErrorModel& errors, const NoiseModel& noise,
+               const SimulatorOptions& options);
+  /// Next sample, until the end of the motion.
+  bool next(ImuSample& sample) override;
+  /// Number of samples the whole motion gives.
+  std::size_t total_samples() const { return total_; }
+  /// Samples clipped by the measurement range so far.
+  std::size_t saturated() const { return saturated_; }
+
+ private:
+  Eigen::Vector3d integrate(double a, double b, double shift, bool gyro) const;
+  const Motion& motion_;
+  ImuErrorModel errors_;
+  SimulatorOptions options_;
+  NoiseGenerator noise_;
+  double dt_;
+  std::size_t k_ = 0, total_ = 0, saturated_ = 0;
+};
+
+}  // namespace sinscal

@@ -1,0 +1,96 @@
+// IMU logs. The native format (written by `sinscal simulate`) is CSV with a header naming each
+// column and its unit; a configurable reader also takes foreign logs: column order, delimiter,
+// header lines, units including raw counts with a scale and offset, increments or rates, axis
+// mapping with signs. Format and [log] keys: docs/formats.md.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <fstream>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "rig/imu_sample.hpp"
+
+namespace sinscal {
+
+class IniFile;
+
+/// A problem in a log file; what() reads "FILE:LINE: cause".
+class LogError : public std::runtime_error {
+ public:
+  LogError(const std::string& file, std::size_t line, const std::string& cause);
+  const std::string& file() const { return file_; }
+  std::size_t line() const { return line_; }
+  const std::string& cause() const { return cause_; }
+
+ private:
+  std::string file_;
+  std::size_t line_;
+  std::string cause_;
+};
+
+/// How one triad is stored in a log.
+struct TriadColumns {
+  bool increments = true;      // true: angle/velocity increments; false: rates
+  double scale = 1.0;          // SI per (count - offset): unit factor times counts-to-unit scale
+  double offset = 0.0;         // subtracted from the raw value before scaling
+  std::array<int, 3> axis{0, 1, 2};            // body axis i comes from log axis axis[i]
+  std::array<double, 3> sign{1.0, 1.0, 1.0};   // with this sign
+  double saturation = 0.0;     // |raw value| at or beyond which a sample is saturated (0: none)
+};
+
+struct LogFormat {
+  std::string file;                 // path of the data file
+  bool native = true;               // the sinscal CSV (the header is checked)
+  char delimiter = ',';             // ' ' means any run of spaces or tabs
+  int header_lines = 1;             // lines skipped before the data (after them, '#' lines too)
+  std::vector<std::string> columns; // t gx gy gz ax ay az, "-" for a column to skip
+  double time_scale = 1.0;          // s per time unit
+  double rate_hz = 0.0;             // nominal rate; needed when there is no time column
+  double max_gap = 1.5;             // a step in time above max_gap / rate_hz is a gap (error)
+  TriadColumns gyro, accel;
+
+  /// The native format for a rate.
+  static LogFormat native_format(const std::string& file, double rate_hz);
+  /// From the [log] section of a session file; relative paths are taken from `base_dir`.
+  static LogFormat from_ini(const IniFile& ini, const std::string& base_dir, double rate_hz);
+};
+
+/// Writes the native CSV format.
+class LogWriter {
+ public:
+  LogWriter(const std::string& path, double rate_hz);
+  void write(const ImuSample& s);
+  void close();
+
+ private:
+  std::string path_;
+  std::ofstream out_;
+  std::string buffer_;
+};
+
+/// Reads a log sample by sample in constant memory; every problem throws LogError with the line.
+class LogReader : public SampleSource {
+ public:
+  explicit LogReader(const LogFormat& format);
+  bool next(ImuSample& sample) override;
+  std::size_t line() const { return line_; }
+  /// Samples read so far.
+  std::size_t count() const { return count_; }
+
+ private:
+  [[noreturn]] void fail(const std::string& cause) const;
+  bool read_line(std::string& line, bool& had_newline);
+  LogFormat f_;
+  std::ifstream in_;
+  std::size_t line_ = 0, count_ = 0;
+  int col_t_ = -1;
+  std::array<int, 3> col_g_{-1, -1, -1}, col_a_{-1, -1, -1};
+  double t_prev_ = 0.0;
+  std::vector<double> fields_;
+};
+
+}  // namespace sinscal

@@ -1,0 +1,95 @@
+// Truth motion of the IMU on the table: attitude, angular rate and acceleration, specific force,
+// exact (analytic) at any time. The site is fixed on the Earth, the navigation frame is the local
+// NED frame there, the IMU reference point sits at the intersection of the table axes.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "models/earth.hpp"
+#include "models/imu_error_model.hpp"
+
+namespace sinscal {
+
+/// Trapezoidal angle profile: constant acceleration, constant rate, constant deceleration.
+class TrapezoidProfile {
+ public:
+  TrapezoidProfile() = default;
+  /// Profile of `angle` (signed, rad) at peak `rate` (rad/s) with `accel` (rad/s^2); triangular
+  /// when the angle is too small to reach the rate.
+  static TrapezoidProfile by_rate(double angle, double rate, double accel);
+  /// Profile of `angle` lasting `duration` (s) with `accel`; throws std::invalid_argument when the
+  /// acceleration cannot turn the angle in that time.
+  static TrapezoidProfile by_duration(double angle, double duration, double accel);
+  double duration() const { return 2.0 * t_acc_ + t_cruise_; }
+  double angle() const { return angle_; }
+  double peak_rate() const { return accel_ * t_acc_; }
+  /// Angle (rad), rate (rad/s), angular acceleration (rad/s^2) at time t from the start; the
+  /// profile holds its end angle after it ends and zero before it starts.
+  void eval(double t, double& angle, double& rate, double& accel) const;
+  /// Times (from the start) where the acceleration jumps.
+  std::vector<double> knots() const;
+
+ private:
+  double angle_ = 0.0, accel_ = 0.0, t_acc_ = 0.0, t_cruise_ = 0.0;
+};
+
+/// One piece of motion: C_b_n(t) = R(axis_n, alpha(t)) * C_b_n_start * R(axis_b, beta(t)), a
+/// rotation about an axis fixed in the navigation frame composed with one about an axis fixed in
+/// the body. Both profiles start at t0. A static piece has both angles zero.
+struct MotionSegment {
+  double t0 = 0.0;
+  double t1 = 0.0;
+  Eigen::Matrix3d C_b_n_start = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d axis_n = Eigen::Vector3d::UnitX();
+  TrapezoidProfile alpha;
+  Eigen::Vector3d axis_b = Eigen::Vector3d::UnitZ();
+  TrapezoidProfile beta;
+  bool is_static() const { return alpha.angle() == 0.0 && beta.angle() == 0.0; }
+  Eigen::Matrix3d C_b_n_end() const;
+};
+
+/// A static interval of the plan: the attitude the plan says (known) and the one the simulation
+/// produced (true; differs by the table errors).
+struct Dwell {
+  int index = 0;
+  std::string label;
+  double t_start = 0.0;  // s
+  double t_end = 0.0;    // s
+  Eigen::Matrix3d C_b_n_known = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d C_b_n_true = Eigen::Matrix3d::Identity();
+};
+
+struct KinematicState {
+  Eigen::Matrix3d C_b_n = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d omega_nb_b = Eigen::Vector3d::Zero();  // rad/s
+  KinematicSample imu;                                   // omega_ib_b, omega_dot_ib_b, f_ib_b
+};
+
+class Motion {
+ public:
+  Motion(const Site& site, std::vector<MotionSegment> segments, std::vector<Dwell> dwells);
+  /// Truth at time t (s); before the start and after the end the IMU rests in the first / last
+  /// attitude.
+  KinematicState at(double t) const;
+  double duration() const { return segments_.back().t1; }
+  const Site& site() const { return site_; }
+  const std::vector<Dwell>& dwells() const { return dwells_; }
+  const std::vector<MotionSegment>& segments() const { return segments_; }
+  /// Sorted times where the motion is not smooth (segment ends, profile knots).
+  const std::vector<double>& knots() const { return knots_; }
+  /// True if [a, b] lies in one static segment (or outside the motion, where it rests).
+  bool static_between(double a, double b) const;
+
+ private:
+  std::size_t segment_index(double t) const;
+  Site site_;
+  std::vector<MotionSegment> segments_;
+  std::vector<Dwell> dwells_;
+  std::vector<double> knots_;
+  Eigen::Vector3d omega_ie_n_;
+  Eigen::Vector3d g_n_;
+};
+
+}  // namespace sinscal

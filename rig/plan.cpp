@@ -1,0 +1,293 @@
+#include "rig/plan.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "models/config.hpp"
+#include "models/units.hpp"
+
+namespace sinscal {
+namespace {
+
+using Q = QuantityKind;
+
+int section_number(const IniFile& ini, const std::string& section, const std::string& prefix) {
+  const std::string tail = section.substr(prefix.size());
+  char* end = nullptr;
+  const long n = std::strtol(tail.c_str(), &end, 10);
+  if (tail.empty() || *end != '\0' || n < 1)
+    throw ConfigError(ini.path() + ": section [" + section + "]: expected [" + prefix + "N], N = 1, 2, ...");
+  return static_cast<int>(n);
+}
+
+EulerAngles read_angles(const IniFile& ini, const std::string& s) {
+  EulerAngles e;
+  e.heading = ini.get_quantity(s + ".heading", Q::Angle, "deg");
+  e.pitch = ini.get_quantity(s + ".pitch", Q::Angle, "deg");
+  e.roll = ini.get_quantity(s + ".roll", Q::Angle, "deg");
+  return e;
+}
+
+Eigen::Vector3d read_vector(const IniFile& ini, const std::string& key, const Eigen::Vector3d& dflt) {
+  if (!ini.has(key)) return dflt;
+  std::istringstream in(ini.get_string(key));
+  Eigen::Vector3d v;
+  if (!(in >> v.x() >> v.y() >> v.z()) || v.norm() < 1e-9)
+    throw ConfigError(ini.where(key) + "expected three numbers forming a non-zero vector");
+  return v.normalized();
+}
+
+RotationStep parse_axis(const IniFile& ini, const std::string& key, const std::string& text) {
+  RotationStep st;
+  st.axis_name = text;
+  if (text.size() < 2 || (text[0] != '+' && text[0] != '-'))
+    throw ConfigError(ini.where(key) + "axis '" + text +
+                      "': expected +x, -x, +y, -y, +z, -z, +outer, -outer, +inner or -inner");
+  const double sign = text[0] == '-' ? -1.0 : 1.0;
+  const std::string name = text.substr(1);
+  if (name == "x" || name == "y" || name == "z") {
+    st.kind = RotationStep::Axis::Body;
+    st.axis_b = sign * Eigen::Vector3d::Unit(name[0] - 'x');
+  } else if (name == "outer" || name == "inner") {
+    st.kind = name == "outer" ? RotationStep::Axis::Outer : RotationStep::Axis::Inner;
+    st.sign = sign;
+  } else {
+    return parse_axis(ini, key, "");
+  }
+  return st;
+}
+
+void read_step_timing(const IniFile& ini, const std::string& s, RotationStep& st) {
+  st.angle = ini.get_quantity(s + ".angle", Q::Angle, "deg");
+  if (!(st.angle > 0.0)) throw ConfigError(ini.where(s + ".angle") + "must be positive");
+  st.duration = ini.get_quantity(s + ".duration", Q::Time, "s", 0.0);
+  st.rate = ini.get_quantity(s + ".rate", Q::AngularRate, "deg/s", 0.0);
+  if ((st.duration > 0.0) == (st.rate > 0.0))
+    throw ConfigError(ini.path() + ": [" + s + "]: give exactly one of 'duration' and 'rate'");
+  st.pause = ini.get_quantity(s + ".pause", Q::Time, "s", 0.0);
+  if (st.pause < 0.0) throw ConfigError(ini.where(s + ".pause") + "must not be negative");
+}
+
+}  // namespace
+
+Plan Plan::load(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path + ": cannot open plan file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return parse(path, buffer.str());
+}
+
+Plan Plan::parse(const std::string& path, const std::string& text) {
+  const IniFile ini(path, text);
+  Plan p;
+  p.path = path;
+  p.text = text;
+  p.name = ini.get_string("plan.name", "plan");
+  const std::string type = ini.get_string("plan.type");
+  try {
+    p.convention = parse_angle_convention(ini.get_string("plan.convention", "ned-frd"));
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(ini.where("plan.convention") + e.what());
+  }
+  ini.check_keys("plan", {"name", "description", "type", "convention", "move_rate",
+                          "move_acceleration", "rotation_acceleration"});
+  if (ini.has("site.latitude")) {
+    p.has_site = true;
+    p.site.lat_rad = ini.get_quantity("site.latitude", Q::Angle, "deg");
+    p.site.lon_rad = ini.get_quantity("site.longitude", Q::Angle, "deg", 0.0);
+    p.site.h_m = ini.get_quantity("site.height", Q::Length, "m", 0.0);
+    if (std::abs(p.site.lat_rad) > 89.0 * units::deg)
+      throw ConfigError(ini.where("site.latitude") + "must be within +-89 deg");
+  }
+  ini.check_keys("site", {"latitude", "longitude", "height"});
+  // Table geometry; the default mounting makes table angles zero equal plan angles zero.
+  p.table.outer_axis_n = read_vector(ini, "table.outer_axis", Eigen::Vector3d::UnitX());
+  p.table.inner_axis_p = read_vector(ini, "table.inner_axis", -Eigen::Vector3d::UnitZ());
+  p.table.C_b_p = C_b_n_from_euler(p.convention, EulerAngles{});
+  ini.check_keys("table", {"outer_axis", "inner_axis"});
+
+  if (type == "orientations") {
+    p.type = Type::Orientations;
+    p.move_rate = ini.get_quantity("plan.move_rate", Q::AngularRate, "deg/s");
+    p.move_accel = ini.get_quantity("plan.move_acceleration", Q::AngularAcceleration, "deg/s^2");
+    if (!(p.move_rate > 0.0) || !(p.move_accel > 0.0))
+      throw ConfigError(ini.path() + ": [plan] move_rate and move_acceleration must be positive");
+    std::vector<std::pair<int, PlanOrientation>> found;
+    for (const auto& s : ini.sections_with_prefix("orientation.")) {
+      ini.check_keys(s, {"heading", "pitch", "roll", "dwell"});
+      PlanOrientation o;
+      const int n = section_number(ini, s, "orientation.");
+      o.label = std::to_string(n);
+      o.angles = read_angles(ini, s);
+      o.dwell = ini.get_quantity(s + ".dwell", Q::Time, "s");
+      if (!(o.dwell > 0.0)) throw ConfigError(ini.where(s + ".dwell") + "must be positive");
+      found.emplace_back(n, o);
+    }
+    std::sort(found.begin(), found.end(), [](auto& a, auto& b) { return a.first < b.first; });
+    for (std::size_t i = 0; i < found.size(); ++i) {
+      if (found[i].first != static_cast<int>(i) + 1)
+        throw ConfigError(ini.path() + ": orientations must be numbered 1, 2, ... without gaps; " +
+                          "missing [orientation." + std::to_string(i + 1) + "]");
+      p.orientations.push_back(found[i].second);
+    }
+    if (p.orientations.empty()) throw ConfigError(ini.path() + ": no [orientation.N] sections");
+    // Every orientation must be reachable by the table.
+    const Table table(p.table);
+    for (const auto& o : p.orientations) {
+      try {
+        table.angles_for(C_b_n_from_euler(p.convention, o.angles));
+      } catch (const UnreachableOrientation& e) {
+        throw ConfigError(ini.path() + ": [orientation." + o.label + "]: " + e.what());
+      }
+    }
+  } else if (type == "rotations") {
+    p.type = Type::Rotations;
+    p.move_accel = ini.get_quantity("plan.rotation_acceleration", Q::AngularAcceleration, "deg/s^2");
+    if (!(p.move_accel > 0.0))
+      throw ConfigError(ini.where("plan.rotation_acceleration") + "must be positive");
+    p.start = read_angles(ini, "start");
+    p.start_dwell = ini.get_quantity("start.dwell", Q::Time, "s");
+    ini.check_keys("start", {"heading", "pitch", "roll", "dwell"});
+    if (ini.has("rotations.axes")) {
+      ini.check_keys("rotations", {"axes", "angle", "duration", "rate", "pause"});
+      std::istringstream axes(ini.get_string("rotations.axes"));
+      for (std::string a; axes >> a;) {
+        RotationStep st = parse_axis(ini, "rotations.axes", a);
+        read_step_timing(ini, "rotations", st);
+        p.steps.push_back(st);
+      }
+      if (!ini.sections_with_prefix("step.").empty())
+        throw ConfigError(ini.path() + ": give the rotations either as [rotations] axes or as [step.N], not both");
+    } else {
+      std::vector<std::pair<int, RotationStep>> found;
+      for (const auto& s : ini.sections_with_prefix("step.")) {
+        ini.check_keys(s, {"axis", "angle", "duration", "rate", "pause"});
+        RotationStep st = parse_axis(ini, s + ".axis", ini.get_string(s + ".axis"));
+        read_step_timing(ini, s, st);
+        found.emplace_back(section_number(ini, s, "step."), st);
+      }
+      std::sort(found.begin(), found.end(), [](auto& a, auto& b) { return a.first < b.first; });
+      for (auto& f : found) p.steps.push_back(f.second);
+    }
+    if (p.steps.empty()) throw ConfigError(ini.path() + ": a rotation plan needs rotations");
+  } else {
+    throw ConfigError(ini.where("plan.type") + "expected 'orientations' or 'rotations', got '" + type + "'");
+  }
+  for (const auto& key : ini.keys()) {
+    const std::string sec = key.substr(0, key.find('.'));
+    static const std::vector<std::string> known = {"plan", "site", "table", "orientation",
+                                                   "start", "rotations", "step"};
+    if (std::find(known.begin(), known.end(), sec) == known.end())
+      throw ConfigError(ini.where(key) + "unknown section");
+  }
+  return p;
+}
+
+Motion build_motion(const Plan& plan, const Site& site, const TableErrors& errors) {
+  std::mt19937_64 rng(errors.seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  auto angle_error = [&] { return errors.angle_sigma > 0.0 ? errors.angle_sigma * normal(rng) : 0.0; };
+
+  const Table nominal(plan.table);
+  TableGeometry true_geometry = plan.table;
+  if (errors.non_orthogonality != 0.0) {
+    const Eigen::Vector3d lean = plan.table.inner_axis_p.cross(plan.table.outer_axis_n);
+    if (lean.norm() > 1e-9)
+      true_geometry.inner_axis_p =
+          rotation(lean.normalized(), errors.non_orthogonality) * plan.table.inner_axis_p;
+  }
+  const Table truth(true_geometry);
+
+  std::vector<MotionSegment> segments;
+  std::vector<Dwell> dwells;
+  double t = 0.0;
+  auto add_dwell = [&](const std::string& label, const Eigen::Matrix3d& known,
+                       const Eigen::Matrix3d& actual, double duration) {
+    MotionSegment s;
+    s.t0 = t;
+    s.t1 = t + duration;
+    s.C_b_n_start = actual;
+    segments.push_back(s);
+    Dwell d;
+    d.index = static_cast<int>(dwells.size()) + 1;
+    d.label = label;
+    d.t_start = t;
+    d.t_end = s.t1;
+    d.C_b_n_known = known;
+    d.C_b_n_true = actual;
+    dwells.push_back(d);
+    t = s.t1;
+  };
+
+  if (plan.type == Plan::Type::Orientations) {
+    TableAngles prev{};
+    for (std::size_t i = 0; i < plan.orientations.size(); ++i) {
+      const auto& o = plan.orientations[i];
+      const Eigen::Matrix3d known = C_b_n_from_euler(plan.convention, o.angles);
+      TableAngles cmd = nominal.angles_for(known);
+      cmd.outer += angle_error();
+      cmd.inner += angle_error();
+      if (i > 0) {
+        // Each axis takes the shorter way round; both start together.
+        auto wrap = [](double a) { return std::remainder(a, 2.0 * M_PI); };
+        MotionSegment m;
+        m.t0 = t;
+        m.C_b_n_start = truth.C_b_n(prev);
+        m.axis_n = truth.geometry().outer_axis_n;
+        m.alpha = TrapezoidProfile::by_rate(wrap(cmd.outer - prev.outer), plan.move_rate, plan.move_accel);
+        m.axis_b = truth.inner_axis_b();
+        m.beta = TrapezoidProfile::by_rate(wrap(cmd.inner - prev.inner), plan.move_rate, plan.move_accel);
+        m.t1 = t + std::max(m.alpha.duration(), m.beta.duration());
+        if (m.t1 > t) {
+          segments.push_back(m);
+          t = m.t1;
+        }
+        // Continue from where the move really ends (wrapping aside, the same attitude).
+        cmd.outer = prev.outer + m.alpha.angle();
+        cmd.inner = prev.inner + m.beta.angle();
+      }
+      add_dwell(o.label, known, truth.C_b_n(cmd), o.dwell);
+      prev = cmd;
+    }
+  } else {
+    Eigen::Matrix3d known = C_b_n_from_euler(plan.convention, plan.start);
+    Eigen::Vector3d start_error;
+    for (int k = 0; k < 3; ++k) start_error(k) = angle_error();
+    Eigen::Matrix3d actual = dcm_from_rotvec(start_error) * known;
+    add_dwell("start", known, actual, plan.start_dwell);
+    for (std::size_t i = 0; i < plan.steps.size(); ++i) {
+      const RotationStep& st = plan.steps[i];
+      MotionSegment m;
+      m.t0 = t;
+      m.C_b_n_start = actual;
+      const double realized = st.angle + angle_error();
+      const TrapezoidProfile profile =
+          st.duration > 0.0 ? TrapezoidProfile::by_duration(realized, st.duration, plan.move_accel)
+                            : TrapezoidProfile::by_rate(realized, st.rate, plan.move_accel);
+      if (st.kind == RotationStep::Axis::Outer) {
+        m.axis_n = st.sign * truth.geometry().outer_axis_n;
+        m.alpha = profile;
+        known = rotation(st.sign * nominal.geometry().outer_axis_n, st.angle) * known;
+      } else {
+        m.axis_b = st.kind == RotationStep::Axis::Body ? st.axis_b : st.sign * truth.inner_axis_b();
+        m.beta = profile;
+        const Eigen::Vector3d nominal_axis =
+            st.kind == RotationStep::Axis::Body ? st.axis_b : st.sign * nominal.inner_axis_b();
+        known = known * rotation(nominal_axis, st.angle);
+      }
+      m.t1 = t + profile.duration();
+      segments.push_back(m);
+      t = m.t1;
+      actual = m.C_b_n_end();
+      if (st.pause > 0.0) add_dwell("after " + std::to_string(i + 1) + " (" + st.axis_name + ")",
+                                    known, actual, st.pause);
+    }
+  }
+  return Motion(site, std::move(segments), std::move(dwells));
+}
+
+}  // namespace sinscal

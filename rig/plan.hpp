@@ -1,0 +1,72 @@
+// Calibration plans (config/plans/*.ini) and the motion they command. Format: docs/formats.md.
+//   type = orientations: static orientations (heading, pitch, roll in a named convention) each
+//     with a dwell, reached by two-axis table moves at a move rate and acceleration;
+//   type = rotations: a start attitude and dwell, then rotations about body axes (+x ... -z) or
+//     table axes (+outer, -inner, ...), each with an angle, a duration or rate, and a pause.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "models/attitude.hpp"
+#include "models/earth.hpp"
+#include "rig/motion.hpp"
+#include "rig/table.hpp"
+
+namespace sinscal {
+
+struct PlanOrientation {
+  std::string label;
+  EulerAngles angles;  // rad, in the plan's convention
+  double dwell = 0.0;  // s
+};
+
+struct RotationStep {
+  enum class Axis { Body, Outer, Inner };
+  Axis kind = Axis::Body;
+  Eigen::Vector3d axis_b = Eigen::Vector3d::UnitX();  // unit, Body kind only
+  double sign = 1.0;                                  // Outer / Inner kinds
+  std::string axis_name;                              // as written: "+y", "-outer"
+  double angle = 0.0;     // rad (positive; the direction is in the axis)
+  double duration = 0.0;  // s; 0: from `rate`
+  double rate = 0.0;      // rad/s peak rate when duration is 0
+  double pause = 0.0;     // s static after the rotation
+};
+
+struct Plan {
+  enum class Type { Orientations, Rotations };
+  std::string name;
+  std::string path;
+  std::string text;  // the file as read (copied into simulated sessions)
+  Type type = Type::Orientations;
+  AngleConvention convention = AngleConvention::NedFrd;
+  Site site;
+  bool has_site = false;
+  TableGeometry table;
+  double move_rate = 0.0;   // rad/s (orientations)
+  double move_accel = 0.0;  // rad/s^2 (both types)
+  std::vector<PlanOrientation> orientations;
+  EulerAngles start;         // rotations
+  double start_dwell = 0.0;  // s
+  std::vector<RotationStep> steps;
+
+  /// Loads and validates a plan; throws ConfigError naming file, line and key.
+  static Plan load(const std::string& path);
+  static Plan parse(const std::string& path, const std::string& text);
+};
+
+/// Errors of the table, for simulations. Every commanded axis angle (orientation plans) or
+/// rotation angle and the start attitude (rotation plans) is off by a random angle of sigma
+/// `angle_sigma`; the inner axis leans by `non_orthogonality` from its nominal direction
+/// (towards the outer axis). The known attitudes of the dwells stay the plan's.
+struct TableErrors {
+  double angle_sigma = 0.0;        // rad
+  double non_orthogonality = 0.0;  // rad
+  std::uint64_t seed = 0;
+};
+
+/// The motion a plan commands at `site`; with table errors, the truth differs from the plan.
+Motion build_motion(const Plan& plan, const Site& site, const TableErrors& errors = {});
+
+}  // namespace sinscal
