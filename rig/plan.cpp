@@ -60,13 +60,19 @@ RotationStep parse_axis(const IniFile& ini, const std::string& key, const std::s
   return st;
 }
 
-void read_step_timing(const IniFile& ini, const std::string& s, RotationStep& st) {
+void read_step_timing(const IniFile& ini, const std::string& s, double accel, RotationStep& st) {
   st.angle = ini.get_quantity(s + ".angle", Q::Angle, "deg");
   if (!(st.angle > 0.0)) throw ConfigError(ini.where(s + ".angle") + "must be positive");
   st.duration = ini.get_quantity(s + ".duration", Q::Time, "s", 0.0);
   st.rate = ini.get_quantity(s + ".rate", Q::AngularRate, "deg/s", 0.0);
   if ((st.duration > 0.0) == (st.rate > 0.0))
     throw ConfigError(ini.path() + ": [" + s + "]: give exactly one of 'duration' and 'rate'");
+  if (st.duration > 0.0 && 4.0 * st.angle / accel > st.duration * st.duration)
+    throw ConfigError(ini.where(s + ".duration") + "acceleration too low to turn " +
+                      std::to_string(st.angle / units::deg) + " deg in " +
+                      std::to_string(st.duration) + " s (needs at least " +
+                      std::to_string(4.0 * st.angle / (st.duration * st.duration) / units::deg) +
+                      " deg/s^2)");
   st.pause = ini.get_quantity(s + ".pause", Q::Time, "s", 0.0);
   if (st.pause < 0.0) throw ConfigError(ini.where(s + ".pause") + "must not be negative");
 }
@@ -157,7 +163,7 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
       std::istringstream axes(ini.get_string("rotations.axes"));
       for (std::string a; axes >> a;) {
         RotationStep st = parse_axis(ini, "rotations.axes", a);
-        read_step_timing(ini, "rotations", st);
+        read_step_timing(ini, "rotations", p.move_accel, st);
         p.steps.push_back(st);
       }
       if (!ini.sections_with_prefix("step.").empty())
@@ -167,7 +173,7 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
       for (const auto& s : ini.sections_with_prefix("step.")) {
         ini.check_keys(s, {"axis", "angle", "duration", "rate", "pause"});
         RotationStep st = parse_axis(ini, s + ".axis", ini.get_string(s + ".axis"));
-        read_step_timing(ini, s, st);
+        read_step_timing(ini, s, p.move_accel, st);
         found.emplace_back(section_number(ini, s, "step."), st);
       }
       std::sort(found.begin(), found.end(), [](auto& a, auto& b) { return a.first < b.first; });

@@ -1,0 +1,67 @@
+#pragma once
+
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "models/sensor_profile.hpp"
+#include "rig/imu_sim.hpp"
+#include "rig/plan.hpp"
+
+namespace sinscal::test {
+
+inline std::string source_path(const std::string& relative) {
+  return std::string(SINSCAL_SOURCE_DIR) + "/" + relative;
+}
+
+/// A fresh temporary directory for one test.
+inline std::string temp_dir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / ("sinscal_test_" + name);
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir.string();
+}
+
+inline Plan load_plan(const std::string& name) {
+  return Plan::load(source_path("config/plans/" + name));
+}
+
+/// All samples of a motion, noise off unless a noise model is given.
+inline std::vector<ImuSample> simulate(const Motion& motion, const ImuErrorModel& errors = {},
+                                       double rate_hz = 100.0, const NoiseModel* noise = nullptr,
+                                       std::uint64_t seed = 1) {
+  SimulatorOptions o;
+  o.rate_hz = rate_hz;
+  o.noise = noise != nullptr;
+  o.noise_seed = seed;
+  ImuSimulator sim(motion, errors, noise ? *noise : NoiseModel{}, o);
+  std::vector<ImuSample> out;
+  out.reserve(sim.total_samples());
+  ImuSample s;
+  while (sim.next(s)) out.push_back(s);
+  return out;
+}
+
+/// Sample source over a vector.
+class VectorSource : public SampleSource {
+ public:
+  explicit VectorSource(const std::vector<ImuSample>& v) : v_(v) {}
+  bool next(ImuSample& s) override {
+    if (i_ >= v_.size()) return false;
+    s = v_[i_++];
+    return true;
+  }
+
+ private:
+  const std::vector<ImuSample>& v_;
+  std::size_t i_ = 0;
+};
+
+inline void write_file(const std::string& path, const std::string& text) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  std::fputs(text.c_str(), f);
+  std::fclose(f);
+}
+
+}  // namespace sinscal::test

@@ -1,0 +1,140 @@
+#include <catch2/catch.hpp>
+#include <random>
+#include <set>
+
+#include "helpers.hpp"
+#include "models/config.hpp"
+#include "models/imu_error_model.hpp"
+#include "models/sensor_profile.hpp"
+#include "models/units.hpp"
+
+using namespace sinscal;
+using Eigen::Vector3d;
+
+namespace {
+ImuErrorModel random_extended_model(std::uint64_t seed) {
+  // Base and extended terms from the profile, plus asymmetry and g-sensitivity by hand.
+  ImuErrorModel m = SensorProfile::load(test::source_path("config/sensors/nav-fog-extended.ini")).draw(seed);
+  std::mt19937_64 rng(seed + 100);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int i = 0; i < 3; ++i) {
+    m.gyro.scale_asym(i) = 20 * units::ppm * u(rng);
+    m.accel.scale_asym(i) = 20 * units::ppm * u(rng);
+    for (int j = 0; j < 3; ++j) m.gyro_g_sensitivity(i, j) = 0.05 * units::deg_per_h_per_g * u(rng);
+  }
+  return m;
+}
+}  // namespace
+
+TEST_CASE("Error model: apply then compensate returns the input to 1e-12 relative", "[error_model]") {
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    const ImuErrorModel m = random_extended_model(seed);
+    REQUIRE(m.accel.k2.norm() > 0.0);
+    REQUIRE(m.accel_lever_arm_b.norm() > 0.0);
+    for (int k = 0; k < 50; ++k) {
+      KinematicSample s;
+      s.omega_ib_b = Vector3d(n(rng), n(rng), n(rng)) * 0.5;
+      s.omega_dot_ib_b = Vector3d(n(rng), n(rng), n(rng)) * 0.3;
+      s.f_ib_b = Vector3d(n(rng), n(rng), n(rng)) * 9.8;
+      const Vector3d yg = m.gyro_output(s), ya = m.accel_output(s);
+      Vector3d w, f;
+      m.compensate(yg, ya, s.omega_dot_ib_b, w, f);
+      CHECK((w - s.omega_ib_b).norm() <= 1e-12 * s.omega_ib_b.norm());
+      CHECK((f - s.f_ib_b).norm() <= 1e-12 * s.f_ib_b.norm());
+      // And the errors are really there: output differs from input by far more than that.
+      CHECK((ya - s.f_ib_b).norm() > 1e-6 * s.f_ib_b.norm());
+    }
+  }
+}
+
+TEST_CASE("Error model: sign conventions of each term", "[error_model]") {
+  ImuErrorModel m;
+  m.set("gyro.misalignment.xy", 10.0);  // sensor x towards body y
+  m.set("gyro.scale.z", 100.0);
+  m.set("gyro.bias.y", 1.0);
+  KinematicSample s;
+  s.omega_ib_b = Vector3d(0.0, 1.0, 2.0);
+  Vector3d y = m.gyro_output(s);
+  CHECK(y.x() == Approx(10.0 * units::arcsec));
+  CHECK(y.y() == Approx(1.0 + units::deg_per_h));
+  CHECK(y.z() == Approx(2.0 * (1.0 + 100e-6)));
+  // Asymmetry: +a on positive input, -a on negative input (half the difference).
+  ImuErrorModel a;
+  a.set("accel.scale_asym.x", 50.0);
+  s.f_ib_b = Vector3d(2.0, 0, 0);
+  CHECK(a.accel_output(s).x() == Approx(2.0 * (1 + 50e-6)));
+  s.f_ib_b = Vector3d(-2.0, 0, 0);
+  CHECK(a.accel_output(s).x() == Approx(-2.0 * (1 - 50e-6)));
+  // K2 in ug/g^2: 1 g input gives k2 ug extra.
+  ImuErrorModel q;
+  q.set("accel.k2.z", 20.0);
+  s.f_ib_b = Vector3d(0, 0, units::g0);
+  CHECK(q.accel_output(s).z() - units::g0 == Approx(20.0 * units::ug).epsilon(1e-9));
+  // g-sensitivity: gyro x per acceleration along z.
+  ImuErrorModel g;
+  g.set("gyro.g_sensitivity.xz", 0.5);
+  s.omega_ib_b.setZero();
+  CHECK(g.gyro_output(s).x() == Approx(0.5 * units::deg_per_h));
+  // Size effect: turning about z at w, an accelerometer x at r = (L, 0, 0) sees -w^2 L.
+  ImuErrorModel l;
+  l.set("accel.lever_arm.x.x", 50.0);
+  s.f_ib_b.setZero();
+  s.omega_ib_b = Vector3d(0, 0, 2.0);
+  CHECK(l.accel_output(s).x() == Approx(-4.0 * 0.05));
+  CHECK(l.accel_output(s).y() == 0.0);
+}
+
+TEST_CASE("Coefficient catalog: names, units and set/get", "[error_model]") {
+  const auto& cat = coefficient_catalog();
+  CHECK(cat.size() == 24 + 3 + 6 + 9 + 9 + 1);
+  std::set<std::string> names;
+  for (const auto& c : cat) names.insert(c.name);
+  CHECK(names.size() == cat.size());
+  for (const char* n : {"gyro.bias.x", "accel.misalignment.zy", "accel.k2.y", "gyro.scale_asym.z",
+                        "gyro.g_sensitivity.yx", "accel.lever_arm.z.x", "time_delay"})
+    CHECK(names.count(n) == 1);
+  ImuErrorModel m;
+  m.set("time_delay", 5.0);
+  CHECK(m.time_delay == Approx(5e-3));
+  m.set("accel.lever_arm.y.x", 30.0);  // accelerometer y, body axis x
+  CHECK(m.accel_lever_arm_b(0, 1) == Approx(0.03));
+  CHECK(m.coefficients().at("accel.lever_arm.y.x") == Approx(30.0));
+  CHECK_THROWS_AS(m.set("gyro.bias.w", 1.0), std::invalid_argument);
+}
+
+TEST_CASE("Sensor profiles: drawn coefficients lie in their ranges", "[error_model]") {
+  const SensorProfile p = SensorProfile::load(test::source_path("config/sensors/nav-fog-extended.ini"));
+  CHECK(p.has("accel.k2"));
+  CHECK_FALSE(p.has("gyro.g_sensitivity"));
+  CHECK(p.noise.gyro.white == Approx(0.001 * units::deg_per_sqrt_h));
+  CHECK(p.noise.accel.white == Approx(10 * units::ug_per_sqrt_hz));
+  for (std::uint64_t seed = 1; seed < 30; ++seed) {
+    const auto c = p.draw(seed).coefficients();
+    for (const auto& [name, v] : c) {
+      const std::string fam = coefficient_family(name);
+      if (fam == "gyro.bias") CHECK((std::abs(v) >= 0.1 && std::abs(v) <= 0.3));
+      if (fam == "gyro.misalignment") CHECK((std::abs(v) >= 10 && std::abs(v) <= 60));
+      if (fam == "accel.lever_arm") CHECK((std::abs(v) >= 10 && std::abs(v) <= 60));
+      if (fam == "time_delay") CHECK(v == Approx(5.0));
+      if (fam == "gyro.g_sensitivity") CHECK(v == 0.0);
+    }
+  }
+  CHECK(p.draw(1).coefficients() == p.draw(1).coefficients());
+  CHECK(p.draw(1).coefficients() != p.draw(2).coefficients());
+}
+
+TEST_CASE("Sensor profiles: wrong units and unknown keys are errors with file and line", "[error_model]") {
+  const std::string dir = test::temp_dir("profile");
+  test::write_file(dir + "/bad_unit.ini", "[gyro]\nbias = 0.1 0.3 ug\n");
+  try {
+    SensorProfile::load(dir + "/bad_unit.ini");
+    FAIL("no error");
+  } catch (const ConfigError& e) {
+    CHECK_THAT(e.what(), Catch::Contains("bad_unit.ini:2") && Catch::Contains("ug") &&
+                             Catch::Contains("deg/h"));
+  }
+  test::write_file(dir + "/typo.ini", "[accel]\nbias = 100 ug\nbais = 3\n");
+  CHECK_THROWS_WITH(SensorProfile::load(dir + "/typo.ini"), Catch::Contains("typo.ini:3"));
+}
