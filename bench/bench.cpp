@@ -1,0 +1,92 @@
+// Throughput benchmarks (not tests): simulator, navigator, log writer and reader, on one core.
+// Prints samples/s and ratios. Usage: bench [SOURCE_DIR]
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "filter/strapdown.hpp"
+#include "models/sensor_profile.hpp"
+#include "rig/imu_sim.hpp"
+#include "rig/log_io.hpp"
+#include "rig/plan.hpp"
+
+using namespace sinscal;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string src = argc > 1 ? argv[1] : ".";
+  const Plan plan = Plan::load(src + "/config/plans/seed8.ini");
+  const SensorProfile profile = SensorProfile::load(src + "/config/sensors/nav-fog-extended.ini");
+  const Motion motion = build_motion(plan, plan.site);
+  const ImuErrorModel errors = profile.draw(1);
+
+  // Simulator: full extended error model and noise, 100 Hz.
+  SimulatorOptions so;
+  std::vector<ImuSample> samples;
+  auto t0 = Clock::now();
+  {
+    ImuSimulator sim(motion, errors, profile.noise, so);
+    samples.reserve(sim.total_samples());
+    ImuSample s;
+    while (sim.next(s)) samples.push_back(s);
+  }
+  const double t_sim = seconds_since(t0);
+  const double n = static_cast<double>(samples.size());
+
+  // Navigator: several passes over the samples, best pass reported.
+  double t_nav = 1e300;
+  double sink = 0.0;
+  for (int pass = 0; pass < 5; ++pass) {
+    Strapdown nav;
+    NavState x;
+    x.q_b_n = Eigen::Quaterniond(motion.dwells()[0].C_b_n_known);
+    x.lat_rad = plan.site.lat_rad;
+    x.h_m = plan.site.h_m;
+    nav.reset(x);
+    t0 = Clock::now();
+    for (const auto& s : samples) nav.step(s.dtheta_b, s.dv_b, s.dt);
+    t_nav = std::min(t_nav, seconds_since(t0));
+    sink += nav.state().v_n.norm();
+  }
+
+  // Log write and read.
+  const std::string path = (std::filesystem::temp_directory_path() / "sinscal_bench_imu.csv").string();
+  t0 = Clock::now();
+  {
+    LogWriter w(path, so.rate_hz);
+    for (const auto& s : samples) w.write(s);
+    w.close();
+  }
+  const double t_write = seconds_since(t0);
+  t0 = Clock::now();
+  {
+    LogReader r(LogFormat::native_format(path, so.rate_hz));
+    ImuSample s;
+    while (r.next(s)) sink += s.dt;
+  }
+  const double t_read = seconds_since(t0);
+  std::filesystem::remove(path);
+
+  const double real_time = motion.duration();
+  std::printf("sinscal bench: plan seed8 (%.0f s at %.0f Hz, %.0f samples), profile %s\n",
+              real_time, so.rate_hz, n, profile.name.c_str());
+  std::printf("%-34s %14s %14s\n", "stage", "samples/s", "x real time");
+  auto row = [&](const char* name, double t) {
+    std::printf("%-34s %14.0f %14.0f\n", name, n / t, real_time / t);
+  };
+  row("simulator (extended model, noise)", t_sim);
+  row("strapdown navigator", t_nav);
+  row("log write (native CSV)", t_write);
+  row("log read (native CSV)", t_read);
+  std::printf("navigator / simulator throughput ratio: %.1f\n", t_sim / t_nav);
+  std::printf("navigator aim: 5e6 samples/s -> %s\n", n / t_nav >= 5e6 ? "met" : "NOT met");
+  return sink > 0 ? 0 : 1;
+}
