@@ -35,7 +35,8 @@ const std::vector<UnitEntry>& units_for(QuantityKind kind) {
       {QuantityKind::RateRandomWalk,
        {{"rad/s/sqrt(s)", 1.0}, {"deg/h/sqrt(h)", deg_per_h_per_sqrt_h}}},
       {QuantityKind::AccelRandomWalk, {{"m/s^2/sqrt(s)", 1.0}, {"ug/sqrt(h)", ug_per_sqrt_h}}},
-      {QuantityKind::GSensitivity, {{"rad/s/(m/s^2)", 1.0}, {"deg/h/g", deg_per_h_per_g}}},
+      {QuantityKind::GSensitivity,
+       {{"rad/s/(m/s^2)", 1.0}, {"deg/h/g", deg_per_h_per_g}, {"deg/s/g", deg / g0}}},
       {QuantityKind::QuadraticScale, {{"1/(m/s^2)", 1.0}, {"ug/g^2", ug_per_g2}}},
       {QuantityKind::Velocity, {{"m/s", 1.0}, {"mm/s", mm}}},
   };

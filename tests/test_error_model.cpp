@@ -138,3 +138,19 @@ TEST_CASE("Sensor profiles: wrong units and unknown keys are errors with file an
   test::write_file(dir + "/typo.ini", "[accel]\nbias = 100 ug\nbais = 3\n");
   CHECK_THROWS_WITH(SensorProfile::load(dir + "/typo.ini"), Catch::Contains("typo.ini:3"));
 }
+
+TEST_CASE("Every bundled sensor profile loads and draws", "[error_model]") {
+  int n = 0;
+  for (const auto& f : std::filesystem::directory_iterator(test::source_path("config/sensors"))) {
+    CAPTURE(f.path().string());
+    const SensorProfile p = SensorProfile::load(f.path().string());
+    CHECK(p.has("gyro.bias"));
+    CHECK(p.noise.gyro.white > 0.0);
+    ++n;
+  }
+  CHECK(n >= 3);
+  const SensorProfile mems = SensorProfile::load(test::source_path("config/sensors/mems.ini"));
+  CHECK(mems.has("gyro.g_sensitivity"));
+  const double g_sens = std::abs(mems.draw(4).gyro_g_sensitivity(0, 0));
+  CHECK((g_sens >= 0.01 * units::deg / units::g0 && g_sens <= 0.1 * units::deg / units::g0));
+}

@@ -111,3 +111,15 @@ TEST_CASE("Plans: bad plans are clear errors naming file and line", "[plan]") {
                       "pitch = 0\nroll = 0\ndwell = 10\n[rotations]\naxes = +y\nangle = 90\nduration = 9\n"),
              Catch::Contains("acceleration too low"));
 }
+
+TEST_CASE("Every bundled plan loads and builds", "[plan]") {
+  int n = 0;
+  for (const auto& f : std::filesystem::directory_iterator(test::source_path("config/plans"))) {
+    CAPTURE(f.path().string());
+    const Plan p = Plan::load(f.path().string());
+    CHECK(p.has_site);
+    CHECK(build_motion(p, p.site).dwells().size() >= 8);
+    ++n;
+  }
+  CHECK(n >= 2);
+}
