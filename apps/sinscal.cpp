@@ -52,18 +52,18 @@ int cmd_simulate(const std::vector<std::string>& args) {
   std::string plan_path, sensor_path, out_dir;
   double rate = 100.0, angle_sigma_arcsec = 0.0, non_orth_arcsec = 0.0;
   unsigned long long seed = 1;
-  d.add_options()("help,h", "this help")
-      ("plan", po::value(&plan_path)->required(), "plan INI file (config/plans/*.ini)")
-      ("sensor", po::value(&sensor_path)->required(), "sensor profile INI (config/sensors/*.ini)")
-      ("out", po::value(&out_dir)->required(), "output session directory")
-      ("rate", po::value(&rate)->default_value(100.0), "IMU output rate [Hz]")
-      ("seed", po::value(&seed)->default_value(1), "seed of all random draws")
-      ("no-noise", "no sensor noise (coefficients still drawn)")
-      ("perfect", "no sensor errors at all (zero coefficients, no noise)")
-      ("table-angle-sigma", po::value(&angle_sigma_arcsec)->default_value(0.0),
-       "table angle error per commanded angle, 1-sigma [arcsec]")
-      ("table-non-orthogonality", po::value(&non_orth_arcsec)->default_value(0.0),
-       "lean of the inner axis [arcsec]");
+  d.add_options()("help,h", "this help")("plan", po::value(&plan_path)->required(),
+                                         "plan INI file (config/plans/*.ini)")(
+      "sensor", po::value(&sensor_path)->required(), "sensor profile INI (config/sensors/*.ini)")(
+      "out", po::value(&out_dir)->required(), "output session directory")(
+      "rate", po::value(&rate)->default_value(100.0), "IMU output rate [Hz]")(
+      "seed", po::value(&seed)->default_value(1), "seed of all random draws")(
+      "no-noise", "no sensor noise (coefficients still drawn)")(
+      "perfect", "no sensor errors at all (zero coefficients, no noise)")(
+      "table-angle-sigma", po::value(&angle_sigma_arcsec)->default_value(0.0),
+      "table angle error per commanded angle, 1-sigma [arcsec]")(
+      "table-non-orthogonality", po::value(&non_orth_arcsec)->default_value(0.0),
+      "lean of the inner axis [arcsec]");
   const auto vm = parse(args, d,
                         "Usage: sinscal simulate --plan P --sensor S --out DIR [--rate HZ] "
                         "[--seed N] [--no-noise]\nSimulates a calibration session: DIR/imu.csv, "
@@ -93,7 +93,8 @@ int cmd_simulate(const std::vector<std::string>& args) {
   ImuSample s;
   while (sim.next(s)) log.write(s);
   log.close();
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   {
     std::ofstream p(out_dir + "/plan.ini");
     p << plan.text;
@@ -104,21 +105,23 @@ int cmd_simulate(const std::vector<std::string>& args) {
   std::ofstream ses(out_dir + "/session.ini");
   ses << "# Written by sinscal simulate\n[session]\nname = " << plan.name << "\nrate = " << rate
       << " Hz\nplan = plan.ini\nsensor = sensor.ini\ntruth = truth.json\n\n[site]\nlatitude = "
-      << fmt("%.12g", plan.site.lat_rad / units::deg) << " deg\nlongitude = "
-      << fmt("%.12g", plan.site.lon_rad / units::deg) << " deg\nheight = " << plan.site.h_m
-      << " m\n\n[log]\nfile = imu.csv\nformat = sinscal\n";
+      << fmt("%.12g", plan.site.lat_rad / units::deg)
+      << " deg\nlongitude = " << fmt("%.12g", plan.site.lon_rad / units::deg)
+      << " deg\nheight = " << plan.site.h_m << " m\n\n[log]\nfile = imu.csv\nformat = sinscal\n";
   ses.close();
   if (!ses) throw std::runtime_error(out_dir + "/session.ini: cannot write");
   write_truth_json(out_dir + "/truth.json", truth,
                    "simulate --plan " + plan_path + " --sensor " + sensor_path + " --seed " +
                        std::to_string(seed) + (so.noise ? "" : " (no noise)"));
 
-  std::cout << "Simulated plan '" << plan.name << "' (" << plan.path << "), sensor '" << profile.name
-            << "'\n  " << sim.total_samples() << " samples at " << rate << " Hz, "
+  std::cout << "Simulated plan '" << plan.name << "' (" << plan.path << "), sensor '"
+            << profile.name << "'\n  " << sim.total_samples() << " samples at " << rate << " Hz, "
             << fmt("%.1f", motion.duration()) << " s, " << motion.dwells().size() << " dwells, "
-            << (so.noise ? "noise on" : "noise off") << ", " << fmt("%.0f", static_cast<double>(sim.total_samples()) / seconds)
+            << (so.noise ? "noise on" : "noise off") << ", "
+            << fmt("%.0f", static_cast<double>(sim.total_samples()) / seconds)
             << " samples/s written\n";
-  if (sim.saturated()) std::cout << "  WARNING: " << sim.saturated() << " samples clipped at the sensor range\n";
+  if (sim.saturated())
+    std::cout << "  WARNING: " << sim.saturated() << " samples clipped at the sensor range\n";
   std::cout << "  session: " << out_dir << "/session.ini\n  injected coefficients (truth.json):\n";
   for (const auto& info : coefficient_catalog()) {
     const double v = truth.coefficients().at(info.name);
@@ -131,11 +134,12 @@ int cmd_navigate(const std::vector<std::string>& args) {
   po::options_description d("sinscal navigate options");
   std::string session_path, out_path, vertical;
   double interval = 1.0;
-  d.add_options()("help,h", "this help")
-      ("session", po::value(&session_path)->required(), "session.ini of the recording")
-      ("out", po::value(&out_path)->required(), "navigation error CSV to write")
-      ("interval", po::value(&interval)->default_value(1.0), "output interval [s] (0: every sample)")
-      ("vertical", po::value(&vertical)->default_value("free"), "vertical channel: free | held");
+  d.add_options()("help,h", "this help")("session", po::value(&session_path)->required(),
+                                         "session.ini of the recording")(
+      "out", po::value(&out_path)->required(), "navigation error CSV to write")(
+      "interval", po::value(&interval)->default_value(1.0),
+      "output interval [s] (0: every sample)")(
+      "vertical", po::value(&vertical)->default_value("free"), "vertical channel: free | held");
   parse(args, d,
         "Usage: sinscal navigate --session DIR/session.ini --out nav.csv\nNavigates through each "
         "static dwell of the plan from its known attitude, zero velocity and known position, and "
@@ -166,7 +170,8 @@ int cmd_navigate(const std::vector<std::string>& args) {
   };
   auto print_summary = [&] {
     std::printf("Navigation through the dwells of '%s' (%s convention), vertical channel %s\n",
-                session.plan.name.c_str(), to_string(session.plan.convention).c_str(), vertical.c_str());
+                session.plan.name.c_str(), to_string(session.plan.convention).c_str(),
+                vertical.c_str());
     std::printf("%5s %-14s %8s %8s %8s %7s %10s %10s %10s %10s %10s\n", "dwell", "label", "heading",
                 "pitch", "roll", "T", "dv_n", "dv_e", "phi_n", "phi_e", "phi_d");
     std::printf("%5s %-14s %8s %8s %8s %7s %10s %10s %10s %10s %10s\n", "", "", "[deg]", "[deg]",
@@ -175,9 +180,9 @@ int cmd_navigate(const std::vector<std::string>& args) {
       const EulerAngles a = euler_from_C_b_n(session.plan.convention, s.dwell.C_b_n_known);
       const NavError& e = s.final_error;
       std::printf("%5d %-14s %8.2f %8.2f %8.2f %7.1f %10.4f %10.4f %10.4f %10.4f %10.4f\n",
-                  s.dwell.index, s.dwell.label.c_str(), a.heading / units::deg, a.pitch / units::deg,
-                  a.roll / units::deg, e.t, e.dv_n.x() * 1e3, e.dv_n.y() * 1e3,
-                  e.phi_n.x() / units::arcsec, e.phi_n.y() / units::arcsec,
+                  s.dwell.index, s.dwell.label.c_str(), a.heading / units::deg,
+                  a.pitch / units::deg, a.roll / units::deg, e.t, e.dv_n.x() * 1e3,
+                  e.dv_n.y() * 1e3, e.phi_n.x() / units::arcsec, e.phi_n.y() / units::arcsec,
                   e.phi_n.z() / units::arcsec);
     }
     std::printf("Navigation errors written to %s\n", out_path.c_str());

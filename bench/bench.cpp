@@ -58,7 +58,8 @@ int main(int argc, char** argv) {
   }
 
   // Log write and read.
-  const std::string path = (std::filesystem::temp_directory_path() / "sinscal_bench_imu.csv").string();
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "sinscal_bench_imu.csv").string();
   t0 = Clock::now();
   {
     LogWriter w(path, so.rate_hz);

@@ -5,8 +5,10 @@
 //             (two-sample coning), zeta = (omega_ie_n + omega_en_n) dt (navigation-frame turn);
 //   velocity  dv_b' = dv + 1/2 dtheta x dv (rotation) + 1/12 (dtheta_prev x dv + dv_prev x dtheta)
 //             (two-sample sculling) + 1/6 dtheta x (dtheta x dv) (second-order rotation),
-//             v_n += (I - 1/2 [zeta x]) C_b_n(k-1) dv_b' + (g_n - (2 omega_ie_n + omega_en_n) x v_n) dt;
-//   position  latitude, longitude, height by the trapezoidal rule; the vertical channel free or held.
+//             v_n += (I - 1/2 [zeta x]) C_b_n(k-1) dv_b' + (g_n - (2 omega_ie_n + omega_en_n) x
+//             v_n) dt;
+//   position  latitude, longitude, height by the trapezoidal rule; the vertical channel free or
+//   held.
 // Earth terms from models/earth.hpp (GeographicLib) through LocalEarth.
 #pragma once
 
@@ -18,7 +20,7 @@
 namespace sinscal {
 
 struct NavState {
-  double t = 0.0;                                           // s
+  double t = 0.0;                                             // s
   Eigen::Quaterniond q_b_n = Eigen::Quaterniond::Identity();  // body to NED
   Eigen::Vector3d v_n = Eigen::Vector3d::Zero();              // m/s, NED, relative to the Earth
   double lat_rad = 0.0;

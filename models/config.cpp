@@ -20,8 +20,8 @@ struct UnitEntry {
 const std::vector<UnitEntry>& units_for(QuantityKind kind) {
   using namespace units;
   static const std::map<QuantityKind, std::vector<UnitEntry>> table = {
-      {QuantityKind::Angle, {{"rad", 1.0}, {"mrad", mrad}, {"deg", deg}, {"arcmin", arcmin},
-                             {"arcsec", arcsec}}},
+      {QuantityKind::Angle,
+       {{"rad", 1.0}, {"mrad", mrad}, {"deg", deg}, {"arcmin", arcmin}, {"arcsec", arcsec}}},
       {QuantityKind::AngularRate, {{"rad/s", 1.0}, {"deg/s", deg_per_s}, {"deg/h", deg_per_h}}},
       {QuantityKind::AngularAcceleration, {{"rad/s^2", 1.0}, {"deg/s^2", deg}}},
       {QuantityKind::Acceleration, {{"m/s^2", 1.0}, {"ug", ug}, {"mg", mg}, {"g", g0}}},
@@ -68,8 +68,8 @@ bool parse_number(const std::string& token, double& value) {
 double unit_factor(const std::string& unit, QuantityKind kind) {
   for (const auto& u : units_for(kind))
     if (unit == u.token) return u.factor;
-  throw ConfigError("unit '" + unit + "' is not a unit of this quantity (accepted: " +
-                    accepted_units(kind) + ")");
+  throw ConfigError("unit '" + unit +
+                    "' is not a unit of this quantity (accepted: " + accepted_units(kind) + ")");
 }
 
 std::vector<double> parse_quantities(const std::string& text, QuantityKind kind,
@@ -219,7 +219,8 @@ std::vector<std::string> IniFile::sections_with_prefix(const std::string& prefix
   return out;
 }
 
-void IniFile::check_keys(const std::string& section, const std::vector<std::string>& allowed) const {
+void IniFile::check_keys(const std::string& section,
+                         const std::vector<std::string>& allowed) const {
   for (const auto& key : order_) {
     const auto dot = key.rfind('.');
     const std::string sec = dot == std::string::npos ? "" : key.substr(0, dot);

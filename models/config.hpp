@@ -64,7 +64,8 @@ class IniFile {
   /// Exactly `count` values (count < 0: any number >= 1) in SI.
   std::vector<double> get_quantities(const std::string& key, QuantityKind kind,
                                      const std::string& default_unit, int count = -1) const;
-  double get_quantity(const std::string& key, QuantityKind kind, const std::string& default_unit) const;
+  double get_quantity(const std::string& key, QuantityKind kind,
+                      const std::string& default_unit) const;
   double get_quantity(const std::string& key, QuantityKind kind, const std::string& default_unit,
                       double fallback_si) const;
   /// Section names in file order that start with `prefix` (e.g. "orientation." gives

@@ -71,7 +71,8 @@ void LocalEarth::expand(double lat, double h) {
   h0_ = h;
   t0_ = exact_terms(earth_, lat, h);
   const double dlat = 1e-5, dh = 10.0;  // central differences; their error is O(step^2)
-  d_lat_ = difference(exact_terms(earth_, lat + dlat, h), exact_terms(earth_, lat - dlat, h), 2 * dlat);
+  d_lat_ =
+      difference(exact_terms(earth_, lat + dlat, h), exact_terms(earth_, lat - dlat, h), 2 * dlat);
   d_h_ = difference(exact_terms(earth_, lat, h + dh), exact_terms(earth_, lat, h - dh), 2 * dh);
 }
 

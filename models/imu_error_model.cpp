@@ -91,15 +91,17 @@ void visit_coefficients(ImuErrorModel& m, Visit&& visit) {
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j)
         if (i != j)
-          visit(CoefficientInfo{p + ".misalignment." + kAxis[i] + kAxis[j], "arcsec", arcsec, "base"},
-                t.e->misalignment(i, j));
+          visit(
+              CoefficientInfo{p + ".misalignment." + kAxis[i] + kAxis[j], "arcsec", arcsec, "base"},
+              t.e->misalignment(i, j));
   }
   for (int i = 0; i < 3; ++i)
     visit(CoefficientInfo{std::string("accel.k2.") + kAxis[i], "ug/g^2", ug_per_g2, "k2"},
           m.accel.k2(i));
   for (const auto& t : triads)
     for (int i = 0; i < 3; ++i)
-      visit(CoefficientInfo{std::string(t.name) + ".scale_asym." + kAxis[i], "ppm", ppm, "scale_asym"},
+      visit(CoefficientInfo{std::string(t.name) + ".scale_asym." + kAxis[i], "ppm", ppm,
+                            "scale_asym"},
             t.e->scale_asym(i));
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
@@ -117,7 +119,8 @@ void visit_coefficients(ImuErrorModel& m, Visit&& visit) {
 
 std::vector<std::pair<CoefficientInfo, double*>> ImuErrorModel::coefficient_refs() {
   std::vector<std::pair<CoefficientInfo, double*>> out;
-  visit_coefficients(*this, [&](const CoefficientInfo& info, double& v) { out.emplace_back(info, &v); });
+  visit_coefficients(*this,
+                     [&](const CoefficientInfo& info, double& v) { out.emplace_back(info, &v); });
   return out;
 }
 

@@ -13,9 +13,10 @@
 //
 // Coefficients are errors (not corrections). The gyro-to-accelerometer time delay tau shifts the
 // accelerometer input in time: the accelerometers output the model applied to the motion at t - tau
-// (tau > 0: accelerometer samples late). The simulator evaluates the motion at t - tau; compensate()
-// works on samples already aligned in time. Units of members are SI; names and engineering units of
-// every coefficient are listed by coefficient_refs() and in docs/conventions.md.
+// (tau > 0: accelerometer samples late). The simulator evaluates the motion at t - tau;
+// compensate() works on samples already aligned in time. Units of members are SI; names and
+// engineering units of every coefficient are listed by coefficient_refs() and in
+// docs/conventions.md.
 #pragma once
 
 #include <Eigen/Core>
@@ -51,8 +52,8 @@ struct KinematicSample {
 
 /// Name, unit and group of one coefficient; value_si = value_in_unit * si_per_unit.
 struct CoefficientInfo {
-  std::string name;   // e.g. "gyro.bias.x"
-  std::string unit;   // e.g. "deg/h"
+  std::string name;  // e.g. "gyro.bias.x"
+  std::string unit;  // e.g. "deg/h"
   double si_per_unit;
   std::string group;  // base | scale_asym | k2 | g_sensitivity | lever_arm | time_delay
 };

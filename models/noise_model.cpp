@@ -29,8 +29,8 @@ void NoiseGenerator::apply_triad(const TriadNoise& n, TriadState& s, Eigen::Vect
   if (n.bias_instability > 0.0) {
     // Exact discretisation of db/dt = -b/T + w: stationary sigma stays bias_instability.
     const double phi = std::exp(-dt / n.correlation_time);
-    s.gauss_markov = phi * s.gauss_markov +
-                     n.bias_instability * std::sqrt(1.0 - phi * phi) * normal3();
+    s.gauss_markov =
+        phi * s.gauss_markov + n.bias_instability * std::sqrt(1.0 - phi * phi) * normal3();
     inc += s.gauss_markov * dt;
   }
   if (n.random_walk > 0.0) {

@@ -10,11 +10,11 @@ namespace sinscal {
 
 /// Noise of one triad. Gyro units in brackets first, accelerometer second.
 struct TriadNoise {
-  double white = 0.0;             // rad/sqrt(s) | m/s/sqrt(s): ARW | VRW (density of the rate)
-  double bias_instability = 0.0;  // rad/s | m/s^2: 1-sigma of the Gauss-Markov bias
+  double white = 0.0;                // rad/sqrt(s) | m/s/sqrt(s): ARW | VRW (density of the rate)
+  double bias_instability = 0.0;     // rad/s | m/s^2: 1-sigma of the Gauss-Markov bias
   double correlation_time = 3600.0;  // s: Gauss-Markov correlation time
-  double random_walk = 0.0;       // rad/s/sqrt(s) | m/s^2/sqrt(s): rate | acceleration random walk
-  double quantum = 0.0;           // rad | m/s: increment per output count (0: not quantized)
+  double random_walk = 0.0;  // rad/s/sqrt(s) | m/s^2/sqrt(s): rate | acceleration random walk
+  double quantum = 0.0;      // rad | m/s: increment per output count (0: not quantized)
   bool any() const {
     return white > 0.0 || bias_instability > 0.0 || random_walk > 0.0 || quantum > 0.0;
   }

@@ -50,8 +50,7 @@ SensorProfile SensorProfile::load(const std::string& path) {
     const std::string key = std::string(f.section) + "." + f.key;
     if (!ini.has(key)) continue;
     const auto v = ini.get_quantities(key, f.kind, f.unit);
-    if (v.size() > 2)
-      throw ConfigError(ini.where(key) + "expected one value or a range 'lo hi'");
+    if (v.size() > 2) throw ConfigError(ini.where(key) + "expected one value or a range 'lo hi'");
     CoefficientRange r;
     r.fixed = v.size() == 1;
     r.lo = v.front();
@@ -65,7 +64,8 @@ SensorProfile SensorProfile::load(const std::string& path) {
   g.white = ini.get_quantity("gyro.arw", Q::AngleRandomWalk, "deg/sqrt(h)", 0.0);
   g.bias_instability = ini.get_quantity("gyro.bias_instability", Q::AngularRate, "deg/h", 0.0);
   g.correlation_time = ini.get_quantity("gyro.correlation_time", Q::Time, "s", 3600.0);
-  g.random_walk = ini.get_quantity("gyro.rate_random_walk", Q::RateRandomWalk, "deg/h/sqrt(h)", 0.0);
+  g.random_walk =
+      ini.get_quantity("gyro.rate_random_walk", Q::RateRandomWalk, "deg/h/sqrt(h)", 0.0);
   g.quantum = ini.get_quantity("gyro.quantum", Q::Angle, "arcsec", 0.0);
   p.gyro_range = ini.get_quantity("gyro.range", Q::AngularRate, "deg/s", 0.0);
   auto& a = p.noise.accel;
@@ -78,12 +78,12 @@ SensorProfile SensorProfile::load(const std::string& path) {
   for (const auto* tn : {&g, &a})
     if (tn->correlation_time <= 0.0)
       throw ConfigError(path + ": correlation_time must be positive");
-  ini.check_keys("gyro", {"bias", "scale", "misalignment", "scale_asym", "g_sensitivity", "arw",
-                          "bias_instability", "correlation_time", "rate_random_walk", "quantum",
-                          "range"});
-  ini.check_keys("accel", {"bias", "scale", "misalignment", "scale_asym", "k2", "lever_arm", "vrw",
-                           "bias_instability", "correlation_time", "random_walk", "quantum",
-                           "range"});
+  ini.check_keys("gyro",
+                 {"bias", "scale", "misalignment", "scale_asym", "g_sensitivity", "arw",
+                  "bias_instability", "correlation_time", "rate_random_walk", "quantum", "range"});
+  ini.check_keys("accel",
+                 {"bias", "scale", "misalignment", "scale_asym", "k2", "lever_arm", "vrw",
+                  "bias_instability", "correlation_time", "random_walk", "quantum", "range"});
   ini.check_keys("timing", {"time_delay"});
   for (const auto& key : ini.keys()) {
     const auto section = key.substr(0, key.find('.'));

@@ -6,8 +6,8 @@ namespace sinscal {
 
 /// One IMU output: incremental angle and velocity over the interval (t - dt, t], body axes.
 struct ImuSample {
-  double t = 0.0;                                     // s, end of the interval
-  double dt = 0.0;                                    // s, length of the interval
+  double t = 0.0;                                      // s, end of the interval
+  double dt = 0.0;                                     // s, length of the interval
   Eigen::Vector3d dtheta_b = Eigen::Vector3d::Zero();  // rad
   Eigen::Vector3d dv_b = Eigen::Vector3d::Zero();      // m/s
 };

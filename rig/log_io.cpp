@@ -55,7 +55,8 @@ TriadColumns read_triad(const IniFile& ini, const std::string& name, bool gyro) 
     std::array<bool, 3> used{false, false, false};
     for (int i = 0; i < 3; ++i) {
       std::string a;
-      if (!(in >> a)) throw ConfigError(ini.where(p + "_axes") + "expected three axes like 'x -z y'");
+      if (!(in >> a))
+        throw ConfigError(ini.where(p + "_axes") + "expected three axes like 'x -z y'");
       double sign = 1.0;
       if (a.size() == 2 && (a[0] == '-' || a[0] == '+')) {
         sign = a[0] == '-' ? -1.0 : 1.0;
@@ -99,7 +100,8 @@ LogFormat LogFormat::from_ini(const IniFile& ini, const std::string& base_dir, d
     return f;
   }
   if (format != "custom")
-    throw ConfigError(ini.where("log.format") + "expected 'sinscal' or 'custom', got '" + format + "'");
+    throw ConfigError(ini.where("log.format") + "expected 'sinscal' or 'custom', got '" + format +
+                      "'");
   ini.check_keys("log", {"file", "format", "delimiter", "header_lines", "columns", "time_unit",
                          "max_gap", "gyro", "gyro_unit", "gyro_scale", "gyro_offset", "gyro_axes",
                          "gyro_saturation", "accel", "accel_unit", "accel_scale", "accel_offset",
@@ -109,11 +111,16 @@ LogFormat LogFormat::from_ini(const IniFile& ini, const std::string& base_dir, d
   f.native = false;
   f.rate_hz = rate_hz;
   const std::string d = ini.get_string("log.delimiter", "comma");
-  if (d == "comma") f.delimiter = ',';
-  else if (d == "semicolon") f.delimiter = ';';
-  else if (d == "tab") f.delimiter = '\t';
-  else if (d == "whitespace") f.delimiter = ' ';
-  else throw ConfigError(ini.where("log.delimiter") + "expected comma, semicolon, tab or whitespace");
+  if (d == "comma")
+    f.delimiter = ',';
+  else if (d == "semicolon")
+    f.delimiter = ';';
+  else if (d == "tab")
+    f.delimiter = '\t';
+  else if (d == "whitespace")
+    f.delimiter = ' ';
+  else
+    throw ConfigError(ini.where("log.delimiter") + "expected comma, semicolon, tab or whitespace");
   f.header_lines = ini.get_int("log.header_lines", 0);
   std::istringstream cols(ini.get_string("log.columns"));
   for (std::string c; cols >> c;) {
@@ -173,7 +180,8 @@ LogReader::LogReader(const LogFormat& format) : f_(format), in_(format.file) {
   std::string line;
   bool nl = true;
   for (int i = 0; i < f_.header_lines; ++i)
-    if (!read_line(line, nl)) fail("file ends inside the " + std::to_string(f_.header_lines) + " header lines");
+    if (!read_line(line, nl))
+      fail("file ends inside the " + std::to_string(f_.header_lines) + " header lines");
   if (f_.native) {
     do {
       if (!read_line(line, nl)) fail("file ends before the column header");
@@ -237,13 +245,14 @@ bool LogReader::next(ImuSample& s) {
     if (!had_newline && fields_.size() < expected)
       fail("truncated line: the file ends in the middle of a sample (" +
            std::to_string(fields_.size()) + " of " + std::to_string(expected) + " fields)");
-    fail("expected " + std::to_string(expected) + " fields, found " + std::to_string(fields_.size()));
+    fail("expected " + std::to_string(expected) + " fields, found " +
+         std::to_string(fields_.size()));
   }
 
   // Time.
   const double nominal_dt = 1.0 / f_.rate_hz;
-  const double t = col_t_ >= 0 ? fields_[col_t_] * f_.time_scale
-                               : static_cast<double>(count_ + 1) * nominal_dt;
+  const double t =
+      col_t_ >= 0 ? fields_[col_t_] * f_.time_scale : static_cast<double>(count_ + 1) * nominal_dt;
   double dt = nominal_dt;
   if (count_ > 0) {
     dt = t - t_prev_;

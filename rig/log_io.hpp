@@ -34,23 +34,23 @@ class LogError : public std::runtime_error {
 
 /// How one triad is stored in a log.
 struct TriadColumns {
-  bool increments = true;      // true: angle/velocity increments; false: rates
-  double scale = 1.0;          // SI per (count - offset): unit factor times counts-to-unit scale
-  double offset = 0.0;         // subtracted from the raw value before scaling
-  std::array<int, 3> axis{0, 1, 2};            // body axis i comes from log axis axis[i]
-  std::array<double, 3> sign{1.0, 1.0, 1.0};   // with this sign
-  double saturation = 0.0;     // |raw value| at or beyond which a sample is saturated (0: none)
+  bool increments = true;  // true: angle/velocity increments; false: rates
+  double scale = 1.0;      // SI per (count - offset): unit factor times counts-to-unit scale
+  double offset = 0.0;     // subtracted from the raw value before scaling
+  std::array<int, 3> axis{0, 1, 2};           // body axis i comes from log axis axis[i]
+  std::array<double, 3> sign{1.0, 1.0, 1.0};  // with this sign
+  double saturation = 0.0;  // |raw value| at or beyond which a sample is saturated (0: none)
 };
 
 struct LogFormat {
-  std::string file;                 // path of the data file
-  bool native = true;               // the sinscal CSV (the header is checked)
-  char delimiter = ',';             // ' ' means any run of spaces or tabs
-  int header_lines = 1;             // lines skipped before the data (after them, '#' lines too)
-  std::vector<std::string> columns; // t gx gy gz ax ay az, "-" for a column to skip
-  double time_scale = 1.0;          // s per time unit
-  double rate_hz = 0.0;             // nominal rate; needed when there is no time column
-  double max_gap = 1.5;             // a step in time above max_gap / rate_hz is a gap (error)
+  std::string file;                  // path of the data file
+  bool native = true;                // the sinscal CSV (the header is checked)
+  char delimiter = ',';              // ' ' means any run of spaces or tabs
+  int header_lines = 1;              // lines skipped before the data (after them, '#' lines too)
+  std::vector<std::string> columns;  // t gx gy gz ax ay az, "-" for a column to skip
+  double time_scale = 1.0;           // s per time unit
+  double rate_hz = 0.0;              // nominal rate; needed when there is no time column
+  double max_gap = 1.5;              // a step in time above max_gap / rate_hz is a gap (error)
   TriadColumns gyro, accel;
 
   /// The native format for a rate.

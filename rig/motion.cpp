@@ -96,7 +96,8 @@ std::size_t Motion::segment_index(double t) const {
   // First segment whose end is after t; the last one for t beyond the end.
   const auto it = std::upper_bound(segments_.begin(), segments_.end(), t,
                                    [](double x, const MotionSegment& s) { return x < s.t1; });
-  return it == segments_.end() ? segments_.size() - 1 : static_cast<std::size_t>(it - segments_.begin());
+  return it == segments_.end() ? segments_.size() - 1
+                               : static_cast<std::size_t>(it - segments_.begin());
 }
 
 bool Motion::static_between(double a, double b) const {

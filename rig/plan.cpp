@@ -19,7 +19,8 @@ int section_number(const IniFile& ini, const std::string& section, const std::st
   char* end = nullptr;
   const long n = std::strtol(tail.c_str(), &end, 10);
   if (tail.empty() || *end != '\0' || n < 1)
-    throw ConfigError(ini.path() + ": section [" + section + "]: expected [" + prefix + "N], N = 1, 2, ...");
+    throw ConfigError(ini.path() + ": section [" + section + "]: expected [" + prefix +
+                      "N], N = 1, 2, ...");
   return static_cast<int>(n);
 }
 
@@ -31,7 +32,8 @@ EulerAngles read_angles(const IniFile& ini, const std::string& s) {
   return e;
 }
 
-Eigen::Vector3d read_vector(const IniFile& ini, const std::string& key, const Eigen::Vector3d& dflt) {
+Eigen::Vector3d read_vector(const IniFile& ini, const std::string& key,
+                            const Eigen::Vector3d& dflt) {
   if (!ini.has(key)) return dflt;
   std::istringstream in(ini.get_string(key));
   Eigen::Vector3d v;
@@ -152,7 +154,8 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
     }
   } else if (type == "rotations") {
     p.type = Type::Rotations;
-    p.move_accel = ini.get_quantity("plan.rotation_acceleration", Q::AngularAcceleration, "deg/s^2");
+    p.move_accel =
+        ini.get_quantity("plan.rotation_acceleration", Q::AngularAcceleration, "deg/s^2");
     if (!(p.move_accel > 0.0))
       throw ConfigError(ini.where("plan.rotation_acceleration") + "must be positive");
     p.start = read_angles(ini, "start");
@@ -167,7 +170,9 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
         p.steps.push_back(st);
       }
       if (!ini.sections_with_prefix("step.").empty())
-        throw ConfigError(ini.path() + ": give the rotations either as [rotations] axes or as [step.N], not both");
+        throw ConfigError(
+            ini.path() +
+            ": give the rotations either as [rotations] axes or as [step.N], not both");
     } else {
       std::vector<std::pair<int, RotationStep>> found;
       for (const auto& s : ini.sections_with_prefix("step.")) {
@@ -181,11 +186,12 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
     }
     if (p.steps.empty()) throw ConfigError(ini.path() + ": a rotation plan needs rotations");
   } else {
-    throw ConfigError(ini.where("plan.type") + "expected 'orientations' or 'rotations', got '" + type + "'");
+    throw ConfigError(ini.where("plan.type") + "expected 'orientations' or 'rotations', got '" +
+                      type + "'");
   }
   for (const auto& key : ini.keys()) {
     const std::string sec = key.substr(0, key.find('.'));
-    static const std::vector<std::string> known = {"plan", "site", "table", "orientation",
+    static const std::vector<std::string> known = {"plan",  "site",      "table", "orientation",
                                                    "start", "rotations", "step"};
     if (std::find(known.begin(), known.end(), sec) == known.end())
       throw ConfigError(ini.where(key) + "unknown section");
@@ -196,7 +202,9 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
 Motion build_motion(const Plan& plan, const Site& site, const TableErrors& errors) {
   std::mt19937_64 rng(errors.seed);
   std::normal_distribution<double> normal(0.0, 1.0);
-  auto angle_error = [&] { return errors.angle_sigma > 0.0 ? errors.angle_sigma * normal(rng) : 0.0; };
+  auto angle_error = [&] {
+    return errors.angle_sigma > 0.0 ? errors.angle_sigma * normal(rng) : 0.0;
+  };
 
   const Table nominal(plan.table);
   TableGeometry true_geometry = plan.table;
@@ -244,9 +252,11 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
         m.t0 = t;
         m.C_b_n_start = truth.C_b_n(prev);
         m.axis_n = truth.geometry().outer_axis_n;
-        m.alpha = TrapezoidProfile::by_rate(wrap(cmd.outer - prev.outer), plan.move_rate, plan.move_accel);
+        m.alpha = TrapezoidProfile::by_rate(wrap(cmd.outer - prev.outer), plan.move_rate,
+                                            plan.move_accel);
         m.axis_b = truth.inner_axis_b();
-        m.beta = TrapezoidProfile::by_rate(wrap(cmd.inner - prev.inner), plan.move_rate, plan.move_accel);
+        m.beta = TrapezoidProfile::by_rate(wrap(cmd.inner - prev.inner), plan.move_rate,
+                                           plan.move_accel);
         m.t1 = t + std::max(m.alpha.duration(), m.beta.duration());
         if (m.t1 > t) {
           segments.push_back(m);
@@ -289,8 +299,9 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
       segments.push_back(m);
       t = m.t1;
       actual = m.C_b_n_end();
-      if (st.pause > 0.0) add_dwell("after " + std::to_string(i + 1) + " (" + st.axis_name + ")",
-                                    known, actual, st.pause);
+      if (st.pause > 0.0)
+        add_dwell("after " + std::to_string(i + 1) + " (" + st.axis_name + ")", known, actual,
+                  st.pause);
     }
   }
   return Motion(site, std::move(segments), std::move(dwells));

@@ -44,7 +44,8 @@ Session Session::load(const std::string& path) {
   return s;
 }
 
-void write_truth_json(const std::string& path, const ImuErrorModel& model, const std::string& note) {
+void write_truth_json(const std::string& path, const ImuErrorModel& model,
+                      const std::string& note) {
   nlohmann::ordered_json j;
   if (!note.empty()) j["note"] = note;
   auto& c = j["coefficients"];

@@ -14,16 +14,16 @@
 namespace sinscal {
 
 struct Session {
-  std::string path;       // session.ini
-  std::string dir;        // its directory
+  std::string path;  // session.ini
+  std::string dir;   // its directory
   std::string name;
   Site site;
   double rate_hz = 0.0;
   double time_offset = 0.0;  // s: log time at which the plan starts
   Plan plan;
   LogFormat log;
-  std::string truth_file;    // empty if none
-  std::string sensor_file;   // empty if none
+  std::string truth_file;   // empty if none
+  std::string sensor_file;  // empty if none
 
   static Session load(const std::string& path);
 };
@@ -31,7 +31,7 @@ struct Session {
 /// One coefficient of a result file.
 struct ResultCoefficient {
   double value = 0.0;
-  std::optional<double> sigma;  // absent: not estimated (truth files) 
+  std::optional<double> sigma;  // absent: not estimated (truth files)
   std::string unit;
 };
 

@@ -20,7 +20,7 @@ Eigen::Vector3d Table::inner_axis_b() const { return g_.C_b_p.transpose() * g_.i
 
 TableAngles Table::angles_for(const Eigen::Matrix3d& C_target) const {
   const Eigen::Vector3d& u = g_.outer_axis_n;
-  const Eigen::Vector3d v0 = g_.inner_axis_p;        // inner axis in NED at outer angle 0
+  const Eigen::Vector3d v0 = g_.inner_axis_p;           // inner axis in NED at outer angle 0
   const Eigen::Vector3d w = C_target * inner_axis_b();  // where the target puts the inner axis
   auto fail = [&](const std::string& why) {
     std::ostringstream s;

@@ -56,11 +56,13 @@ TEST_CASE("Named conventions put the body axes where their definitions say", "[a
   CHECK(C_b_n_from_euler(AngleConvention::Paper, {0, 0, 30 * d}).col(2).z() == Approx(0.5));
 }
 
-TEST_CASE("The paper's 8 orientations: one axis North-South, two at 45 deg in East-Up", "[attitude]") {
-  const double table[8][3] = {{0, 0, 45},    {90, 45, 0},   {180, 0, 315}, {270, 315, 0},
-                              {0, 0, 225},   {90, 45, 180}, {180, 0, 135}, {90, 225, 0}};
+TEST_CASE("The paper's 8 orientations: one axis North-South, two at 45 deg in East-Up",
+          "[attitude]") {
+  const double table[8][3] = {{0, 0, 45},  {90, 45, 0},   {180, 0, 315}, {270, 315, 0},
+                              {0, 0, 225}, {90, 45, 180}, {180, 0, 135}, {90, 225, 0}};
   for (int i = 0; i < 8; ++i) {
-    const EulerAngles e{table[i][0] * units::deg, table[i][1] * units::deg, table[i][2] * units::deg};
+    const EulerAngles e{table[i][0] * units::deg, table[i][1] * units::deg,
+                        table[i][2] * units::deg};
     const Matrix3d C = C_b_n_from_euler(AngleConvention::Paper, e);
     const int ns_axis = i % 2 == 0 ? 0 : 2;  // x in 1,3,5,7; z in 2,4,6,8
     CAPTURE(i + 1);
@@ -79,5 +81,6 @@ TEST_CASE("Attitude error sign: C_computed = (I - [phi x]) C_true", "[attitude]"
   const Vector3d phi(2e-5, -3e-5, 1e-5);
   const Matrix3d C_comp = (Matrix3d::Identity() - skew(phi)) * C_true;
   CHECK((attitude_error_n(C_comp, C_true) - phi).norm() < 1e-14);
-  CHECK((attitude_error_n(dcm_from_rotvec(-phi) * C_true, C_true) - phi).norm() < 1e-15);  // rounding of unit-size matrices
+  CHECK((attitude_error_n(dcm_from_rotvec(-phi) * C_true, C_true) - phi).norm() <
+        1e-15);  // rounding of unit-size matrices
 }

@@ -14,7 +14,8 @@ using Eigen::Vector3d;
 namespace {
 ImuErrorModel random_extended_model(std::uint64_t seed) {
   // Base and extended terms from the profile, plus asymmetry and g-sensitivity by hand.
-  ImuErrorModel m = SensorProfile::load(test::source_path("config/sensors/nav-fog-extended.ini")).draw(seed);
+  ImuErrorModel m =
+      SensorProfile::load(test::source_path("config/sensors/nav-fog-extended.ini")).draw(seed);
   std::mt19937_64 rng(seed + 100);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int i = 0; i < 3; ++i) {
@@ -26,7 +27,8 @@ ImuErrorModel random_extended_model(std::uint64_t seed) {
 }
 }  // namespace
 
-TEST_CASE("Error model: apply then compensate returns the input to 1e-12 relative", "[error_model]") {
+TEST_CASE("Error model: apply then compensate returns the input to 1e-12 relative",
+          "[error_model]") {
   std::mt19937_64 rng(3);
   std::normal_distribution<double> n(0.0, 1.0);
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
@@ -105,7 +107,8 @@ TEST_CASE("Coefficient catalog: names, units and set/get", "[error_model]") {
 }
 
 TEST_CASE("Sensor profiles: drawn coefficients lie in their ranges", "[error_model]") {
-  const SensorProfile p = SensorProfile::load(test::source_path("config/sensors/nav-fog-extended.ini"));
+  const SensorProfile p =
+      SensorProfile::load(test::source_path("config/sensors/nav-fog-extended.ini"));
   CHECK(p.has("accel.k2"));
   CHECK_FALSE(p.has("gyro.g_sensitivity"));
   CHECK(p.noise.gyro.white == Approx(0.001 * units::deg_per_sqrt_h));
@@ -125,7 +128,8 @@ TEST_CASE("Sensor profiles: drawn coefficients lie in their ranges", "[error_mod
   CHECK(p.draw(1).coefficients() != p.draw(2).coefficients());
 }
 
-TEST_CASE("Sensor profiles: wrong units and unknown keys are errors with file and line", "[error_model]") {
+TEST_CASE("Sensor profiles: wrong units and unknown keys are errors with file and line",
+          "[error_model]") {
   const std::string dir = test::temp_dir("profile");
   test::write_file(dir + "/bad_unit.ini", "[gyro]\nbias = 0.1 0.3 ug\n");
   try {

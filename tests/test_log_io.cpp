@@ -120,11 +120,12 @@ TEST_CASE("Log: foreign formats (counts, rates, delimiters, axis mapping)", "[lo
                    "some header\nmore header\n"
                    "10  100 200 300  1000 2000 3000\n"
                    "20  100 200 300  1000 2000 3000\n");
-  test::write_file(dir + "/s.ini",
-                   "[log]\nfile = f.txt\nformat = custom\ndelimiter = whitespace\nheader_lines = 2\n"
-                   "columns = t gx gy gz ax ay az\ntime_unit = ms\n"
-                   "gyro = rate\ngyro_unit = deg/s\ngyro_scale = 0.5\ngyro_offset = 100\n"
-                   "gyro_axes = -y x z\naccel = increment\naccel_unit = mm/s\naccel_axes = -y x z\n");
+  test::write_file(
+      dir + "/s.ini",
+      "[log]\nfile = f.txt\nformat = custom\ndelimiter = whitespace\nheader_lines = 2\n"
+      "columns = t gx gy gz ax ay az\ntime_unit = ms\n"
+      "gyro = rate\ngyro_unit = deg/s\ngyro_scale = 0.5\ngyro_offset = 100\n"
+      "gyro_axes = -y x z\naccel = increment\naccel_unit = mm/s\naccel_axes = -y x z\n");
   const IniFile ini(dir + "/s.ini");
   LogReader r(LogFormat::from_ini(ini, dir, 100.0));
   ImuSample s;
@@ -140,8 +141,10 @@ TEST_CASE("Log: foreign formats (counts, rates, delimiters, axis mapping)", "[lo
   CHECK(s.dv_b.z() == Approx(3.0));
   CHECK_FALSE(r.next(s));
   // A bad key value is a configuration error naming the line.
-  test::write_file(dir + "/bad.ini", "[log]\nfile = f.txt\nformat = custom\ncolumns = t gx\ngyro_axes = x x z\n");
-  CHECK_THROWS_WITH(LogFormat::from_ini(IniFile(dir + "/bad.ini"), dir, 100.0), Catch::Contains("bad.ini:5"));
+  test::write_file(dir + "/bad.ini",
+                   "[log]\nfile = f.txt\nformat = custom\ncolumns = t gx\ngyro_axes = x x z\n");
+  CHECK_THROWS_WITH(LogFormat::from_ini(IniFile(dir + "/bad.ini"), dir, 100.0),
+                    Catch::Contains("bad.ini:5"));
 }
 
 TEST_CASE("Log: the real MPU-6050 recording reads with its documented format", "[log][data]") {
@@ -152,10 +155,11 @@ TEST_CASE("Log: the real MPU-6050 recording reads with its documented format", "
   }
   const std::string dir = test::temp_dir("log_mpu");
   test::write_file(dir + "/s.ini",
-                   "[log]\nfile = " + file + "\nformat = custom\nheader_lines = 5\n"
-                   "columns = ax ay az gx gy gz\ngyro = rate\ngyro_unit = deg/s\n"
-                   "gyro_scale = 0.0076335877862595417\naccel = rate\naccel_unit = g\n"
-                   "accel_scale = 0.00006103515625\n");
+                   "[log]\nfile = " + file +
+                       "\nformat = custom\nheader_lines = 5\n"
+                       "columns = ax ay az gx gy gz\ngyro = rate\ngyro_unit = deg/s\n"
+                       "gyro_scale = 0.0076335877862595417\naccel = rate\naccel_unit = g\n"
+                       "accel_scale = 0.00006103515625\n");
   LogReader r(LogFormat::from_ini(IniFile(dir + "/s.ini"), dir, 100.0));
   ImuSample s;
   Vector3d sum_v = Vector3d::Zero();

@@ -20,7 +20,8 @@ TEST_CASE("Table: angles for every paper orientation reproduce it", "[table]") {
     CHECK((table.C_b_n(a) - C).cwiseAbs().maxCoeff() < 1e-12);
   }
   // Orientation 1 (roll 45 about North) is a pure outer-axis tilt of 45 deg.
-  const TableAngles a1 = table.angles_for(C_b_n_from_euler(plan.convention, plan.orientations[0].angles));
+  const TableAngles a1 =
+      table.angles_for(C_b_n_from_euler(plan.convention, plan.orientations[0].angles));
   CHECK(std::abs(a1.outer) == Approx(45 * units::deg));
   CHECK(a1.inner == Approx(0.0).margin(1e-12));
   // Nose up 30 deg at heading 0 tilts the inner axis (body y) towards South: unreachable.
@@ -43,8 +44,10 @@ TEST_CASE("Plans: seed8 and rot19 build the documented timelines", "[plan]") {
   CHECK(m19.duration() == Approx(70.0 + 18 * 29.0));
   CHECK(m19.dwells()[0].t_end == Approx(70.0));
   // The sequence turns the body back to its start attitude.
-  CHECK((m19.dwells().back().C_b_n_known - m19.dwells().front().C_b_n_known).cwiseAbs().maxCoeff() < 1e-12);
-  CHECK((m19.dwells().back().C_b_n_true - m19.dwells().back().C_b_n_known).cwiseAbs().maxCoeff() < 1e-12);
+  CHECK((m19.dwells().back().C_b_n_known - m19.dwells().front().C_b_n_known).cwiseAbs().maxCoeff() <
+        1e-12);
+  CHECK((m19.dwells().back().C_b_n_true - m19.dwells().back().C_b_n_known).cwiseAbs().maxCoeff() <
+        1e-12);
   // After the first +y turn (ned-frd, start x North): x points up (nose up 90 deg).
   CHECK(m19.dwells()[1].C_b_n_known.col(0).z() == Approx(-1.0));
 }
@@ -78,7 +81,8 @@ TEST_CASE("Motion: rates and angular accelerations match finite differences", "[
         const Vector3d wd_fd = (kp.imu.omega_ib_b - km.imu.omega_ib_b) / (2 * h);
         CHECK((wd_fd - k.imu.omega_dot_ib_b).norm() < 1e-6);
         // Specific force is gravity's reaction at the table centre.
-        CHECK(k.imu.f_ib_b.norm() == Approx(Earth::wgs84().gravity_n(p.site.lat_rad, p.site.h_m).norm()));
+        CHECK(k.imu.f_ib_b.norm() ==
+              Approx(Earth::wgs84().gravity_n(p.site.lat_rad, p.site.h_m).norm()));
       }
     }
   }
@@ -86,8 +90,9 @@ TEST_CASE("Motion: rates and angular accelerations match finite differences", "[
 
 TEST_CASE("Plans: bad plans are clear errors naming file and line", "[plan]") {
   const std::string dir = test::temp_dir("plans");
-  const std::string head = "[plan]\ntype = orientations\nconvention = paper\nmove_rate = 15 deg/s\n"
-                           "move_acceleration = 15 deg/s^2\n";
+  const std::string head =
+      "[plan]\ntype = orientations\nconvention = paper\nmove_rate = 15 deg/s\n"
+      "move_acceleration = 15 deg/s^2\n";
   auto error_of = [&](const std::string& text) {
     test::write_file(dir + "/p.ini", text);
     try {
@@ -97,19 +102,23 @@ TEST_CASE("Plans: bad plans are clear errors naming file and line", "[plan]") {
     }
     return std::string("no error");
   };
-  CHECK_THAT(error_of(head + "[orientation.1]\nheading = 0\npitch = 0\nroll = 0\ndwell = 180 deg\n"),
-             Catch::Contains("p.ini:10") && Catch::Contains("deg"));
+  CHECK_THAT(
+      error_of(head + "[orientation.1]\nheading = 0\npitch = 0\nroll = 0\ndwell = 180 deg\n"),
+      Catch::Contains("p.ini:10") && Catch::Contains("deg"));
   CHECK_THAT(error_of(head + "[orientation.1]\nheading = 0\npitch = 0\nroll = 0\n"),
              Catch::Contains("dwell"));
   CHECK_THAT(error_of(head + "[orientation.2]\nheading = 0\npitch = 0\nroll = 0\ndwell = 1\n"),
              Catch::Contains("orientation.1"));
   CHECK_THAT(error_of(head + "[orientation.1]\nheading = 0\npitch = 30\nroll = 0\ndwell = 1\n"),
              Catch::Contains("not reachable"));
-  CHECK_THAT(error_of(head + "[orientation.1]\nheading = 0\npitch = 0\nroll = 0\ndwell = 1\nspeed = 3\n"),
-             Catch::Contains("p.ini:11") && Catch::Contains("unknown key"));
-  CHECK_THAT(error_of("[plan]\ntype = rotations\nrotation_acceleration = 1 deg/s^2\n[start]\nheading = 0\n"
-                      "pitch = 0\nroll = 0\ndwell = 10\n[rotations]\naxes = +y\nangle = 90\nduration = 9\n"),
-             Catch::Contains("acceleration too low"));
+  CHECK_THAT(
+      error_of(head + "[orientation.1]\nheading = 0\npitch = 0\nroll = 0\ndwell = 1\nspeed = 3\n"),
+      Catch::Contains("p.ini:11") && Catch::Contains("unknown key"));
+  CHECK_THAT(
+      error_of(
+          "[plan]\ntype = rotations\nrotation_acceleration = 1 deg/s^2\n[start]\nheading = 0\n"
+          "pitch = 0\nroll = 0\ndwell = 10\n[rotations]\naxes = +y\nangle = 90\nduration = 9\n"),
+      Catch::Contains("acceleration too low"));
 }
 
 TEST_CASE("Every bundled plan loads and builds", "[plan]") {

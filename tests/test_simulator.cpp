@@ -22,8 +22,9 @@ TEST_CASE("Simulator: static increments are exactly Earth rate and gravity", "[s
   CHECK((s.dv_b + d.C_b_n_true.transpose() * g_n * s.dt).norm() < 1e-16);
 }
 
-TEST_CASE("Simulator: increments through each move reproduce the true attitude change to 1e-3 arcsec",
-          "[simulator]") {
+TEST_CASE(
+    "Simulator: increments through each move reproduce the true attitude change to 1e-3 arcsec",
+    "[simulator]") {
   for (const char* name : {"seed8.ini", "rot19.ini"}) {
     const Plan p = test::load_plan(name);
     const Motion m = build_motion(p, p.site);
@@ -41,8 +42,10 @@ TEST_CASE("Simulator: increments through each move reproduce the true attitude c
       x.lon_rad = p.site.lon_rad;
       x.h_m = p.site.h_m;
       nav.reset(x);
-      for (std::size_t k = k0; k < k1; ++k) nav.step(samples[k].dtheta_b, samples[k].dv_b, samples[k].dt);
-      const double err = attitude_error_n(nav.state().C_b_n(), m.at(static_cast<double>(k1) * dt).C_b_n).norm();
+      for (std::size_t k = k0; k < k1; ++k)
+        nav.step(samples[k].dtheta_b, samples[k].dv_b, samples[k].dt);
+      const double err =
+          attitude_error_n(nav.state().C_b_n(), m.at(static_cast<double>(k1) * dt).C_b_n).norm();
       CAPTURE(name, seg.t0, err / units::arcsec);
       CHECK(err < 1e-3 * units::arcsec);
     }

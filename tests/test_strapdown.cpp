@@ -61,7 +61,8 @@ TEST_CASE("Strapdown, perfect sensors: 200 s through each table move at 15 deg/s
     MaxError max;
     for (std::size_t k = k0; k < k1; ++k) {
       nav.step(samples[k].dtheta_b, samples[k].dv_b, samples[k].dt);
-      max.add(nav_error(nav.state(), m.at(static_cast<double>(k + 1) * dt).C_b_n, Vector3d::Zero(), p.site));
+      max.add(nav_error(nav.state(), m.at(static_cast<double>(k + 1) * dt).C_b_n, Vector3d::Zero(),
+                        p.site));
     }
     CAPTURE(seg.t0, max.dv, max.phi / units::arcsec);
     CHECK(max.dv < 1e-5);
@@ -106,24 +107,31 @@ void check_schuler(const ImuErrorModel& errors, bool vertical_held) {
     const Schuler s{e.gravity_n(p.site.lat_rad, p.site.h_m).norm(),
                     e.radius_meridian(p.site.lat_rad) + p.site.h_m,
                     e.radius_transverse(p.site.lat_rad) + p.site.h_m,
-                    fa.x(), fa.y(), -wg.x(), -wg.y()};
+                    fa.x(),
+                    fa.y(),
+                    -wg.x(),
+                    -wg.y()};
     const Eigen::Vector4d a = s.at(r.error.t);
-    const Eigen::Vector4d n(r.error.dv_n.x(), r.error.dv_n.y(), r.error.phi_n.y(), r.error.phi_n.x());
+    const Eigen::Vector4d n(r.error.dv_n.x(), r.error.dv_n.y(), r.error.phi_n.y(),
+                            r.error.phi_n.x());
     // With a free vertical channel the vertical velocity error v_D = df_D t couples into the
     // east channel through Coriolis, 2 Omega cos(lat) v_D, integrating to Omega cos(lat) df_D t^2:
     // a cross-coupling the paper's two-channel solutions do not model, allowed for explicitly.
     const double t = r.error.t;
-    const double allow_v = vertical_held ? 0.0
-                                         : e.rate() * std::cos(p.site.lat_rad) * std::abs(fa.z()) * t * t;
+    const double allow_v =
+        vertical_held ? 0.0 : e.rate() * std::cos(p.site.lat_rad) * std::abs(fa.z()) * t * t;
     for (int k = 0; k < 2; ++k) {
       const double allow = k == 0 ? allow_v : 0.0;
-      dev[r.dwell](k) = std::max(dev[r.dwell](k),
-                                 std::max(std::abs(n(2 * k) - a(2 * k)), std::abs(n(2 * k + 1) - a(2 * k + 1))) - allow);
-      peak[r.dwell](k) = std::max(peak[r.dwell](k), std::max(std::abs(a(2 * k)), std::abs(a(2 * k + 1))));
+      dev[r.dwell](k) = std::max(
+          dev[r.dwell](k),
+          std::max(std::abs(n(2 * k) - a(2 * k)), std::abs(n(2 * k + 1) - a(2 * k + 1))) - allow);
+      peak[r.dwell](k) =
+          std::max(peak[r.dwell](k), std::max(std::abs(a(2 * k)), std::abs(a(2 * k + 1))));
     }
   });
   for (int d = 1; d <= 8; ++d) {
-    CAPTURE(vertical_held, d, dev[d](0), peak[d](0), dev[d](1) / units::arcsec, peak[d](1) / units::arcsec);
+    CAPTURE(vertical_held, d, dev[d](0), peak[d](0), dev[d](1) / units::arcsec,
+            peak[d](1) / units::arcsec);
     CHECK(peak[d](0) > 0.0);
     CHECK(dev[d](0) < 0.02 * peak[d](0));
     CHECK(dev[d](1) < 0.02 * peak[d](1));
