@@ -46,11 +46,7 @@ int main(int argc, char** argv) {
   double sink = 0.0;
   for (int pass = 0; pass < 5; ++pass) {
     Strapdown nav;
-    NavState x;
-    x.q_b_n = Eigen::Quaterniond(motion.dwells()[0].C_b_n_known);
-    x.lat_rad = plan.site.lat_rad;
-    x.h_m = plan.site.h_m;
-    nav.reset(x);
+    nav.reset(NavState::at_rest(motion.dwells()[0].C_b_n_known, plan.site));
     t0 = Clock::now();
     for (const auto& s : samples) nav.step(s.dtheta_b, s.dv_b, s.dt);
     t_nav = std::min(t_nav, seconds_since(t0));

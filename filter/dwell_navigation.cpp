@@ -48,12 +48,7 @@ void DwellNavigation::run(SampleSource& source,
           << ") begins at plan time " << dwells_[d].t_start << " s";
         throw PlanMismatch(m.str());
       }
-      NavState x0;
-      x0.q_b_n = Eigen::Quaterniond(dwells_[d].C_b_n_known);
-      x0.lat_rad = site_.lat_rad;
-      x0.lon_rad = site_.lon_rad;
-      x0.h_m = site_.h_m;
-      nav.reset(x0);
+      nav.reset(NavState::at_rest(dwells_[d].C_b_n_known, site_));
       current = DwellNavSummary{};
       current.dwell = dwells_[d];
       active = true;

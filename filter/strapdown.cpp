@@ -6,6 +6,15 @@
 
 namespace sinscal {
 
+NavState NavState::at_rest(const Eigen::Matrix3d& C_b_n, const Site& site) {
+  NavState x;
+  x.q_b_n = Eigen::Quaterniond(C_b_n).normalized();
+  x.lat_rad = site.lat_rad;
+  x.lon_rad = site.lon_rad;
+  x.h_m = site.h_m;
+  return x;
+}
+
 Strapdown::Strapdown(const Earth& earth, const StrapdownOptions& options)
     : earth_(earth), options_(options) {}
 

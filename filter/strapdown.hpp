@@ -27,6 +27,8 @@ struct NavState {
   double lon_rad = 0.0;
   double h_m = 0.0;
   Eigen::Matrix3d C_b_n() const { return q_b_n.toRotationMatrix(); }
+  /// At rest at `site` with attitude C_b_n (the start of every static navigation).
+  static NavState at_rest(const Eigen::Matrix3d& C_b_n, const Site& site);
 };
 
 struct StrapdownOptions {

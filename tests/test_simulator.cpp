@@ -36,12 +36,7 @@ TEST_CASE(
       const auto k0 = static_cast<std::size_t>(std::floor(seg.t0 / dt));
       const auto k1 = static_cast<std::size_t>(std::ceil(seg.t1 / dt));
       Strapdown nav;
-      NavState x;
-      x.q_b_n = Eigen::Quaterniond(m.at(static_cast<double>(k0) * dt).C_b_n);
-      x.lat_rad = p.site.lat_rad;
-      x.lon_rad = p.site.lon_rad;
-      x.h_m = p.site.h_m;
-      nav.reset(x);
+      nav.reset(NavState::at_rest(m.at(static_cast<double>(k0) * dt).C_b_n, p.site));
       for (std::size_t k = k0; k < k1; ++k)
         nav.step(samples[k].dtheta_b, samples[k].dv_b, samples[k].dt);
       const double err =

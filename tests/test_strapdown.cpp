@@ -52,12 +52,7 @@ TEST_CASE("Strapdown, perfect sensors: 200 s through each table move at 15 deg/s
     const auto k0 = static_cast<std::size_t>(std::floor((seg.t0 - 100.0) / dt));
     const std::size_t k1 = k0 + 20000;
     Strapdown nav;
-    NavState x;
-    x.q_b_n = Eigen::Quaterniond(m.at(static_cast<double>(k0) * dt).C_b_n);
-    x.lat_rad = p.site.lat_rad;
-    x.lon_rad = p.site.lon_rad;
-    x.h_m = p.site.h_m;
-    nav.reset(x);
+    nav.reset(NavState::at_rest(m.at(static_cast<double>(k0) * dt).C_b_n, p.site));
     MaxError max;
     for (std::size_t k = k0; k < k1; ++k) {
       nav.step(samples[k].dtheta_b, samples[k].dv_b, samples[k].dt);
