@@ -67,6 +67,9 @@ void DwellNavigation::run(SampleSource& source,
       }
     }
   }
+  // Data ending within a sample of the dwell's end complete it.
+  if (active && d < dwells_.size() && t_last - options_.time_offset > dwells_[d].t_end - 1.5 * s.dt)
+    finish(t_last);
   if (d < dwells_.size()) {
     std::ostringstream m;
     m << "the log ends at t = " << t_last << " s but dwell " << dwells_[d].index << " ("

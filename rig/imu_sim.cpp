@@ -21,7 +21,8 @@ ImuSimulator::ImuSimulator(const Motion& motion, const ImuErrorModel& errors,
       noise_(options.noise ? noise : NoiseModel{}, options.noise_seed),
       dt_(1.0 / options.rate_hz) {
   if (!(options.rate_hz > 0.0)) throw std::invalid_argument("sample rate must be positive");
-  total_ = static_cast<std::size_t>(std::floor(motion.duration() * options.rate_hz + 1e-9));
+  // Cover the whole motion: a last partial interval is completed at rest.
+  total_ = static_cast<std::size_t>(std::ceil(motion.duration() * options.rate_hz - 1e-9));
 }
 
 Eigen::Vector3d ImuSimulator::integrate(double a, double b, double shift, bool gyro) const {

@@ -27,7 +27,7 @@ class ImuSimulator : public SampleSource {
                const SimulatorOptions& options);
   /// Next sample, until the end of the motion.
   bool next(ImuSample& sample) override;
-  /// Number of samples the whole motion gives.
+  /// Number of samples: enough to cover the whole motion (the IMU rests after its end).
   std::size_t total_samples() const { return total_; }
   /// Samples clipped by the measurement range so far.
   std::size_t saturated() const { return saturated_; }

@@ -12,7 +12,7 @@ TEST_CASE("Simulator: static increments are exactly Earth rate and gravity", "[s
   const Plan p = test::load_plan("seed8.ini");
   const Motion m = build_motion(p, p.site);
   const auto samples = test::simulate(m);
-  CHECK(samples.size() == static_cast<std::size_t>(std::floor(m.duration() * 100.0 + 1e-9)));
+  CHECK(samples.size() == static_cast<std::size_t>(std::ceil(m.duration() * 100.0 - 1e-9)));
   const Earth& e = Earth::wgs84();
   const Vector3d w_n = e.omega_ie_n(p.site.lat_rad), g_n = e.gravity_n(p.site.lat_rad, p.site.h_m);
   const Dwell& d = m.dwells()[2];

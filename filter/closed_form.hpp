@@ -1,0 +1,127 @@
+// The source paper's closed-form calibration (../shared/seed-method.md), faithful and generalized.
+//
+// Stage 1, per static dwell: the navigation errors over the dwell (started from the known
+// attitude, zero velocity, known position) give the equivalent inputs u = (df_n, dw_n): the
+// accelerometer and gyro errors in NED, natural sign (the paper's dwn, dwe are -dw_n, -dw_e).
+//   point: the paper's single-time formulas (eq. 5) on the uncoupled Schuler solutions;
+//   fit:   weighted least squares of the error dynamics over the whole window. The errors are
+//          observed exactly at every sample, so the one-step residuals
+//          x(k+1) - Phi x(k) - Gamma u are the sensor noise of that step, independent from step to
+//          step (VRW^2 h on velocity rows, ARW^2 h on attitude rows): the fit is the optimal
+//          estimator of u under the noise model and reaches VRW / sqrt(T). Constant memory.
+// Channels: north (dv_n, phi_e -> df_n, dw_e), east (dv_e, phi_n -> df_e, dw_n), optionally
+// vertical (dv_d -> df_d) and heading (phi_d -> dw_d). Model: the paper's uncoupled channels or the
+// coupled one (Earth rate, Coriolis, transport, gravity feedback).
+//
+// Stage 2: the equivalent inputs of all dwells are linear in the 24 base coefficients; a general
+// weighted least-squares solve (any static plan) with an identifiability report, and the paper's
+// literal closed forms for the X and Z sensors of the 8-orientation plan.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "filter/ins_error_model.hpp"
+#include "filter/strapdown.hpp"
+#include "rig/imu_sample.hpp"
+#include "rig/motion.hpp"
+
+namespace sinscal {
+
+enum class Stage1Method { Point, Fit };
+
+struct ChannelSet {
+  bool north = true;
+  bool east = true;
+  bool vertical = false;
+  bool heading = false;
+  /// Which of the 6 inputs (df_n, df_e, df_d, dw_n, dw_e, dw_d) the channels give.
+  std::array<bool, 6> inputs() const;
+};
+
+struct Stage1Options {
+  Stage1Method method = Stage1Method::Fit;
+  ErrorModelKind model = ErrorModelKind::Uncoupled;
+  ChannelSet channels;
+  double point_time = 0.0;  // s from the dwell start; 0: the end of the dwell
+  double arw = 0.0;         // rad/sqrt(s), gyro white noise density (weights, sigma)
+  double vrw = 0.0;         // m/s/sqrt(s), accelerometer white noise density
+  double min_dwell = 20.0;  // s: a shorter dwell is an error
+  StrapdownOptions strapdown;
+};
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+/// Stage-1 result of one dwell.
+struct EquivalentInputs {
+  Dwell dwell;
+  double duration = 0.0;  // s navigated
+  std::size_t samples = 0;
+  Vector6d u = Vector6d::Zero();    // df_n (m/s^2, NED), dw_n (rad/s, NED)
+  Matrix6d cov = Matrix6d::Zero();  // of the estimated inputs; rows of the others are zero
+  std::array<bool, 6> estimated{};  // which inputs this stage gave
+  double rms_velocity = 0.0;        // m/s: RMS one-step residual of the velocity rows (fit)
+  double rms_attitude = 0.0;        // rad: of the attitude rows (fit)
+  double chi2_per_dof = 0.0;  // residual chi-square per degree of freedom under the noise model
+};
+
+/// Runs the navigator through every dwell and stage 1 on it. Throws PlanMismatch (dwell missing
+/// from the log) or std::invalid_argument (dwell shorter than min_dwell, no noise densities).
+std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector<Dwell>& dwells,
+                                         const Site& site, const Stage1Options& options,
+                                         double time_offset = 0.0);
+
+/// Layout of the 24 base coefficients (the first 24 of coefficient_catalog(), same order).
+namespace base_coeffs {
+constexpr Block kGyroBias{0, 3};
+constexpr Block kGyroScale{3, 3};
+constexpr Block kGyroMis{6, 6};  // xy xz yx yz zx zy
+constexpr Block kAccelBias{12, 3};
+constexpr Block kAccelScale{15, 3};
+constexpr Block kAccelMis{18, 6};
+constexpr int kSize = kAccelMis.index + kAccelMis.size;
+static_assert(kSize == 24, "base coefficient layout");
+}  // namespace base_coeffs
+
+using Stage2Map = Eigen::Matrix<double, 6, base_coeffs::kSize>;
+
+/// u = H theta at a static attitude (theta in SI): df_n = C (b_a + (K_a + M_a) f_b),
+/// dw_n = C (b_g + (K_g + M_g) omega_ib_b), with f_b and omega_ib_b from gravity and Earth rate.
+Stage2Map equivalent_input_map(const Eigen::Matrix3d& C_b_n, const Site& site);
+/// Base coefficients of a model as the stage-2 vector (SI) and back.
+Eigen::VectorXd base_vector(const class ImuErrorModel& model);
+
+struct Stage2Options {
+  double table_sigma = 0.0;  // rad, 1-sigma error of each table angle (per orientation)
+  Eigen::Vector3d outer_axis_n = Eigen::Vector3d::UnitX();
+  Eigen::Vector3d inner_axis_b = Eigen::Vector3d::UnitY();
+  double null_tolerance = 1e-9;  // relative singular value below which a direction is unobservable
+};
+
+struct Stage2Result {
+  Eigen::VectorXd theta;  // 24, SI; unobservable entries are NaN
+  Eigen::MatrixXd cov;    // 24 x 24, rows/columns of unobservable entries NaN
+  std::vector<bool> observable;
+  int rank = 0;
+  std::vector<std::string> unobservable_directions;  // e.g. "+0.577 accel.scale.x +0.577 ..."
+  std::vector<Eigen::VectorXd> null_vectors;         // in coefficient space (unit norm)
+};
+
+Stage2Result solve_stage2(const std::vector<EquivalentInputs>& inputs, const Site& site,
+                          const Stage2Options& options);
+
+/// The paper's closed forms for the X and Z sensors of the 8-orientation plan, literally
+/// (X as printed, with the OCR-lost signs of seed-method.md; Z derived the same way).
+/// `inputs` are the 8 dwells in the paper's order. SI units.
+struct PaperClosedForms {
+  double w0x, dkgx, nu_xy, nu_xz;  // X gyro: bias, scale, misalignments
+  double w0z, dkgz, nu_zx, nu_zy;  // Z gyro
+  double f0x, mu_xy, mu_xz;        // X accelerometer: bias, misalignments
+  double f0z, mu_zx, mu_zy;        // Z accelerometer
+};
+PaperClosedForms paper_closed_forms(const std::vector<EquivalentInputs>& inputs, const Site& site);
+
+}  // namespace sinscal
