@@ -6,8 +6,11 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
+#include <sstream>
 #include <string>
 
+#include "filter/closed_form.hpp"
 #include "filter/dwell_navigation.hpp"
 #include "models/config.hpp"
 #include "models/sensor_profile.hpp"
@@ -200,12 +203,183 @@ int cmd_navigate(const std::vector<std::string>& args) {
   return 0;
 }
 
+int cmd_calibrate(const std::vector<std::string>& args) {
+  po::options_description d("sinscal calibrate options");
+  std::string session_path, out_path, method, stage1, model, channels;
+  double table_sigma = 2.5, arw = 0.0, vrw = 0.0, min_dwell = 20.0;
+  d.add_options()("help,h", "this help")("session", po::value(&session_path)->required(),
+                                         "session.ini of the recording")(
+      "method", po::value(&method)->default_value("closed-form"), "closed-form")(
+      "out", po::value(&out_path)->required(), "result JSON to write")(
+      "stage1", po::value(&stage1)->default_value("fit"),
+      "fit (weighted least squares over each dwell) | point (the paper's eq. 5 at the dwell end)")(
+      "model", po::value(&model)->default_value("coupled"),
+      "coupled | uncoupled (the paper's Schuler channels)")(
+      "channels", po::value(&channels)->default_value("north,east,vertical,heading"),
+      "stage-1 channels, comma separated (the paper: north,east)")(
+      "table-sigma", po::value(&table_sigma)->default_value(2.5),
+      "table angle error per orientation, 1-sigma [arcsec]")(
+      "arw", po::value(&arw),
+      "gyro angle random walk [deg/sqrt(h)] (default: the session's sensor)")(
+      "vrw", po::value(&vrw), "accelerometer velocity random walk [ug/sqrt(Hz)] (default: sensor)")(
+      "min-dwell", po::value(&min_dwell)->default_value(20.0),
+      "shortest dwell stage 1 accepts [s]");
+  parse(
+      args, d,
+      "Usage: sinscal calibrate --session DIR/session.ini --method closed-form --out result.json\n"
+      "Estimates the 24 base coefficients (biases, scale factors, misalignments) with their\n"
+      "sigma from the static dwells of the session. The paper's method exactly:\n"
+      "  --stage1 point --model uncoupled --channels north,east");
+  if (method != "closed-form")
+    throw UsageError("--method " + method +
+                     ": only closed-form exists so far (the Kalman filter is issue #4)");
+  Stage1Options o;
+  if (stage1 == "fit")
+    o.method = Stage1Method::Fit;
+  else if (stage1 == "point")
+    o.method = Stage1Method::Point;
+  else
+    throw UsageError("--stage1 must be fit or point");
+  if (model == "coupled")
+    o.model = ErrorModelKind::Coupled;
+  else if (model == "uncoupled")
+    o.model = ErrorModelKind::Uncoupled;
+  else
+    throw UsageError("--model must be coupled or uncoupled");
+  o.channels = ChannelSet{false, false, false, false};
+  std::stringstream cs(channels);
+  for (std::string c; std::getline(cs, c, ',');) {
+    if (c == "north")
+      o.channels.north = true;
+    else if (c == "east")
+      o.channels.east = true;
+    else if (c == "vertical")
+      o.channels.vertical = true;
+    else if (c == "heading")
+      o.channels.heading = true;
+    else
+      throw UsageError("--channels: unknown channel '" + c + "' (north, east, vertical, heading)");
+  }
+  if (!o.channels.north || !o.channels.east)
+    throw UsageError("--channels needs at least north,east");
+  o.min_dwell = min_dwell;
+  const Session session = Session::load(session_path);
+  if (!session.sensor_file.empty()) {
+    const SensorProfile p = SensorProfile::load(session.sensor_file);
+    o.arw = p.noise.gyro.white;
+    o.vrw = p.noise.accel.white;
+  }
+  if (arw > 0.0) o.arw = arw * units::deg_per_sqrt_h;
+  if (vrw > 0.0) o.vrw = vrw * units::ug_per_sqrt_hz;
+  const auto t0 = std::chrono::steady_clock::now();
+  const ClosedFormReport r = run_closed_form(session, o, table_sigma * units::arcsec);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  write_result_json(out_path, r.coefficients, r.details);
+
+  std::printf(
+      "Closed-form calibration of '%s': stage 1 %s, %s model, channels %s, table %.2f arcsec\n",
+      session.name.c_str(), stage1.c_str(), model.c_str(), channels.c_str(), table_sigma);
+  std::printf("\nStage 1: equivalent inputs per dwell (value +- sigma)\n");
+  std::printf("%5s %-10s %6s %20s %20s %20s %20s %20s %20s %8s\n", "dwell", "label", "T [s]",
+              "df_n [ug]", "df_e [ug]", "df_d [ug]", "dw_n [deg/h]", "dw_e [deg/h]", "dw_d [deg/h]",
+              "chi2/dof");
+  for (const auto& e : r.stage1) {
+    std::printf("%5d %-10s %6.1f", e.dwell.index, e.dwell.label.c_str(), e.duration);
+    for (int i = 0; i < 6; ++i) {
+      const double f = i < 3 ? units::ug : units::deg_per_h;
+      if (e.estimated[i])
+        std::printf(" %10.4f +- %6.4f", e.u(i) / f, std::sqrt(e.cov(i, i)) / f);
+      else
+        std::printf(" %20s", "-");
+    }
+    std::printf(" %8.3f\n", e.chi2_per_dof);
+  }
+  std::printf("\nIdentifiability: rank %d of %d\n", r.stage2.rank, base_coeffs::kSize);
+  for (const auto& u : r.stage2.unobservable_directions)
+    std::printf("  unobservable direction: %s\n", u.c_str());
+  std::map<std::string, ResultCoefficient> truth;
+  if (!session.truth_file.empty() && std::filesystem::exists(session.truth_file))
+    truth = read_result_json(session.truth_file);
+  std::printf("\n%-24s %12s %10s %-7s", "coefficient", "estimate", "sigma", "unit");
+  if (!truth.empty()) std::printf(" %12s %10s %7s", "truth", "error", "err/sig");
+  std::printf("\n");
+  for (const auto& info : coefficient_catalog()) {
+    const auto it = r.coefficients.find(info.name);
+    if (it == r.coefficients.end()) continue;
+    const ResultCoefficient& c = it->second;
+    if (!c.observable) {
+      std::printf("%-24s %23s %-7s", info.name.c_str(), "unobservable", c.unit.c_str());
+    } else {
+      std::printf("%-24s %12.4f %10.4f %-7s", info.name.c_str(), c.value, *c.sigma, c.unit.c_str());
+    }
+    const auto t = truth.find(info.name);
+    if (t != truth.end()) {
+      if (c.observable)
+        std::printf(" %12.4f %10.4f %7.2f", t->second.value, c.value - t->second.value,
+                    (c.value - t->second.value) / *c.sigma);
+      else
+        std::printf(" %12.4f", t->second.value);
+    }
+    std::printf("\n");
+  }
+  // The limits of a static plan, shown rather than hidden.
+  double smin = 1e300, smax = 0, mmin = 1e300, mmax = 0;
+  for (int i = 0; i < 3; ++i) {
+    const int k = base_coeffs::kGyroScale.index + i;
+    if (!r.stage2.observable[k]) continue;
+    smin = std::min(smin, std::sqrt(r.stage2.cov(k, k)) / units::ppm);
+    smax = std::max(smax, std::sqrt(r.stage2.cov(k, k)) / units::ppm);
+  }
+  for (int i = 0; i < 6; ++i) {
+    const int k = base_coeffs::kGyroMis.index + i;
+    if (!r.stage2.observable[k]) continue;
+    mmin = std::min(mmin, std::sqrt(r.stage2.cov(k, k)) / units::arcsec);
+    mmax = std::max(mmax, std::sqrt(r.stage2.cov(k, k)) / units::arcsec);
+  }
+  std::printf(
+      "\nLimit of static orientations: gyro scale factors and misalignments come from Earth "
+      "rate alone:\n  sigma %.0f-%.0f ppm and %.0f-%.0f arcsec. Rotations are needed for them "
+      "(Kalman filter, rot19).\n",
+      smin, smax, mmin, mmax);
+  if (r.has_paper_forms) {
+    const PaperClosedForms& p = r.paper;
+    std::printf(
+        "\nThe paper's literal closed forms (X and Z sensors) beside the general solution:\n");
+    const std::pair<const char*, double> rows[] = {{"gyro.bias.x", p.w0x},
+                                                   {"gyro.scale.x", p.dkgx},
+                                                   {"gyro.misalignment.xy", p.nu_xy},
+                                                   {"gyro.misalignment.xz", p.nu_xz},
+                                                   {"gyro.bias.z", p.w0z},
+                                                   {"gyro.scale.z", p.dkgz},
+                                                   {"gyro.misalignment.zx", p.nu_zx},
+                                                   {"gyro.misalignment.zy", p.nu_zy},
+                                                   {"accel.bias.x", p.f0x},
+                                                   {"accel.misalignment.xy", p.mu_xy},
+                                                   {"accel.misalignment.xz", p.mu_xz},
+                                                   {"accel.bias.z", p.f0z},
+                                                   {"accel.misalignment.zx", p.mu_zx},
+                                                   {"accel.misalignment.zy", p.mu_zy}};
+    for (const auto& [name, v] : rows) {
+      for (const auto& info : coefficient_catalog())
+        if (info.name == name) {
+          const auto& c = r.coefficients.at(name);
+          std::printf("  %-24s paper %12.4f   general %12.4f %s\n", name, v / info.si_per_unit,
+                      c.observable ? c.value : std::nan(""), info.unit.c_str());
+        }
+    }
+  }
+  std::printf("\nResult written to %s (%.2f s)\n", out_path.c_str(), seconds);
+  return 0;
+}
+
 const char* kUsage =
     "sinscal: calibration of strapdown inertial navigation systems\n"
     "Usage: sinscal COMMAND [options]   (sinscal COMMAND --help for the options)\n"
     "Commands:\n"
     "  simulate   simulate a calibration session on a two-axis table\n"
-    "  navigate   navigate through the static dwells of a session, report navigation errors\n";
+    "  navigate   navigate through the static dwells of a session, report navigation errors\n"
+    "  calibrate  estimate the calibration coefficients of a session (closed-form method)\n";
 
 }  // namespace
 
@@ -219,6 +393,7 @@ int main(int argc, char** argv) {
   try {
     if (command == "simulate") return cmd_simulate(args);
     if (command == "navigate") return cmd_navigate(args);
+    if (command == "calibrate") return cmd_calibrate(args);
     std::cerr << "sinscal: unknown command '" << command << "'\n" << kUsage;
     return kUsageError;
   } catch (int code) {

@@ -11,6 +11,8 @@
 #include "filter/dwell_navigation.hpp"
 #include "models/attitude.hpp"
 #include "models/imu_error_model.hpp"
+#include "rig/log_io.hpp"
+#include "rig/plan.hpp"
 
 namespace sinscal {
 
@@ -382,6 +384,95 @@ PaperClosedForms paper_closed_forms(const std::vector<EquivalentInputs>& in, con
   p.mu_zx = s2 / (4.0 * g) * (-dfn[2] - dfn[4] + dfn[6] + dfn[8]);
   p.mu_zy = s2 / (4.0 * g) * (-dfn[2] + dfn[4] - dfn[6] + dfn[8]);
   return p;
+}
+
+}  // namespace sinscal
+
+namespace sinscal {
+
+namespace {
+const char* kInputName[6] = {"df_n", "df_e", "df_d", "dw_n", "dw_e", "dw_d"};
+}  // namespace
+
+ClosedFormReport run_closed_form(const Session& session, const Stage1Options& stage1,
+                                 double table_sigma) {
+  ClosedFormReport r;
+  r.stage1_options = stage1;
+  const Motion motion = build_motion(session.plan, session.site);
+  LogReader reader(session.log);
+  r.stage1 = run_stage1(reader, motion.dwells(), session.site, stage1, session.time_offset);
+  r.stage2_options.table_sigma = table_sigma;
+  r.stage2_options.outer_axis_n = session.plan.table.outer_axis_n;
+  r.stage2_options.inner_axis_b = Table(session.plan.table).inner_axis_b();
+  r.stage2 = solve_stage2(r.stage1, session.site, r.stage2_options);
+
+  const auto& cat = coefficient_catalog();
+  for (int i = 0; i < base_coeffs::kSize; ++i) {
+    ResultCoefficient c;
+    c.unit = cat[i].unit;
+    c.observable = r.stage2.observable[i];
+    if (c.observable) {
+      c.value = r.stage2.theta(i) / cat[i].si_per_unit;
+      c.sigma = std::sqrt(r.stage2.cov(i, i)) / cat[i].si_per_unit;
+    }
+    r.coefficients[cat[i].name] = c;
+  }
+
+  // The paper's literal closed forms, when the plan is its 8-orientation table.
+  const auto& o = session.plan.orientations;
+  static const double kPaper[8][3] = {{0, 0, 45},  {90, 45, 0},   {180, 0, 315}, {270, 315, 0},
+                                      {0, 0, 225}, {90, 45, 180}, {180, 0, 135}, {90, 225, 0}};
+  if (session.plan.type == Plan::Type::Orientations && o.size() == 8 && r.stage1.size() == 8) {
+    bool same = true;
+    for (int i = 0; i < 8; ++i) {
+      const Eigen::Matrix3d C = C_b_n_from_euler(
+          AngleConvention::Paper,
+          {kPaper[i][0] * M_PI / 180, kPaper[i][1] * M_PI / 180, kPaper[i][2] * M_PI / 180});
+      same = same && (C - r.stage1[i].dwell.C_b_n_known).cwiseAbs().maxCoeff() < 1e-9;
+    }
+    if (same) {
+      r.has_paper_forms = true;
+      r.paper = paper_closed_forms(r.stage1, session.site);
+    }
+  }
+
+  nlohmann::ordered_json& d = r.details;
+  d["method"] = {{"name", "closed-form"},
+                 {"stage1", stage1.method == Stage1Method::Fit ? "fit" : "point"},
+                 {"model", stage1.model == ErrorModelKind::Coupled ? "coupled" : "uncoupled"},
+                 {"channels",
+                  {{"north", stage1.channels.north},
+                   {"east", stage1.channels.east},
+                   {"vertical", stage1.channels.vertical},
+                   {"heading", stage1.channels.heading}}},
+                 {"arw_deg_per_sqrt_h", stage1.arw / (M_PI / 180 / 60)},
+                 {"vrw_ug_per_sqrt_hz", stage1.vrw / 9.80665e-6},
+                 {"table_sigma_arcsec", table_sigma / (M_PI / 180 / 3600)}};
+  nlohmann::ordered_json dwells = nlohmann::ordered_json::array();
+  for (const auto& e : r.stage1) {
+    nlohmann::ordered_json x = {
+        {"dwell", e.dwell.index}, {"label", e.dwell.label}, {"duration_s", e.duration}};
+    nlohmann::ordered_json inputs = nlohmann::ordered_json::object();
+    for (int i = 0; i < 6; ++i) {
+      if (!e.estimated[i]) continue;
+      const bool gyro = i >= 3;
+      const double f = gyro ? M_PI / 180 / 3600 : 9.80665e-6;  // deg/h | ug
+      inputs[kInputName[i]] = {{"value", e.u(i) / f},
+                               {"sigma", std::sqrt(e.cov(i, i)) / f},
+                               {"unit", gyro ? "deg/h" : "ug"}};
+    }
+    x["equivalent_inputs"] = inputs;
+    if (stage1.method == Stage1Method::Fit)
+      x["residuals"] = {{"rms_velocity_m_per_s", e.rms_velocity},
+                        {"rms_attitude_arcsec", e.rms_attitude / (M_PI / 180 / 3600)},
+                        {"chi2_per_dof", e.chi2_per_dof}};
+    dwells.push_back(x);
+  }
+  d["stage1"] = dwells;
+  d["identifiability"] = {{"rank", r.stage2.rank},
+                          {"parameters", base_coeffs::kSize},
+                          {"unobservable_directions", r.stage2.unobservable_directions}};
+  return r;
 }
 
 }  // namespace sinscal

@@ -27,6 +27,7 @@
 #include "filter/strapdown.hpp"
 #include "rig/imu_sample.hpp"
 #include "rig/motion.hpp"
+#include "rig/session.hpp"
 
 namespace sinscal {
 
@@ -123,5 +124,20 @@ struct PaperClosedForms {
   double f0z, mu_zx, mu_zy;        // Z accelerometer
 };
 PaperClosedForms paper_closed_forms(const std::vector<EquivalentInputs>& inputs, const Site& site);
+
+/// The whole method on a recorded session: navigation through every dwell, stage 1, stage 2.
+struct ClosedFormReport {
+  Stage1Options stage1_options;
+  Stage2Options stage2_options;
+  std::vector<EquivalentInputs> stage1;
+  Stage2Result stage2;
+  ResultCoefficients coefficients;  // engineering units, the 24 base coefficients
+  nlohmann::ordered_json details;   // method, per-dwell inputs, identifiability (result JSON)
+  bool has_paper_forms = false;     // the plan is the paper's 8-orientation table
+  PaperClosedForms paper{};
+};
+
+ClosedFormReport run_closed_form(const Session& session, const Stage1Options& stage1,
+                                 double table_sigma);
 
 }  // namespace sinscal

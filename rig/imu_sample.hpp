@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <vector>
 
 namespace sinscal {
 
@@ -18,6 +19,21 @@ class SampleSource {
   virtual ~SampleSource() = default;
   /// Next sample; false at the end.
   virtual bool next(ImuSample& sample) = 0;
+};
+
+/// Samples held in memory (tests, batch use); the vector must outlive the source.
+class VectorSource : public SampleSource {
+ public:
+  explicit VectorSource(const std::vector<ImuSample>& samples) : samples_(samples) {}
+  bool next(ImuSample& sample) override {
+    if (next_ >= samples_.size()) return false;
+    sample = samples_[next_++];
+    return true;
+  }
+
+ private:
+  const std::vector<ImuSample>& samples_;
+  std::size_t next_ = 0;
 };
 
 }  // namespace sinscal

@@ -57,17 +57,24 @@ void write_truth_json(const std::string& path, const ImuErrorModel& model,
   if (!out) throw std::runtime_error(path + ": cannot write");
 }
 
-void write_result_json(const std::string& path, const ResultCoefficients& coefficients) {
+void write_result_json(const std::string& path, const ResultCoefficients& coefficients,
+                       const nlohmann::ordered_json& extra) {
   nlohmann::ordered_json j;
   auto& c = j["coefficients"];
   for (const auto& info : coefficient_catalog()) {
     const auto it = coefficients.find(info.name);
     if (it == coefficients.end()) continue;
-    nlohmann::ordered_json e = {{"value", it->second.value}};
-    if (it->second.sigma) e["sigma"] = *it->second.sigma;
+    nlohmann::ordered_json e = nlohmann::ordered_json::object();
+    if (it->second.observable) {
+      e["value"] = it->second.value;
+      if (it->second.sigma) e["sigma"] = *it->second.sigma;
+    } else {
+      e["observable"] = false;
+    }
     e["unit"] = it->second.unit;
     c[info.name] = e;
   }
+  for (const auto& [key, value] : extra.items()) j[key] = value;
   std::ofstream out(path);
   out << j.dump(2) << "\n";
   if (!out) throw std::runtime_error(path + ": cannot write");
@@ -81,7 +88,8 @@ ResultCoefficients read_result_json(const std::string& path) {
     const auto j = nlohmann::json::parse(in);
     for (const auto& [name, e] : j.at("coefficients").items()) {
       ResultCoefficient r;
-      r.value = e.at("value").get<double>();
+      r.observable = e.value("observable", true);
+      if (r.observable) r.value = e.at("value").get<double>();
       if (e.contains("sigma")) r.sigma = e.at("sigma").get<double>();
       r.unit = e.value("unit", "");
       out[name] = r;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 
@@ -33,6 +34,7 @@ struct ResultCoefficient {
   double value = 0.0;
   std::optional<double> sigma;  // absent: not estimated (truth files)
   std::string unit;
+  bool observable = true;  // false: the data cannot determine it; no value is given
 };
 
 /// Result / truth JSON: {"coefficients": {"gyro.bias.x": {"value": .., "sigma": .., "unit": ..}}}.
@@ -41,7 +43,9 @@ using ResultCoefficients = std::map<std::string, ResultCoefficient>;
 /// Writes the coefficients of a model (engineering units) as a truth file.
 void write_truth_json(const std::string& path, const ImuErrorModel& model,
                       const std::string& note = "");
-void write_result_json(const std::string& path, const ResultCoefficients& coefficients);
+/// Writes a result file; `extra` (an object) adds sections after "coefficients".
+void write_result_json(const std::string& path, const ResultCoefficients& coefficients,
+                       const nlohmann::ordered_json& extra = nlohmann::ordered_json::object());
 /// Reads a result or truth file; throws std::runtime_error naming the file on a bad file.
 ResultCoefficients read_result_json(const std::string& path);
 

@@ -43,6 +43,26 @@ sed '1000s/^\([^,]*\),[^,]*/\1,oops/' "$work/s8/imu.csv" > "$work/bad/imu.csv"
 check "corrupt log exits 2" test $? -eq 2
 check "corrupt log names file and line" contains "$work/bad.err" "imu.csv:1000: field 2 'oops' is not a number"
 
+# Closed-form calibration: result JSON, table with truth, the paper's two channels leave the
+# common accelerometer scale factor unobservable and say so.
+"$bin" calibrate --session "$work/s8/session.ini" --method closed-form --out "$work/s8/result.json" > "$work/cal.txt"
+check "calibrate exits 0" test $? -eq 0
+check "result has gyro.bias.x with sigma" grep -q '"sigma"' "$work/s8/result.json"
+check "calibrate compares with truth" contains "$work/cal.txt" "err/sig"
+check "calibrate is full rank with all channels" contains "$work/cal.txt" "rank 24 of 24"
+check "calibrate shows the Earth-rate limit" contains "$work/cal.txt" "Earth rate alone"
+"$bin" calibrate --session "$work/s8/session.ini" --method closed-form --stage1 point --model uncoupled \
+  --channels north,east --out "$work/s8/paper.json" > "$work/paper.txt"
+check "paper method exits 0" test $? -eq 0
+check "paper method names the common accel scale" contains "$work/paper.txt" "unobservable direction: +0.577 accel.scale.x +0.577 accel.scale.y +0.577 accel.scale.z"
+check "paper method writes accel.scale as unobservable" grep -q '"observable": false' "$work/s8/paper.json"
+"$bin" calibrate --session "$work/short/session.ini" --method closed-form --out "$work/short/r.json" > /dev/null 2> "$work/cal_short.err"
+check "calibrate on a short log exits 2" test $? -eq 2
+check "calibrate on a short log names the mismatch" contains "$work/cal_short.err" "plan does not match the data"
+"$bin" calibrate --session "$work/s8/session.ini" --min-dwell 300 --out "$work/x.json" > /dev/null 2> "$work/cal_dwell.err"
+check "too short dwells exit 2" test $? -eq 2
+check "too short dwells say so" contains "$work/cal_dwell.err" "shorter than the 300"
+
 # A sensor profile with a wrong unit.
 printf '[gyro]\nbias = 0.1 0.3 ug\n' > "$work/badsensor.ini"
 "$bin" simulate --plan "$src/config/plans/seed8.ini" --sensor "$work/badsensor.ini" --out "$work/x" 2> "$work/unit.err"

@@ -43,20 +43,7 @@ inline std::vector<ImuSample> simulate(const Motion& motion, const ImuErrorModel
   return out;
 }
 
-/// Sample source over a vector.
-class VectorSource : public SampleSource {
- public:
-  explicit VectorSource(const std::vector<ImuSample>& v) : v_(v) {}
-  bool next(ImuSample& s) override {
-    if (i_ >= v_.size()) return false;
-    s = v_[i_++];
-    return true;
-  }
-
- private:
-  const std::vector<ImuSample>& v_;
-  std::size_t i_ = 0;
-};
+using sinscal::VectorSource;
 
 inline void write_file(const std::string& path, const std::string& text) {
   std::FILE* f = std::fopen(path.c_str(), "w");
