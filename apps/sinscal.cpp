@@ -324,19 +324,17 @@ int cmd_calibrate(const std::vector<std::string>& args) {
     std::printf("\n");
   }
   // The limits of a static plan, shown rather than hidden.
-  double smin = 1e300, smax = 0, mmin = 1e300, mmax = 0;
-  for (int i = 0; i < 3; ++i) {
-    const int k = base_coeffs::kGyroScale.index + i;
-    if (!r.stage2.observable[k]) continue;
-    smin = std::min(smin, std::sqrt(r.stage2.cov(k, k)) / units::ppm);
-    smax = std::max(smax, std::sqrt(r.stage2.cov(k, k)) / units::ppm);
-  }
-  for (int i = 0; i < 6; ++i) {
-    const int k = base_coeffs::kGyroMis.index + i;
-    if (!r.stage2.observable[k]) continue;
-    mmin = std::min(mmin, std::sqrt(r.stage2.cov(k, k)) / units::arcsec);
-    mmax = std::max(mmax, std::sqrt(r.stage2.cov(k, k)) / units::arcsec);
-  }
+  auto sigma_range = [&](const Block& block, double unit) {
+    std::pair<double, double> range{1e300, 0.0};
+    for (int k = block.index; k < block.index + block.size; ++k) {
+      if (!r.stage2.observable[k]) continue;
+      const double sigma = std::sqrt(r.stage2.cov(k, k)) / unit;
+      range = {std::min(range.first, sigma), std::max(range.second, sigma)};
+    }
+    return range;
+  };
+  const auto [smin, smax] = sigma_range(base_coeffs::kGyroScale, units::ppm);
+  const auto [mmin, mmax] = sigma_range(base_coeffs::kGyroMis, units::arcsec);
   std::printf(
       "\nLimit of static orientations: gyro scale factors and misalignments come from Earth "
       "rate alone:\n  sigma %.0f-%.0f ppm and %.0f-%.0f arcsec. Rotations are needed for them "

@@ -18,18 +18,19 @@ int run(const std::string& command) { return std::system((command + " > /dev/nul
 TEST_CASE("Golden: seed8 closed-form calibration result", "[golden][cli]") {
   const std::string bin = SINSCAL_BINARY;
   const std::string dir = test::temp_dir("golden_seed8");
-  REQUIRE(run(bin + " simulate --plan " + test::source_path("config/plans/seed8.ini") + " --sensor " +
-              test::source_path("config/sensors/nav-fog.ini") + " --out " + dir +
+  REQUIRE(run(bin + " simulate --plan " + test::source_path("config/plans/seed8.ini") +
+              " --sensor " + test::source_path("config/sensors/nav-fog.ini") + " --out " + dir +
               " --seed 1 --table-angle-sigma 2.5") == 0);
-  REQUIRE(run(bin + " calibrate --session " + dir + "/session.ini --method closed-form --out " + dir +
-              "/result.json") == 0);
+  REQUIRE(run(bin + " calibrate --session " + dir + "/session.ini --method closed-form --out " +
+              dir + "/result.json") == 0);
   const std::string golden = test::source_path("tests/golden/seed8-closed-form.json");
   if (std::getenv("SINSCAL_UPDATE_GOLDEN")) {
     std::filesystem::copy_file(dir + "/result.json", golden,
                                std::filesystem::copy_options::overwrite_existing);
     WARN("golden file rewritten: " << golden);
   }
-  const ResultCoefficients want = read_result_json(golden), got = read_result_json(dir + "/result.json");
+  const ResultCoefficients want = read_result_json(golden),
+                           got = read_result_json(dir + "/result.json");
   REQUIRE(got.size() == want.size());
   for (const auto& [name, w] : want) {
     CAPTURE(name);
