@@ -117,6 +117,28 @@ void visit_coefficients(ImuErrorModel& m, Visit&& visit) {
 }
 }  // namespace
 
+Eigen::Matrix<double, 6, Eigen::Dynamic> ImuErrorModel::jacobian(
+    const KinematicSample& s, const Eigen::Vector3d& f_dot) const {
+  // Each coefficient's column: its unit perturbation applied through the same formula, taking
+  // the difference to the model without it. Exact (linear) and written once: the formula lives
+  // only in TriadErrors::apply, size_effect and the g-sensitivity product.
+  ImuErrorModel zero;
+  const auto refs = zero.coefficient_refs();
+  Eigen::Matrix<double, 6, Eigen::Dynamic> J(6, static_cast<Eigen::Index>(refs.size()));
+  const Eigen::Vector3d g0 = zero.gyro_output(s), a0 = zero.accel_output(s);
+  for (std::size_t k = 0; k < refs.size(); ++k) {
+    const auto col = static_cast<Eigen::Index>(k);
+    if (refs[k].first.name == "time_delay") {
+      J.col(col) << Eigen::Vector3d::Zero(), -f_dot;
+      continue;
+    }
+    *refs[k].second = 1.0;
+    J.col(col) << zero.gyro_output(s) - g0, zero.accel_output(s) - a0;
+    *refs[k].second = 0.0;
+  }
+  return J;
+}
+
 std::vector<std::pair<CoefficientInfo, double*>> ImuErrorModel::coefficient_refs() {
   std::vector<std::pair<CoefficientInfo, double*>> out;
   visit_coefficients(*this,

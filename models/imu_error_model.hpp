@@ -80,6 +80,14 @@ class ImuErrorModel {
                   const Eigen::Vector3d& omega_dot_ib_b, Eigen::Vector3d& omega_ib_b,
                   Eigen::Vector3d& f_ib_b) const;
 
+  /// Sensitivity of the sensor errors (y - x) to every coefficient, in the order of
+  /// coefficient_refs(): rows 0-2 gyro outputs (rad/s), rows 3-5 accelerometer outputs (m/s^2),
+  /// per SI unit of the coefficient. The model is linear in its coefficients for given inputs, so
+  /// this is exact. The time-delay column needs the rate of change of the specific force,
+  /// `f_dot_ib_b` (m/s^3): a delay tau shifts the accelerometer input by -tau f_dot.
+  Eigen::Matrix<double, 6, Eigen::Dynamic> jacobian(const KinematicSample& s,
+                                                    const Eigen::Vector3d& f_dot_ib_b) const;
+
   /// Every coefficient with its name, unit and a pointer to its SI value, in the contract order.
   std::vector<std::pair<CoefficientInfo, double*>> coefficient_refs();
   /// Values in engineering units by name.

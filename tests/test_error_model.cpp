@@ -158,3 +158,44 @@ TEST_CASE("Every bundled sensor profile loads and draws", "[error_model]") {
   const double g_sens = std::abs(mems.draw(4).gyro_g_sensitivity(0, 0));
   CHECK((g_sens >= 0.01 * units::deg / units::g0 && g_sens <= 0.1 * units::deg / units::g0));
 }
+
+TEST_CASE("Error model Jacobian matches finite differences of the model",
+          "[error_model][jacobian]") {
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const ImuErrorModel m = random_extended_model(4);
+  const auto& cat = coefficient_catalog();
+  for (int trial = 0; trial < 20; ++trial) {
+    KinematicSample s;
+    s.omega_ib_b = Vector3d(n(rng), n(rng), n(rng)) * 0.5;
+    s.omega_dot_ib_b = Vector3d(n(rng), n(rng), n(rng)) * 0.3;
+    s.f_ib_b = Vector3d(n(rng), n(rng), n(rng)) * 9.8;
+    const Vector3d f_dot(n(rng), n(rng), n(rng));
+    const auto J = m.jacobian(s, f_dot);
+    REQUIRE(J.cols() == static_cast<Eigen::Index>(cat.size()));
+    for (std::size_t k = 0; k < cat.size(); ++k) {
+      CAPTURE(cat[k].name);
+      // One unit of the coefficient: the model is linear in its coefficients, so a central
+      // difference has no truncation error and a large step keeps rounding small.
+      const double h = cat[k].si_per_unit;
+      Eigen::Matrix<double, 6, 1> fd;
+      if (cat[k].name == "time_delay") {
+        // Delay: the accelerometer sees f(t - tau); to first order f - tau f_dot.
+        ImuErrorModel p = m;
+        KinematicSample shifted = s;
+        shifted.f_ib_b = s.f_ib_b - h * f_dot;
+        fd << Vector3d::Zero(), (p.accel_output(shifted) - p.accel_output(s)) / h;
+        // the model's own scale factors act on the shifted input too (second order)
+        CHECK((fd - J.col(static_cast<Eigen::Index>(k))).norm() < 1e-3 * f_dot.norm());
+        continue;
+      }
+      ImuErrorModel plus = m, minus = m;
+      plus.set(cat[k].name, m.coefficients().at(cat[k].name) + 1.0);
+      minus.set(cat[k].name, m.coefficients().at(cat[k].name) - 1.0);
+      fd << (plus.gyro_output(s) - minus.gyro_output(s)) / (2 * h),
+          (plus.accel_output(s) - minus.accel_output(s)) / (2 * h);
+      CHECK((fd - J.col(static_cast<Eigen::Index>(k))).norm() <=
+            1e-7 * (1.0 + J.col(static_cast<Eigen::Index>(k)).norm()));
+    }
+  }
+}

@@ -1,0 +1,68 @@
+#include "filter/state_layout.hpp"
+
+#include "models/imu_error_model.hpp"
+#include "models/sensor_profile.hpp"
+
+namespace sinscal {
+
+StateLayout StateLayout::make(const StateLayoutOptions& o) {
+  StateLayout l;
+  int next = 0;
+  auto add = [&](Block& b, int size, bool on = true) {
+    if (!on) return;
+    b = Block{next, size};
+    next += size;
+  };
+  add(l.attitude, 3);
+  add(l.velocity, o.vertical_velocity ? 3 : 2);
+  add(l.position, 3);
+  add(l.gyro_bias, 3);
+  add(l.gyro_scale, 3);
+  add(l.gyro_misalignment, 6);
+  add(l.accel_bias, 3);
+  add(l.accel_scale, 3);
+  add(l.accel_misalignment, 6);
+  add(l.accel_k2, 3, o.accel_k2);
+  add(l.gyro_scale_asym, 3, o.scale_asym);
+  add(l.accel_scale_asym, 3, o.scale_asym);
+  add(l.gyro_g_sensitivity, 9, o.g_sensitivity);
+  add(l.accel_lever_arm, 9, o.lever_arm);
+  add(l.time_delay, 1, o.time_delay);
+  l.size = next;
+  return l;
+}
+
+std::vector<StateLayout::CoefficientBlock> StateLayout::coefficient_blocks() const {
+  const std::pair<const char*, const Block*> families[] = {
+      {"gyro.bias", &gyro_bias},
+      {"gyro.scale", &gyro_scale},
+      {"gyro.misalignment", &gyro_misalignment},
+      {"accel.bias", &accel_bias},
+      {"accel.scale", &accel_scale},
+      {"accel.misalignment", &accel_misalignment},
+      {"accel.k2", &accel_k2},
+      {"gyro.scale_asym", &gyro_scale_asym},
+      {"accel.scale_asym", &accel_scale_asym},
+      {"gyro.g_sensitivity", &gyro_g_sensitivity},
+      {"accel.lever_arm", &accel_lever_arm},
+      {"time_delay", &time_delay}};
+  const auto& cat = coefficient_catalog();
+  std::vector<CoefficientBlock> out;
+  for (const auto& [family, block] : families) {
+    if (!on(*block)) continue;
+    int first = -1, count = 0;
+    for (int i = 0; i < static_cast<int>(cat.size()); ++i)
+      if (coefficient_family(cat[i].name) == family) {
+        if (first < 0) first = i;
+        ++count;
+      }
+    if (count != block->size)
+      throw std::logic_error(std::string("state layout: block ") + family + " has " +
+                             std::to_string(block->size) + " states, the catalog " +
+                             std::to_string(count) + " coefficients");
+    out.push_back({family, *block, first});
+  }
+  return out;
+}
+
+}  // namespace sinscal
