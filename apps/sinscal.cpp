@@ -12,6 +12,7 @@
 
 #include "filter/closed_form.hpp"
 #include "filter/dwell_navigation.hpp"
+#include "filter/kalman_calibrator.hpp"
 #include "models/config.hpp"
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"
@@ -203,6 +204,35 @@ int cmd_navigate(const std::vector<std::string>& args) {
   return 0;
 }
 
+// Coefficient, estimate, sigma, unit; truth, error and error/sigma when the session has truth.
+void print_coefficient_table(const ResultCoefficients& coefficients, const Session& session) {
+  std::map<std::string, ResultCoefficient> truth;
+  if (!session.truth_file.empty() && std::filesystem::exists(session.truth_file))
+    truth = read_result_json(session.truth_file);
+  std::printf("\n%-24s %12s %10s %-7s", "coefficient", "estimate", "sigma", "unit");
+  if (!truth.empty()) std::printf(" %12s %10s %7s", "truth", "error", "err/sig");
+  std::printf("\n");
+  for (const auto& info : coefficient_catalog()) {
+    const auto it = coefficients.find(info.name);
+    if (it == coefficients.end()) continue;
+    const ResultCoefficient& c = it->second;
+    if (!c.observable) {
+      std::printf("%-24s %23s %-7s", info.name.c_str(), "unobservable", c.unit.c_str());
+    } else {
+      std::printf("%-24s %12.4f %10.4f %-7s", info.name.c_str(), c.value, *c.sigma, c.unit.c_str());
+    }
+    const auto t = truth.find(info.name);
+    if (t != truth.end()) {
+      if (c.observable)
+        std::printf(" %12.4f %10.4f %7.2f", t->second.value, c.value - t->second.value,
+                    (c.value - t->second.value) / *c.sigma);
+      else
+        std::printf(" %12.4f", t->second.value);
+    }
+    std::printf("\n");
+  }
+}
+
 int cmd_calibrate(const std::vector<std::string>& args) {
   po::options_description d("sinscal calibrate options");
   std::string session_path, out_path, method, stage1, model, channels;
@@ -230,9 +260,27 @@ int cmd_calibrate(const std::vector<std::string>& args) {
       "Estimates the 24 base coefficients (biases, scale factors, misalignments) with their\n"
       "sigma from the static dwells of the session. The paper's method exactly:\n"
       "  --stage1 point --model uncoupled --channels north,east");
-  if (method != "closed-form")
-    throw UsageError("--method " + method +
-                     ": only closed-form exists so far (the Kalman filter is issue #4)");
+  if (method == "kf") {
+    const Session session = Session::load(session_path);
+    if (session.sensor_file.empty())
+      throw UsageError("--method kf needs the session's sensor profile ([session] sensor =)");
+    const SensorProfile profile = SensorProfile::load(session.sensor_file);
+    CalibratorOptions ko = calibrator_options_from_profile(profile);
+    ko.attitude_sigma = table_sigma * units::arcsec;
+    ko.time_offset = session.time_offset;
+    const auto t0 = std::chrono::steady_clock::now();
+    const KalmanReport kr = run_kalman(session, ko);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    write_result_json(out_path, kr.coefficients, kr.details);
+    std::printf("Kalman-filter calibration of '%s': %d states, %zu samples, NIS per dof %.3f\n",
+                session.name.c_str(), kr.states, kr.samples, kr.nis_per_dof);
+    print_coefficient_table(kr.coefficients, session);
+    std::printf("\nResult written to %s (%.2f s, %.0fx real time)\n", out_path.c_str(), seconds,
+                kr.duration / seconds);
+    return 0;
+  }
+  if (method != "closed-form") throw UsageError("--method must be closed-form or kf");
   Stage1Options o;
   if (stage1 == "fit")
     o.method = Stage1Method::Fit;
@@ -298,31 +346,7 @@ int cmd_calibrate(const std::vector<std::string>& args) {
   std::printf("\nIdentifiability: rank %d of %d\n", r.stage2.rank, base_coeffs::kSize);
   for (const auto& u : r.stage2.unobservable_directions)
     std::printf("  unobservable direction: %s\n", u.c_str());
-  std::map<std::string, ResultCoefficient> truth;
-  if (!session.truth_file.empty() && std::filesystem::exists(session.truth_file))
-    truth = read_result_json(session.truth_file);
-  std::printf("\n%-24s %12s %10s %-7s", "coefficient", "estimate", "sigma", "unit");
-  if (!truth.empty()) std::printf(" %12s %10s %7s", "truth", "error", "err/sig");
-  std::printf("\n");
-  for (const auto& info : coefficient_catalog()) {
-    const auto it = r.coefficients.find(info.name);
-    if (it == r.coefficients.end()) continue;
-    const ResultCoefficient& c = it->second;
-    if (!c.observable) {
-      std::printf("%-24s %23s %-7s", info.name.c_str(), "unobservable", c.unit.c_str());
-    } else {
-      std::printf("%-24s %12.4f %10.4f %-7s", info.name.c_str(), c.value, *c.sigma, c.unit.c_str());
-    }
-    const auto t = truth.find(info.name);
-    if (t != truth.end()) {
-      if (c.observable)
-        std::printf(" %12.4f %10.4f %7.2f", t->second.value, c.value - t->second.value,
-                    (c.value - t->second.value) / *c.sigma);
-      else
-        std::printf(" %12.4f", t->second.value);
-    }
-    std::printf("\n");
-  }
+  print_coefficient_table(r.coefficients, session);
   // The limits of a static plan, shown rather than hidden.
   auto sigma_range = [&](const Block& block, double unit) {
     std::pair<double, double> range{1e300, 0.0};

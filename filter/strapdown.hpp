@@ -43,6 +43,8 @@ class Strapdown {
   /// One interval of increments (rad, m/s, body axes) of length dt (s).
   void step(const Eigen::Vector3d& dtheta_b, const Eigen::Vector3d& dv_b, double dt);
   const NavState& state() const { return x_; }
+  /// Replaces the state (a filter's feedback) keeping the coning and sculling memory.
+  void correct(const NavState& state) { x_ = state; }
 
  private:
   LocalEarth earth_;

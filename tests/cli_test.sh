@@ -63,6 +63,14 @@ check "calibrate on a short log names the mismatch" contains "$work/cal_short.er
 check "too short dwells exit 2" test $? -eq 2
 check "too short dwells say so" contains "$work/cal_dwell.err" "shorter than the 300"
 
+# Kalman filter on the rotation plan with the extended profile.
+"$bin" simulate --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog-extended.ini" \
+  --out "$work/r19" --seed 2 > /dev/null
+"$bin" calibrate --session "$work/r19/session.ini" --method kf --out "$work/r19/kf.json" > "$work/kf.txt"
+check "kf exits 0" test $? -eq 0
+check "kf estimates the time delay" grep -q '"time_delay"' "$work/r19/kf.json"
+check "kf compares with truth" contains "$work/kf.txt" "err/sig"
+
 # A sensor profile with a wrong unit.
 printf '[gyro]\nbias = 0.1 0.3 ug\n' > "$work/badsensor.ini"
 "$bin" simulate --plan "$src/config/plans/seed8.ini" --sensor "$work/badsensor.ini" --out "$work/x" 2> "$work/unit.err"

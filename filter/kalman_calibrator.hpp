@@ -1,0 +1,117 @@
+// Error-state Kalman filter calibrator (first version: batch and streaming push/estimate).
+//
+// Each IMU sample is compensated with the current coefficient estimate (models/imu_error_model),
+// integrated by the strapdown navigator, and its error dynamics accumulated into the transition
+// of the state of filter/state_layout.hpp:
+//   phi'  = -omega_ie x phi + d_omega_in(dv, dp) - C_b_n J_g dtheta
+//   dv'   = f_n x phi - 2 omega_ie x dv + (2g/R) dp_d e_d + C_b_n J_a dtheta
+//   dp'   = dv
+// with J the error model's Jacobian (residual coefficient errors dtheta = true - estimate). The
+// transition is accumulated per sample exploiting its structure [[A, B], [0, I]]; the covariance is
+// propagated and updated every `update_interval`. Measurements during the plan's static dwells:
+// zero velocity, known position, and (once per dwell, the table's error being constant within
+// it) the table-known attitude. Joseph-form updates, symmetrized; the normalized innovation
+// squared (NIS) is kept. After every update the estimate is fed back (navigator state and
+// coefficients) and the error state reset.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "filter/state_layout.hpp"
+#include "filter/strapdown.hpp"
+#include "models/imu_error_model.hpp"
+#include "models/noise_model.hpp"
+#include "models/sensor_profile.hpp"
+#include "rig/imu_sample.hpp"
+#include "rig/motion.hpp"
+#include "rig/session.hpp"
+
+namespace sinscal {
+
+struct CalibratorOptions {
+  StateLayoutOptions layout;
+  double update_interval = 1.0;  // s
+  bool zero_velocity = true;
+  bool position = true;
+  bool attitude = true;                               // one table-attitude update per dwell
+  double velocity_sigma = 1e-4;                       // m/s, zero-velocity measurement
+  double position_sigma = 1e-2;                       // m
+  double attitude_sigma = 2.5 * 4.84813681109536e-6;  // rad, table attitude (2.5 arcsec)
+  double static_margin = 0.5;                         // s: updates only this far inside a dwell
+  NoiseModel noise;  // white-noise densities drive the process noise
+  /// Initial 1-sigma of every coefficient (SI, catalog order); zero: taken from the profile
+  /// ranges (the upper bound) or a generous default for the family.
+  std::vector<double> initial_sigma;
+  double time_offset = 0.0;  // s: log time at which the plan starts
+};
+
+/// Options from a sensor profile: noise, the extended blocks the profile declares present,
+/// initial sigmas from its coefficient ranges.
+CalibratorOptions calibrator_options_from_profile(const SensorProfile& profile);
+
+struct CoefficientEstimate {
+  double value = 0.0;  // SI
+  double sigma = 0.0;  // SI
+};
+
+class Calibrator {
+ public:
+  Calibrator(std::vector<Dwell> dwells, const Site& site, const CalibratorOptions& options);
+  /// One IMU sample (streaming: call in time order). A sample is processed when the next one
+  /// arrives (one sample of latency: the rates of change of angular rate and specific force over
+  /// an interval are central differences of its neighbours).
+  void push(const ImuSample& sample);
+  /// Processes the last sample held back (end of the log).
+  void finish();
+  /// Current estimate of every coefficient of the catalog (coefficients whose block is off are
+  /// reported as zero with sigma zero).
+  std::vector<CoefficientEstimate> estimate() const;
+  const StateLayout& layout() const { return layout_; }
+  const Eigen::MatrixXd& covariance() const { return P_; }
+  const ImuErrorModel& model() const { return model_; }
+  /// NIS of the updates so far (sum and count of the measurement dimensions).
+  double nis_sum() const { return nis_sum_; }
+  int nis_dof() const { return nis_dof_; }
+
+ private:
+  void process(const ImuSample& s, const Eigen::Vector3d& omega_dot, const Eigen::Vector3d& f_dot,
+               const Eigen::Vector3d& f_ddot);
+  void propagate_covariance();
+  void update(double t_plan);
+  void feed_back(const Eigen::VectorXd& dx);
+
+  std::vector<Dwell> dwells_;
+  Site site_;
+  CalibratorOptions o_;
+  StateLayout layout_;
+  ImuErrorModel model_;
+  Strapdown nav_;
+  bool started_ = false;
+  Eigen::MatrixXd P_;
+  // Transition accumulated since the last covariance propagation: [[Phi_nn, Phi_nc], [0, I]].
+  Eigen::MatrixXd Phi_nn_;
+  Eigen::VectorXd Q_nn_;  // accumulated process noise of the navigation errors (diagonal)
+  Eigen::MatrixXd Phi_nc_;
+  double accumulated_ = 0.0;
+  int n_nav_ = 0;                          // navigation-error states (attitude, velocity, position)
+  std::vector<int> state_of_coefficient_;  // catalog index -> state index (-1: off)
+  // The last two samples pushed (held back for the central differences).
+  std::vector<ImuSample> held_;
+  int attitude_dwell_done_ = 0;
+  double nis_sum_ = 0.0;
+  int nis_dof_ = 0;
+};
+
+/// The filter over a recorded session (batch, one pass).
+struct KalmanReport {
+  ResultCoefficients coefficients;  // the coefficients of the blocks that are on
+  nlohmann::ordered_json details;
+  int states = 0;
+  std::size_t samples = 0;
+  double duration = 0.0;  // s of data
+  double nis_per_dof = 0.0;
+};
+KalmanReport run_kalman(const Session& session, const CalibratorOptions& options);
+
+}  // namespace sinscal
