@@ -267,6 +267,9 @@ int cmd_calibrate(const std::vector<std::string>& args) {
     const SensorProfile profile = SensorProfile::load(session.sensor_file);
     CalibratorOptions ko = calibrator_options_from_profile(profile);
     ko.attitude_sigma = table_sigma * units::arcsec;
+    ko.attitude = session.plan.type == Plan::Type::Orientations
+                      ? CalibratorOptions::AttitudeUpdates::Every
+                      : CalibratorOptions::AttitudeUpdates::First;
     ko.time_offset = session.time_offset;
     const auto t0 = std::chrono::steady_clock::now();
     const KalmanReport kr = run_kalman(session, ko);

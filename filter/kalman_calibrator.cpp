@@ -208,7 +208,10 @@ void Calibrator::update(double t_plan) {
       rows.emplace_back(layout_.position.index + i, e.dp_n(i));
       sig.push_back(o_.position_sigma);
     }
-  if (o_.attitude && dwell->index > attitude_dwell_done_) {
+  const bool attitude_wanted =
+      o_.attitude == CalibratorOptions::AttitudeUpdates::Every ||
+      (o_.attitude == CalibratorOptions::AttitudeUpdates::First && dwell->index == 1);
+  if (attitude_wanted && dwell->index > attitude_dwell_done_) {
     for (int i = 0; i < 3; ++i) {
       rows.emplace_back(layout_.attitude.index + i, e.phi_n(i));
       sig.push_back(o_.attitude_sigma);
@@ -303,12 +306,15 @@ KalmanReport run_kalman(const Session& session, const CalibratorOptions& options
     c.unit = cat[i].unit;
     r.coefficients[cat[i].name] = c;
   }
-  r.details["method"] = {{"name", "kf"},
-                         {"states", r.states},
-                         {"zero_velocity", options.zero_velocity},
-                         {"position", options.position},
-                         {"attitude", options.attitude},
-                         {"update_interval_s", options.update_interval}};
+  r.details["method"] = {
+      {"name", "kf"},
+      {"states", r.states},
+      {"zero_velocity", options.zero_velocity},
+      {"position", options.position},
+      {"attitude", options.attitude == CalibratorOptions::AttitudeUpdates::Every   ? "every dwell"
+                   : options.attitude == CalibratorOptions::AttitudeUpdates::First ? "first dwell"
+                                                                                   : "none"},
+      {"update_interval_s", options.update_interval}};
   r.details["consistency"] = {{"nis_per_dof", r.nis_per_dof}, {"samples", r.samples}};
   return r;
 }

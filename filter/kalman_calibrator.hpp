@@ -34,9 +34,13 @@ struct CalibratorOptions {
   double update_interval = 1.0;  // s
   bool zero_velocity = true;
   bool position = true;
-  bool attitude = true;                               // one table-attitude update per dwell
-  double velocity_sigma = 1e-4;                       // m/s, zero-velocity measurement
-  double position_sigma = 1e-2;                       // m
+  /// Table-attitude updates: at every dwell (orientation plans: the table sets each
+  /// orientation independently), at the first dwell only (rotation plans: errors of the turns
+  /// accumulate, so later dwells are not independent), or none (zero velocity only).
+  enum class AttitudeUpdates { Every, First, None };
+  AttitudeUpdates attitude = AttitudeUpdates::Every;
+  double velocity_sigma = 1e-5;  // m/s, zero-velocity measurement (table at rest)
+  double position_sigma = 1e-3;  // m
   double attitude_sigma = 2.5 * 4.84813681109536e-6;  // rad, table attitude (2.5 arcsec)
   double static_margin = 0.5;                         // s: updates only this far inside a dwell
   NoiseModel noise;  // white-noise densities drive the process noise

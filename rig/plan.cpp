@@ -272,7 +272,9 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
   } else {
     Eigen::Matrix3d known = C_b_n_from_euler(plan.convention, plan.start);
     Eigen::Vector3d start_error;
-    for (int k = 0; k < 3; ++k) start_error(k) = angle_error();
+    const double start_sigma = errors.start_sigma >= 0.0 ? errors.start_sigma : errors.angle_sigma;
+    for (int k = 0; k < 3; ++k)
+      start_error(k) = start_sigma > 0.0 ? start_sigma * normal(rng) : 0.0;
     Eigen::Matrix3d actual = dcm_from_rotvec(start_error) * known;
     add_dwell("start", known, actual, plan.start_dwell);
     for (std::size_t i = 0; i < plan.steps.size(); ++i) {

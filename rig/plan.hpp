@@ -59,9 +59,11 @@ struct Plan {
 /// Errors of the table, for simulations. Every commanded axis angle (orientation plans) or
 /// rotation angle and the start attitude (rotation plans) is off by a random angle of sigma
 /// `angle_sigma`; the inner axis leans by `non_orthogonality` from its nominal direction
-/// (towards the outer axis). The known attitudes of the dwells stay the plan's.
+/// (towards the outer axis). The start attitude of a rotation plan is off by `start_sigma` per
+/// axis. The known attitudes of the dwells stay the plan's.
 struct TableErrors {
   double angle_sigma = 0.0;        // rad
+  double start_sigma = -1.0;       // rad, start attitude of rotation plans (< 0: angle_sigma)
   double non_orthogonality = 0.0;  // rad
   std::uint64_t seed = 0;
 };
