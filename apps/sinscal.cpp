@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <sstream>
 #include <string>
 
@@ -236,30 +237,40 @@ void print_coefficient_table(const ResultCoefficients& coefficients, const Sessi
 int cmd_calibrate(const std::vector<std::string>& args) {
   po::options_description d("sinscal calibrate options");
   std::string session_path, out_path, method, stage1, model, channels;
-  double table_sigma = 2.5, arw = 0.0, vrw = 0.0, min_dwell = 20.0;
-  d.add_options()("help,h", "this help")("session", po::value(&session_path)->required(),
-                                         "session.ini of the recording")(
-      "method", po::value(&method)->default_value("closed-form"), "closed-form")(
-      "out", po::value(&out_path)->required(), "result JSON to write")(
-      "stage1", po::value(&stage1)->default_value("fit"),
-      "fit (weighted least squares over each dwell) | point (the paper's eq. 5 at the dwell end)")(
-      "model", po::value(&model)->default_value("coupled"),
-      "coupled | uncoupled (the paper's Schuler channels)")(
-      "channels", po::value(&channels)->default_value("north,east,vertical,heading"),
-      "stage-1 channels, comma separated (the paper: north,east)")(
-      "table-sigma", po::value(&table_sigma)->default_value(2.5),
-      "table angle error per orientation, 1-sigma [arcsec]")(
-      "arw", po::value(&arw),
-      "gyro angle random walk [deg/sqrt(h)] (default: the session's sensor)")(
-      "vrw", po::value(&vrw), "accelerometer velocity random walk [ug/sqrt(Hz)] (default: sensor)")(
-      "min-dwell", po::value(&min_dwell)->default_value(20.0),
-      "shortest dwell stage 1 accepts [s]");
-  parse(
+  double table_sigma = 2.5, arw = 0.0, vrw = 0.0, min_dwell = 20.0, monitor_interval = 10.0;
+  std::string monitor_path;
+  // clang-format off
+  d.add_options()
+      ("help,h", "this help")
+      ("session", po::value(&session_path)->required(), "session.ini of the recording")
+      ("method", po::value(&method)->default_value("closed-form"),
+       "closed-form | kf (error-state Kalman filter)")
+      ("out", po::value(&out_path)->required(), "result JSON to write")
+      ("stage1", po::value(&stage1)->default_value("fit"),
+       "closed-form: fit (weighted least squares over each dwell) | point (the paper's eq. 5)")
+      ("model", po::value(&model)->default_value("coupled"),
+       "closed-form: coupled | uncoupled (the paper's Schuler channels)")
+      ("channels", po::value(&channels)->default_value("north,east,vertical,heading"),
+       "closed-form: stage-1 channels, comma separated (the paper: north,east)")
+      ("table-sigma", po::value(&table_sigma)->default_value(2.5),
+       "table attitude error per orientation, 1-sigma [arcsec]")
+      ("arw", po::value(&arw), "gyro angle random walk [deg/sqrt(h)] (default: the session's sensor)")
+      ("vrw", po::value(&vrw), "accelerometer velocity random walk [ug/sqrt(Hz)] (default: sensor)")
+      ("min-dwell", po::value(&min_dwell)->default_value(20.0), "closed-form: shortest dwell [s]")
+      ("stream", "kf: read the samples from standard input (the session's log format)")
+      ("monitor", po::value(&monitor_path), "kf: write a JSON line of estimates and sigmas here")
+      ("monitor-interval", po::value(&monitor_interval)->default_value(10.0),
+       "kf: seconds of data between monitor lines");
+  // clang-format on
+  const auto vm = parse(
       args, d,
-      "Usage: sinscal calibrate --session DIR/session.ini --method closed-form --out result.json\n"
-      "Estimates the 24 base coefficients (biases, scale factors, misalignments) with their\n"
-      "sigma from the static dwells of the session. The paper's method exactly:\n"
-      "  --stage1 point --model uncoupled --channels north,east");
+      "Usage: sinscal calibrate --session DIR/session.ini --method closed-form|kf --out "
+      "result.json\n"
+      "Estimates the calibration coefficients with their sigma. closed-form: the 24 base\n"
+      "coefficients from the static dwells; the paper's method exactly:\n"
+      "  --stage1 point --model uncoupled --channels north,east\n"
+      "kf: the error-state Kalman filter, with the extended terms the sensor profile declares;\n"
+      "--stream reads the samples from standard input as they arrive.");
   if (method == "kf") {
     const Session session = Session::load(session_path);
     if (session.sensor_file.empty())
@@ -271,8 +282,24 @@ int cmd_calibrate(const std::vector<std::string>& args) {
                       ? CalibratorOptions::AttitudeUpdates::Every
                       : CalibratorOptions::AttitudeUpdates::First;
     ko.time_offset = session.time_offset;
+    KalmanRunOptions run;
+    std::ofstream monitor;
+    if (!monitor_path.empty()) {
+      monitor.open(monitor_path);
+      if (!monitor) throw std::runtime_error(monitor_path + ": cannot create");
+      run.monitor_interval = monitor_interval;
+      run.monitor = [&](const nlohmann::ordered_json& rec) {
+        monitor << rec.dump() << "\n" << std::flush;
+      };
+    }
+    std::unique_ptr<LogReader> stdin_reader;
+    if (vm.count("stream")) {
+      LogFormat f = session.log;
+      f.file = "<stdin>";
+      stdin_reader = std::make_unique<LogReader>(std::cin, f);
+    }
     const auto t0 = std::chrono::steady_clock::now();
-    const KalmanReport kr = run_kalman(session, ko);
+    const KalmanReport kr = run_kalman(session, ko, stdin_reader.get(), run);
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     write_result_json(out_path, kr.coefficients, kr.details);
@@ -281,6 +308,13 @@ int cmd_calibrate(const std::vector<std::string>& args) {
     print_coefficient_table(kr.coefficients, session);
     std::printf("\nResult written to %s (%.2f s, %.0fx real time)\n", out_path.c_str(), seconds,
                 kr.duration / seconds);
+    if (!kr.stopped.empty()) {
+      std::fprintf(stderr,
+                   "sinscal calibrate: error: input stopped: %s (the estimates up to there are "
+                   "written)\n",
+                   kr.stopped.c_str());
+      return kDataError;
+    }
     return 0;
   }
   if (method != "closed-form") throw UsageError("--method must be closed-form or kf");

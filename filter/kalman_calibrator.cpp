@@ -274,28 +274,16 @@ std::vector<CoefficientEstimate> Calibrator::estimate() const {
 
 }  // namespace sinscal
 
+#include <memory>
+
 #include "rig/log_io.hpp"
 #include "rig/plan.hpp"
 
 namespace sinscal {
 
-KalmanReport run_kalman(const Session& session, const CalibratorOptions& options) {
-  const Motion motion = build_motion(session.plan, session.site);
-  Calibrator kf(motion.dwells(), session.site, options);
-  LogReader reader(session.log);
-  KalmanReport r;
-  ImuSample s;
-  double t_first = 0.0, t_last = 0.0;
-  while (reader.next(s)) {
-    if (r.samples == 0) t_first = s.t - s.dt;
-    t_last = s.t;
-    kf.push(s);
-    ++r.samples;
-  }
-  kf.finish();
-  r.duration = t_last - t_first;
-  r.states = kf.layout().size;
-  r.nis_per_dof = kf.nis_dof() > 0 ? kf.nis_sum() / kf.nis_dof() : 0.0;
+namespace {
+ResultCoefficients coefficients_of(const Calibrator& kf) {
+  ResultCoefficients out;
   const auto est = kf.estimate();
   const auto& cat = coefficient_catalog();
   for (std::size_t i = 0; i < cat.size(); ++i) {
@@ -304,8 +292,52 @@ KalmanReport run_kalman(const Session& session, const CalibratorOptions& options
     c.value = est[i].value / cat[i].si_per_unit;
     c.sigma = est[i].sigma / cat[i].si_per_unit;
     c.unit = cat[i].unit;
-    r.coefficients[cat[i].name] = c;
+    out[cat[i].name] = c;
   }
+  return out;
+}
+}  // namespace
+
+KalmanReport run_kalman(const Session& session, const CalibratorOptions& options,
+                        SampleSource* source, const KalmanRunOptions& run) {
+  const Motion motion = build_motion(session.plan, session.site);
+  Calibrator kf(motion.dwells(), session.site, options);
+  std::unique_ptr<LogReader> reader;
+  if (!source) {
+    reader = std::make_unique<LogReader>(session.log);
+    source = reader.get();
+  }
+  KalmanReport r;
+  ImuSample s;
+  double t_first = 0.0, t_last = 0.0, next_monitor = run.monitor_interval;
+  try {
+    while (source->next(s)) {
+      if (r.samples == 0) {
+        t_first = s.t - s.dt;
+        next_monitor = t_first + run.monitor_interval;
+      }
+      t_last = s.t;
+      kf.push(s);
+      ++r.samples;
+      if (run.monitor && run.monitor_interval > 0.0 && s.t >= next_monitor - 1e-9) {
+        nlohmann::ordered_json rec;
+        rec["t"] = s.t;
+        rec["nis_per_dof"] = kf.nis_dof() > 0 ? kf.nis_sum() / kf.nis_dof() : 0.0;
+        nlohmann::ordered_json c = nlohmann::ordered_json::object();
+        for (const auto& [name, e] : coefficients_of(kf)) c[name] = {e.value, *e.sigma};
+        rec["coefficients"] = c;
+        run.monitor(rec);
+        next_monitor += run.monitor_interval;
+      }
+    }
+  } catch (const LogError& e) {
+    r.stopped = e.what();
+  }
+  kf.finish();
+  r.duration = t_last - t_first;
+  r.states = kf.layout().size;
+  r.nis_per_dof = kf.nis_dof() > 0 ? kf.nis_sum() / kf.nis_dof() : 0.0;
+  r.coefficients = coefficients_of(kf);
   r.details["method"] = {
       {"name", "kf"},
       {"states", r.states},
@@ -316,6 +348,7 @@ KalmanReport run_kalman(const Session& session, const CalibratorOptions& options
                                                                                    : "none"},
       {"update_interval_s", options.update_interval}};
   r.details["consistency"] = {{"nis_per_dof", r.nis_per_dof}, {"samples", r.samples}};
+  if (!r.stopped.empty()) r.details["stopped"] = {{"reason", r.stopped}, {"last_good_t", t_last}};
   return r;
 }
 

@@ -16,6 +16,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
+#include <string>
 #include <vector>
 
 #include "filter/state_layout.hpp"
@@ -107,7 +109,7 @@ class Calibrator {
   int nis_dof_ = 0;
 };
 
-/// The filter over a recorded session (batch, one pass).
+/// The filter over a session's samples (batch from the log, or streaming from any source).
 struct KalmanReport {
   ResultCoefficients coefficients;  // the coefficients of the blocks that are on
   nlohmann::ordered_json details;
@@ -115,7 +117,19 @@ struct KalmanReport {
   std::size_t samples = 0;
   double duration = 0.0;  // s of data
   double nis_per_dof = 0.0;
+  std::string stopped;  // empty, or why the input stopped early (bad sample); estimates kept
 };
-KalmanReport run_kalman(const Session& session, const CalibratorOptions& options);
+
+struct KalmanRunOptions {
+  double monitor_interval = 0.0;  // s of data between monitor records (0: none)
+  /// Called with one JSON record per monitor interval: t, NIS, estimate and sigma of every
+  /// coefficient (engineering units).
+  std::function<void(const nlohmann::ordered_json&)> monitor;
+};
+
+/// Runs the filter over `source` (the session's log when null). A bad sample (LogError) stops the
+/// run: the report keeps the estimates so far and says where and why in `stopped`.
+KalmanReport run_kalman(const Session& session, const CalibratorOptions& options,
+                        SampleSource* source = nullptr, const KalmanRunOptions& run = {});
 
 }  // namespace sinscal

@@ -165,8 +165,15 @@ void LogWriter::close() {
   if (!out_) throw std::runtime_error(path_ + ": write failed (disk full?)");
 }
 
-LogReader::LogReader(const LogFormat& format) : f_(format), in_(format.file) {
-  if (!in_) throw LogError(f_.file, 0, "cannot open log file");
+LogReader::LogReader(const LogFormat& format)
+    : f_(format), file_(std::make_unique<std::ifstream>(format.file)), in_(file_.get()) {
+  if (!*in_) throw LogError(f_.file, 0, "cannot open log file");
+  start();
+}
+
+LogReader::LogReader(std::istream& in, const LogFormat& format) : f_(format), in_(&in) { start(); }
+
+void LogReader::start() {
   if (!(f_.rate_hz > 0.0)) throw LogError(f_.file, 0, "the nominal sample rate is not set");
   for (int i = 0; i < static_cast<int>(f_.columns.size()); ++i) {
     const std::string& c = f_.columns[i];
@@ -194,12 +201,12 @@ LogReader::LogReader(const LogFormat& format) : f_(format), in_(format.file) {
 void LogReader::fail(const std::string& cause) const { throw LogError(f_.file, line_, cause); }
 
 bool LogReader::read_line(std::string& line, bool& had_newline) {
-  if (!std::getline(in_, line)) {
-    if (in_.bad()) fail("read error");
+  if (!std::getline(*in_, line)) {
+    if (in_->bad()) fail("read error");
     return false;
   }
   ++line_;
-  had_newline = !in_.eof();
+  had_newline = !in_->eof();
   if (!line.empty() && line.back() == '\r') line.pop_back();
   return true;
 }

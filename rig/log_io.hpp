@@ -76,6 +76,8 @@ class LogWriter {
 class LogReader : public SampleSource {
  public:
   explicit LogReader(const LogFormat& format);
+  /// Reads from a stream (standard input, a pipe); `format.file` names it in messages.
+  LogReader(std::istream& in, const LogFormat& format);
   bool next(ImuSample& sample) override;
   std::size_t line() const { return line_; }
   /// Samples read so far.
@@ -84,8 +86,10 @@ class LogReader : public SampleSource {
  private:
   [[noreturn]] void fail(const std::string& cause) const;
   bool read_line(std::string& line, bool& had_newline);
+  void start();
   LogFormat f_;
-  std::ifstream in_;
+  std::unique_ptr<std::ifstream> file_;
+  std::istream* in_ = nullptr;
   std::size_t line_ = 0, count_ = 0;
   int col_t_ = -1;
   std::array<int, 3> col_g_{-1, -1, -1}, col_a_{-1, -1, -1};

@@ -71,6 +71,20 @@ check "kf exits 0" test $? -eq 0
 check "kf estimates the time delay" grep -q '"time_delay"' "$work/r19/kf.json"
 check "kf compares with truth" contains "$work/kf.txt" "err/sig"
 
+# Streaming from standard input: the same result as the batch run; a monitor line per interval.
+"$bin" calibrate --session "$work/r19/session.ini" --method kf --stream --monitor "$work/r19/mon.jsonl" \
+  --monitor-interval 100 --out "$work/r19/stream.json" < "$work/r19/imu.csv" > /dev/null
+check "streaming exits 0" test $? -eq 0
+check "streaming equals batch" cmp -s <(grep -A1 '"time_delay"' "$work/r19/kf.json") <(grep -A1 '"time_delay"' "$work/r19/stream.json")
+check "monitor has a line per 100 s" test "$(wc -l < "$work/r19/mon.jsonl")" -eq 5
+# A NaN in the stream: the run stops with a message naming the line, the estimates so far written.
+sed '30000s/^\([^,]*\),[^,]*/\1,nan/' "$work/r19/imu.csv" | "$bin" calibrate --session "$work/r19/session.ini" \
+  --method kf --stream --out "$work/r19/bad.json" > /dev/null 2> "$work/stream_bad.err"
+check "bad stream exits 2" test $? -eq 2
+check "bad stream names the line" contains "$work/stream_bad.err" "<stdin>:30000: field 2 is NaN"
+check "bad stream keeps the estimates" grep -q '"stopped"' "$work/r19/bad.json"
+check "bad stream estimates are written" grep -q '"gyro.bias.x"' "$work/r19/bad.json"
+
 # A sensor profile with a wrong unit.
 printf '[gyro]\nbias = 0.1 0.3 ug\n' > "$work/badsensor.ini"
 "$bin" simulate --plan "$src/config/plans/seed8.ini" --sensor "$work/badsensor.ini" --out "$work/x" 2> "$work/unit.err"

@@ -3,6 +3,7 @@
 #include "filter/kalman_calibrator.hpp"
 #include "helpers.hpp"
 #include "models/units.hpp"
+#include "rig/log_io.hpp"
 
 using namespace sinscal;
 
@@ -128,4 +129,30 @@ TEST_CASE("Kalman calibrator Monte Carlo: NEES of every coefficient block in the
   }
   CAPTURE(worst_z);
   CHECK(worst_z < 4.0);
+}
+
+TEST_CASE("Kalman calibrator: streaming through the log reader equals the in-memory batch",
+          "[kalman]") {
+  const Plan p = test::load_plan("rot19.ini");
+  const SensorProfile prof =
+      SensorProfile::load(test::source_path("config/sensors/nav-fog-extended.ini"));
+  const Motion m = build_motion(p, p.site);
+  const auto samples = test::simulate(m, prof.draw(7), 100.0, &prof.noise, 8);
+  const std::string dir = test::temp_dir("kf_stream");
+  LogWriter w(dir + "/imu.csv", 100.0);
+  for (const auto& s : samples) w.write(s);
+  w.close();
+  const CalibratorOptions o = calibrator_options_from_profile(prof);
+  Calibrator batch(m.dwells(), p.site, o), stream(m.dwells(), p.site, o);
+  for (const auto& s : samples) batch.push(s);
+  batch.finish();
+  LogReader reader(LogFormat::native_format(dir + "/imu.csv", 100.0));
+  ImuSample s;
+  while (reader.next(s)) stream.push(s);
+  stream.finish();
+  const auto a = batch.estimate(), b = stream.estimate();
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    CHECK(std::abs(a[i].value - b[i].value) <= 1e-9 * std::abs(a[i].value) + 1e-30);
+    CHECK(std::abs(a[i].sigma - b[i].sigma) <= 1e-9 * a[i].sigma + 1e-30);
+  }
 }
