@@ -48,6 +48,11 @@ Calibrator::Calibrator(std::vector<Dwell> dwells, const Site& site,
       o_(options),
       layout_(StateLayout::make(options.layout)) {
   if (dwells_.empty()) throw std::invalid_argument("the Kalman calibrator needs the plan's dwells");
+  const Earth& earth = Earth::wgs84();
+  R_N_ = earth.radius_meridian(site.lat_rad) + site.h_m;
+  R_E_ = earth.radius_transverse(site.lat_rad) + site.h_m;
+  g_ = earth.gravity_n(site.lat_rad, site.h_m).norm();
+  omega_ie_n_ = earth.omega_ie_n(site.lat_rad);
   n_nav_ = layout_.position.index + layout_.position.size;
   const int n = layout_.size, m = n - n_nav_;
   const auto& cat = coefficient_catalog();
@@ -129,11 +134,9 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot,
   // Error dynamics of this interval.
   const NavState& x = nav_.state();
   const Eigen::Matrix3d C = x.C_b_n();
-  const double lat = site_.lat_rad, h = site_.h_m;
-  const double RN = earth.radius_meridian(lat) + h, RE = earth.radius_transverse(lat) + h;
-  const Eigen::Vector3d w_ie = earth.omega_ie_n(lat);
+  const double lat = site_.lat_rad, RN = R_N_, RE = R_E_, g = g_;
+  const Eigen::Vector3d& w_ie = omega_ie_n_;
   const Eigen::Vector3d f_n = C * f;
-  const double g = earth.gravity_n(lat, h).norm();
   const int a = layout_.attitude.index, v = layout_.velocity.index, p = layout_.position.index;
   const int nv = layout_.velocity.size;
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n_nav_, n_nav_);
@@ -243,15 +246,13 @@ void Calibrator::update(double t_plan) {
 }
 
 void Calibrator::feed_back(const Eigen::VectorXd& dx) {
-  const Earth& earth = Earth::wgs84();
   NavState x = nav_.state();
   const Eigen::Vector3d phi = dx.segment<3>(layout_.attitude.index);
   x.q_b_n = (quat_from_rotvec(phi) * x.q_b_n).normalized();
   for (int i = 0; i < layout_.velocity.size; ++i) x.v_n(i) -= dx(layout_.velocity.index + i);
   const Eigen::Vector3d dp = dx.segment<3>(layout_.position.index);
-  x.lat_rad -= dp.x() / (earth.radius_meridian(site_.lat_rad) + site_.h_m);
-  x.lon_rad -=
-      dp.y() / ((earth.radius_transverse(site_.lat_rad) + site_.h_m) * std::cos(site_.lat_rad));
+  x.lat_rad -= dp.x() / R_N_;
+  x.lon_rad -= dp.y() / (R_E_ * std::cos(site_.lat_rad));
   x.h_m += dp.z();
   // Keep the coning/sculling memory: the correction is tiny and the increments unchanged.
   nav_.correct(x);

@@ -89,6 +89,9 @@ class Calibrator {
 
   std::vector<Dwell> dwells_;
   Site site_;
+  // Earth terms at the site (the table does not move): radii with height, Earth rate, gravity.
+  double R_N_ = 0.0, R_E_ = 0.0, g_ = 0.0;
+  Eigen::Vector3d omega_ie_n_ = Eigen::Vector3d::Zero();
   CalibratorOptions o_;
   StateLayout layout_;
   ImuErrorModel model_;
