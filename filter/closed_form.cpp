@@ -11,6 +11,7 @@
 #include "filter/dwell_navigation.hpp"
 #include "models/attitude.hpp"
 #include "models/imu_error_model.hpp"
+#include "models/units.hpp"
 #include "rig/log_io.hpp"
 #include "rig/plan.hpp"
 
@@ -24,12 +25,9 @@ constexpr int kRowPhiN = ins_state::kAttitude.index + 0, kRowPhiE = ins_state::k
               kRowPhiD = ins_state::kAttitude.index + 2, kRowVN = ins_state::kVelocity.index + 0,
               kRowVE = ins_state::kVelocity.index + 1, kRowVD = ins_state::kVelocity.index + 2;
 
-InsState observed_state(const NavError& e, double R_N) {
-  InsState x = InsState::Zero();
-  x.segment<3>(ins_state::kAttitude.index) = e.phi_n;
-  x.segment<3>(ins_state::kVelocity.index) = e.dv_n;
-  x(ins_state::kLatitude.index) = e.dp_n.x() / R_N;
-  x(ins_state::kDown.index) = e.dp_n.z();
+InsState observed_state(const NavError& e) {
+  InsState x;
+  x << e.phi_n, e.dv_n, e.dp_n;
   return x;
 }
 
@@ -115,7 +113,7 @@ std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector
       model.discretize(h, Phi, Gamma);
       h_cached = h;
     }
-    const InsState x0 = observed_state(a.prev, R_N), x1 = observed_state(r.error, R_N);
+    const InsState x0 = observed_state(a.prev), x1 = observed_state(r.error);
     InsState delta = x1 - Phi * x0;
     InsB Gamma_k = Gamma;
     if (o.model == ErrorModelKind::Coupled) {
@@ -260,11 +258,7 @@ Stage2Map equivalent_input_map(const Eigen::Matrix3d& C, const Site& site) {
 }
 
 Eigen::VectorXd base_vector(const ImuErrorModel& model) {
-  ImuErrorModel copy = model;
-  const auto refs = copy.coefficient_refs();
-  Eigen::VectorXd v(base_coeffs::kSize);
-  for (int i = 0; i < base_coeffs::kSize; ++i) v(i) = *refs[i].second;
-  return v;
+  return model.vector().head(base_coeffs::kSize);
 }
 
 Stage2Result solve_stage2(const std::vector<EquivalentInputs>& inputs, const Site& site,
@@ -427,7 +421,7 @@ ClosedFormReport run_closed_form(const Session& session, const Stage1Options& st
     for (int i = 0; i < 8; ++i) {
       const Eigen::Matrix3d C = C_b_n_from_euler(
           AngleConvention::Paper,
-          {kPaper[i][0] * M_PI / 180, kPaper[i][1] * M_PI / 180, kPaper[i][2] * M_PI / 180});
+          {kPaper[i][0] * units::deg, kPaper[i][1] * units::deg, kPaper[i][2] * units::deg});
       same = same && (C - r.stage1[i].dwell.C_b_n_known).cwiseAbs().maxCoeff() < 1e-9;
     }
     if (same) {
@@ -445,9 +439,9 @@ ClosedFormReport run_closed_form(const Session& session, const Stage1Options& st
                    {"east", stage1.channels.east},
                    {"vertical", stage1.channels.vertical},
                    {"heading", stage1.channels.heading}}},
-                 {"arw_deg_per_sqrt_h", stage1.arw / (M_PI / 180 / 60)},
-                 {"vrw_ug_per_sqrt_hz", stage1.vrw / 9.80665e-6},
-                 {"table_sigma_arcsec", table_sigma / (M_PI / 180 / 3600)}};
+                 {"arw_deg_per_sqrt_h", stage1.arw / units::deg_per_sqrt_h},
+                 {"vrw_ug_per_sqrt_hz", stage1.vrw / units::ug_per_sqrt_hz},
+                 {"table_sigma_arcsec", table_sigma / units::arcsec}};
   nlohmann::ordered_json dwells = nlohmann::ordered_json::array();
   for (const auto& e : r.stage1) {
     nlohmann::ordered_json x = {
@@ -456,7 +450,7 @@ ClosedFormReport run_closed_form(const Session& session, const Stage1Options& st
     for (int i = 0; i < 6; ++i) {
       if (!e.estimated[i]) continue;
       const bool gyro = i >= 3;
-      const double f = gyro ? M_PI / 180 / 3600 : 9.80665e-6;  // deg/h | ug
+      const double f = gyro ? units::deg_per_h : units::ug;
       inputs[kInputName[i]] = {{"value", e.u(i) / f},
                                {"sigma", std::sqrt(e.cov(i, i)) / f},
                                {"unit", gyro ? "deg/h" : "ug"}};
@@ -464,7 +458,7 @@ ClosedFormReport run_closed_form(const Session& session, const Stage1Options& st
     x["equivalent_inputs"] = inputs;
     if (stage1.method == Stage1Method::Fit)
       x["residuals"] = {{"rms_velocity_m_per_s", e.rms_velocity},
-                        {"rms_attitude_arcsec", e.rms_attitude / (M_PI / 180 / 3600)},
+                        {"rms_attitude_arcsec", e.rms_attitude / units::arcsec},
                         {"chi2_per_dof", e.chi2_per_dof}};
     dwells.push_back(x);
   }

@@ -48,12 +48,12 @@ Calibrator::Calibrator(std::vector<Dwell> dwells, const Site& site,
       o_(options),
       layout_(StateLayout::make(options.layout)) {
   if (dwells_.empty()) throw std::invalid_argument("the Kalman calibrator needs the plan's dwells");
-  const Earth& earth = Earth::wgs84();
-  R_N_ = earth.radius_meridian(site.lat_rad) + site.h_m;
-  R_E_ = earth.radius_transverse(site.lat_rad) + site.h_m;
-  g_ = earth.gravity_n(site.lat_rad, site.h_m).norm();
-  omega_ie_n_ = earth.omega_ie_n(site.lat_rad);
+  site_terms_ = InsSiteTerms::at(site);
   n_nav_ = layout_.position.index + layout_.position.size;
+  for (int i = 0; i < 3; ++i) ins_index_.push_back(ins_state::kAttitude.index + i);
+  for (int i = 0; i < layout_.velocity.size; ++i)
+    ins_index_.push_back(ins_state::kVelocity.index + i);
+  for (int i = 0; i < 3; ++i) ins_index_.push_back(ins_state::kPosition.index + i);
   const int n = layout_.size, m = n - n_nav_;
   const auto& cat = coefficient_catalog();
   state_of_coefficient_.assign(cat.size(), -1);
@@ -116,7 +116,6 @@ void Calibrator::finish() {
 
 void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot,
                          const Eigen::Vector3d& f_dot, const Eigen::Vector3d& f_ddot) {
-  const Earth& earth = Earth::wgs84();
   if (!started_) {
     nav_.reset(NavState::at_rest(dwells_.front().C_b_n_known, site_));
     started_ = true;
@@ -134,22 +133,13 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot,
   // Error dynamics of this interval.
   const NavState& x = nav_.state();
   const Eigen::Matrix3d C = x.C_b_n();
-  const double lat = site_.lat_rad, RN = R_N_, RE = R_E_, g = g_;
-  const Eigen::Vector3d& w_ie = omega_ie_n_;
   const Eigen::Vector3d f_n = C * f;
-  const int a = layout_.attitude.index, v = layout_.velocity.index, p = layout_.position.index;
+  const int a = layout_.attitude.index, v = layout_.velocity.index;
   const int nv = layout_.velocity.size;
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n_nav_, n_nav_);
-  A.block<3, 3>(a, a) = -skew(w_ie);
-  A(a + 0, v + 1) = 1.0 / RE;
-  A(a + 1, v + 0) = -1.0 / RN;
-  A(a + 2, v + 1) = -std::tan(lat) / RE;
-  A(a + 0, p + 0) = -earth.rate() * std::sin(lat) / RN;
-  A(a + 2, p + 0) = -earth.rate() * std::cos(lat) / RN;
-  A.block(v, a, nv, 3) = skew(f_n).topRows(nv);
-  A.block(v, v, nv, nv) = -2.0 * skew(w_ie).topLeftCorner(nv, nv);
-  if (nv == 3) A(v + 2, p + 2) = 2.0 * g / RE;
-  for (int i = 0; i < nv; ++i) A(p + i, v + i) = 1.0;
+  const InsF F = ins_error_matrix(site_terms_, f_n, ErrorModelKind::Coupled);
+  Eigen::MatrixXd A(n_nav_, n_nav_);
+  for (int i = 0; i < n_nav_; ++i)
+    for (int j = 0; j < n_nav_; ++j) A(i, j) = F(ins_index_[i], ins_index_[j]);
 
   KinematicSample k;
   k.omega_ib_b = omega;
@@ -251,8 +241,8 @@ void Calibrator::feed_back(const Eigen::VectorXd& dx) {
   x.q_b_n = (quat_from_rotvec(phi) * x.q_b_n).normalized();
   for (int i = 0; i < layout_.velocity.size; ++i) x.v_n(i) -= dx(layout_.velocity.index + i);
   const Eigen::Vector3d dp = dx.segment<3>(layout_.position.index);
-  x.lat_rad -= dp.x() / R_N_;
-  x.lon_rad -= dp.y() / (R_E_ * std::cos(site_.lat_rad));
+  x.lat_rad -= dp.x() / site_terms_.R_N;
+  x.lon_rad -= dp.y() / (site_terms_.R_E * std::cos(site_.lat_rad));
   x.h_m += dp.z();
   // Keep the coning/sculling memory: the correction is tiny and the increments unchanged.
   nav_.correct(x);

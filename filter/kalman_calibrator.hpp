@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "filter/ins_error_model.hpp"
 #include "filter/state_layout.hpp"
 #include "filter/strapdown.hpp"
 #include "models/imu_error_model.hpp"
@@ -89,9 +90,9 @@ class Calibrator {
 
   std::vector<Dwell> dwells_;
   Site site_;
-  // Earth terms at the site (the table does not move): radii with height, Earth rate, gravity.
-  double R_N_ = 0.0, R_E_ = 0.0, g_ = 0.0;
-  Eigen::Vector3d omega_ie_n_ = Eigen::Vector3d::Zero();
+  InsSiteTerms site_terms_;  // Earth terms at the site (the table does not move), once
+  // The INS error state (ins_error_model.hpp) of each navigation-error state of the filter.
+  std::vector<int> ins_index_;
   CalibratorOptions o_;
   StateLayout layout_;
   ImuErrorModel model_;

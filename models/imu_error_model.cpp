@@ -146,6 +146,14 @@ std::vector<std::pair<CoefficientInfo, double*>> ImuErrorModel::coefficient_refs
   return out;
 }
 
+Eigen::VectorXd ImuErrorModel::vector() const {
+  ImuErrorModel copy = *this;
+  const auto refs = copy.coefficient_refs();
+  Eigen::VectorXd v(static_cast<Eigen::Index>(refs.size()));
+  for (std::size_t i = 0; i < refs.size(); ++i) v(static_cast<Eigen::Index>(i)) = *refs[i].second;
+  return v;
+}
+
 std::map<std::string, double> ImuErrorModel::coefficients() const {
   ImuErrorModel copy = *this;
   std::map<std::string, double> out;

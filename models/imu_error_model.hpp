@@ -90,6 +90,8 @@ class ImuErrorModel {
 
   /// Every coefficient with its name, unit and a pointer to its SI value, in the contract order.
   std::vector<std::pair<CoefficientInfo, double*>> coefficient_refs();
+  /// Every coefficient in SI, in the order of coefficient_catalog().
+  Eigen::VectorXd vector() const;
   /// Values in engineering units by name.
   std::map<std::string, double> coefficients() const;
   /// Sets one coefficient by name, value in its engineering unit; throws std::invalid_argument

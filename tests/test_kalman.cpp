@@ -95,14 +95,7 @@ TEST_CASE("Kalman calibrator Monte Carlo: NEES of every coefficient block in the
     for (const auto& s : samples) kf.push(s);
     kf.finish();
     const auto est = kf.estimate();
-    const Eigen::VectorXd theta = [&] {
-      ImuErrorModel t = truth;
-      const auto refs = t.coefficient_refs();
-      Eigen::VectorXd v(static_cast<Eigen::Index>(refs.size()));
-      for (std::size_t i = 0; i < refs.size(); ++i)
-        v(static_cast<Eigen::Index>(i)) = *refs[i].second;
-      return v;
-    }();
+    const Eigen::VectorXd theta = truth.vector();
     for (const auto& cb : kf.layout().coefficient_blocks()) {
       Eigen::VectorXd e(cb.block.size);
       for (int i = 0; i < cb.block.size; ++i) {
