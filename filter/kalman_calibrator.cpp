@@ -41,12 +41,23 @@ double default_sigma(const std::string& family) {
 }
 }  // namespace
 
+double initial_attitude_sigma(const CalibratorOptions& o) {
+  if (o.initial_attitude_sigma > 0.0) return o.initial_attitude_sigma;
+  return 0.5 * units::deg;
+}
+
+StateLayoutOptions effective_layout(const CalibratorOptions& o) {
+  StateLayoutOptions l = o.layout;
+  if (o.attitude == CalibratorOptions::AttitudeUpdates::None) l.accel_triad_frame = true;
+  return l;
+}
+
 Calibrator::Calibrator(std::vector<Dwell> dwells, const Site& site,
                        const CalibratorOptions& options)
     : dwells_(std::move(dwells)),
       site_(site),
       o_(options),
-      layout_(StateLayout::make(options.layout)) {
+      layout_(StateLayout::make(effective_layout(options))) {
   if (dwells_.empty()) throw std::invalid_argument("the Kalman calibrator needs the plan's dwells");
   site_terms_ = InsSiteTerms::at(site);
   n_nav_ = layout_.position.index + layout_.position.size;
@@ -60,7 +71,7 @@ Calibrator::Calibrator(std::vector<Dwell> dwells, const Site& site,
   P_ = Eigen::MatrixXd::Zero(n, n);
   P_.block(layout_.attitude.index, layout_.attitude.index, 3, 3)
       .diagonal()
-      .setConstant(o_.attitude_sigma * o_.attitude_sigma);
+      .setConstant(std::pow(initial_attitude_sigma(o_), 2));
   P_.block(layout_.velocity.index, layout_.velocity.index, layout_.velocity.size,
            layout_.velocity.size)
       .diagonal()
@@ -68,7 +79,7 @@ Calibrator::Calibrator(std::vector<Dwell> dwells, const Site& site,
   P_.block(layout_.position.index, layout_.position.index, 3, 3).diagonal().setConstant(1e-4);
   for (const auto& cb : layout_.coefficient_blocks())
     for (int k = 0; k < cb.block.size; ++k) {
-      const int c = cb.catalog_index + k, x = cb.block.index + k;
+      const int c = cb.catalog[static_cast<std::size_t>(k)], x = cb.block.index + k;
       state_of_coefficient_[static_cast<std::size_t>(c)] = x;
       double s0 = o_.initial_sigma.size() > static_cast<std::size_t>(c)
                       ? o_.initial_sigma[static_cast<std::size_t>(c)]
@@ -78,7 +89,7 @@ Calibrator::Calibrator(std::vector<Dwell> dwells, const Site& site,
     }
   Phi_nn_ = Eigen::MatrixXd::Identity(n_nav_, n_nav_);
   Phi_nc_ = Eigen::MatrixXd::Zero(n_nav_, m);
-  Q_nn_ = Eigen::VectorXd::Zero(n_nav_);
+  Q_nn_ = Eigen::MatrixXd::Zero(n_nav_, n_nav_);
 }
 
 void Calibrator::push(const ImuSample& s) {
@@ -158,8 +169,11 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot,
   const Eigen::MatrixXd step = Eigen::MatrixXd::Identity(n_nav_, n_nav_) + A * dt;
   Phi_nn_ = step * Phi_nn_;
   Phi_nc_ = step * Phi_nc_ + B * dt;
-  Q_nn_.segment<3>(a).array() += o_.noise.gyro.white * o_.noise.gyro.white * dt;
-  Q_nn_.segment(v, nv).array() += o_.noise.accel.white * o_.noise.accel.white * dt;
+  // Noise entered earlier in the interval is carried by the later steps (into position, and from
+  // attitude into velocity): Q <- step Q step^T + q dt.
+  Q_nn_ = step * Q_nn_ * step.transpose();
+  Q_nn_.diagonal().segment<3>(a).array() += o_.noise.gyro.white * o_.noise.gyro.white * dt;
+  Q_nn_.diagonal().segment(v, nv).array() += o_.noise.accel.white * o_.noise.accel.white * dt;
   accumulated_ += dt;
   if (accumulated_ >= o_.update_interval - 1e-9) {
     propagate_covariance();
@@ -174,7 +188,7 @@ void Calibrator::propagate_covariance() {
   T.topRows(n) = Phi_nn_ * P_.topRows(n) + Phi_nc_ * P_.bottomRows(m);
   Eigen::MatrixXd Pn = T;
   Pn.leftCols(n) = T.leftCols(n) * Phi_nn_.transpose() + T.rightCols(m) * Phi_nc_.transpose();
-  Pn.topLeftCorner(n, n).diagonal() += Q_nn_;
+  Pn.topLeftCorner(n, n) += Q_nn_;
   P_ = 0.5 * (Pn + Pn.transpose());
   Phi_nn_.setIdentity();
   Phi_nc_.setZero();
@@ -186,9 +200,18 @@ void Calibrator::update(double t_plan) {
   const Dwell* dwell = nullptr;
   for (const auto& d : dwells_)
     if (t_plan >= d.t_start + o_.static_margin && t_plan <= d.t_end - o_.static_margin) dwell = &d;
-  if (!dwell) return;
+  if (!dwell && !o_.zero_velocity_in_motion) return;
   const NavState& x = nav_.state();
-  const NavError e = nav_error(x, dwell->C_b_n_known, Eigen::Vector3d::Zero(), site_);
+  const NavError e =
+      nav_error(x, dwell ? dwell->C_b_n_known : x.C_b_n(), Eigen::Vector3d::Zero(), site_);
+  if (!dwell) {
+    // Turning about the IMU reference point: zero velocity holds, the attitude is not known.
+    std::vector<std::pair<int, double>> rows;
+    for (int i = 0; i < layout_.velocity.size; ++i)
+      rows.emplace_back(layout_.velocity.index + i, e.dv_n(i));
+    apply_update(rows, std::vector<double>(rows.size(), o_.motion_velocity_sigma));
+    return;
+  }
   std::vector<std::pair<int, double>> rows;  // state index, measured value; with sigma
   std::vector<double> sig;
   if (o_.zero_velocity)
@@ -211,6 +234,11 @@ void Calibrator::update(double t_plan) {
     }
     attitude_dwell_done_ = dwell->index;
   }
+  apply_update(rows, sig);
+}
+
+void Calibrator::apply_update(const std::vector<std::pair<int, double>>& rows,
+                              const std::vector<double>& sig) {
   if (rows.empty()) return;
   const int r = static_cast<int>(rows.size()), n = layout_.size;
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(r, n);
@@ -259,7 +287,11 @@ std::vector<CoefficientEstimate> Calibrator::estimate() const {
     out[c].value = *refs[c].second;
     const int xs = state_of_coefficient_[c];
     out[c].sigma = xs >= 0 ? std::sqrt(P_(xs, xs)) : 0.0;
+    out[c].status =
+        xs >= 0 ? CoefficientEstimate::Status::Estimated : CoefficientEstimate::Status::Off;
   }
+  for (int c : layout_.fixed_by_convention())
+    out[static_cast<std::size_t>(c)].status = CoefficientEstimate::Status::FixedByConvention;
   return out;
 }
 

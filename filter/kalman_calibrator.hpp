@@ -44,9 +44,18 @@ struct CalibratorOptions {
   AttitudeUpdates attitude = AttitudeUpdates::Every;
   double velocity_sigma = 1e-5;  // m/s, zero-velocity measurement (table at rest)
   double position_sigma = 1e-3;  // m
+  /// Zero velocity also while the table turns (the IMU reference point on the table's axes).
+  /// (The plan's IMU reference point is at the intersection of the table axes, so it stays put.)
+  bool zero_velocity_in_motion = true;
+  double motion_velocity_sigma = 1e-4;                // m/s
   double attitude_sigma = 2.5 * 4.84813681109536e-6;  // rad, table attitude (2.5 arcsec)
   double static_margin = 0.5;                         // s: updates only this far inside a dwell
-  NoiseModel noise;  // white-noise densities drive the process noise
+  /// 1-sigma of the start attitude about the plan's start orientation; zero: 0.5 deg. Not the
+  /// table's attitude_sigma: the first attitude update measures the same table error again, and
+  /// without attitude updates the body frame is the accelerometer triad's, which differs from
+  /// the table's by the mounting.
+  double initial_attitude_sigma = 0.0;  // rad
+  NoiseModel noise;                     // white-noise densities drive the process noise
   /// Initial 1-sigma of every coefficient (SI, catalog order); zero: taken from the profile
   /// ranges (the upper bound) or a generous default for the family.
   std::vector<double> initial_sigma;
@@ -57,9 +66,18 @@ struct CalibratorOptions {
 /// initial sigmas from its coefficient ranges.
 CalibratorOptions calibrator_options_from_profile(const SensorProfile& profile);
 
+/// The state layout the options imply: without table-attitude updates the body frame is the
+/// accelerometer triad's (docs/conventions.md), whatever `layout.accel_triad_frame` says.
+StateLayoutOptions effective_layout(const CalibratorOptions& options);
+/// The start-attitude sigma the options imply.
+double initial_attitude_sigma(const CalibratorOptions& options);
+
 struct CoefficientEstimate {
   double value = 0.0;  // SI
   double sigma = 0.0;  // SI
+  /// Off: its block is not in the state; FixedByConvention: zero by the body-frame convention.
+  enum class Status { Off, Estimated, FixedByConvention };
+  Status status = Status::Off;
 };
 
 class Calibrator {
@@ -86,6 +104,8 @@ class Calibrator {
                const Eigen::Vector3d& f_ddot);
   void propagate_covariance();
   void update(double t_plan);
+  void apply_update(const std::vector<std::pair<int, double>>& rows,
+                    const std::vector<double>& sig);
   void feed_back(const Eigen::VectorXd& dx);
 
   std::vector<Dwell> dwells_;
@@ -101,7 +121,7 @@ class Calibrator {
   Eigen::MatrixXd P_;
   // Transition accumulated since the last covariance propagation: [[Phi_nn, Phi_nc], [0, I]].
   Eigen::MatrixXd Phi_nn_;
-  Eigen::VectorXd Q_nn_;  // accumulated process noise of the navigation errors (diagonal)
+  Eigen::MatrixXd Q_nn_;  // process noise of the navigation errors accumulated over the interval
   Eigen::MatrixXd Phi_nc_;
   double accumulated_ = 0.0;
   int n_nav_ = 0;                          // navigation-error states (attitude, velocity, position)

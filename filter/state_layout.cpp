@@ -1,5 +1,7 @@
 #include "filter/state_layout.hpp"
 
+#include <algorithm>
+
 #include "models/imu_error_model.hpp"
 #include "models/sensor_profile.hpp"
 
@@ -21,7 +23,7 @@ StateLayout StateLayout::make(const StateLayoutOptions& o) {
   add(l.gyro_misalignment, 6);
   add(l.accel_bias, 3);
   add(l.accel_scale, 3);
-  add(l.accel_misalignment, 6);
+  add(l.accel_misalignment, o.accel_triad_frame ? 3 : 6);
   add(l.accel_k2, 3, o.accel_k2);
   add(l.gyro_scale_asym, 3, o.scale_asym);
   add(l.accel_scale_asym, 3, o.scale_asym);
@@ -29,6 +31,7 @@ StateLayout StateLayout::make(const StateLayoutOptions& o) {
   add(l.accel_lever_arm, 9, o.lever_arm);
   add(l.time_delay, 1, o.time_delay);
   l.size = next;
+  l.accel_triad_frame = o.accel_triad_frame;
   return l;
 }
 
@@ -47,21 +50,32 @@ std::vector<StateLayout::CoefficientBlock> StateLayout::coefficient_blocks() con
       {"accel.lever_arm", &accel_lever_arm},
       {"time_delay", &time_delay}};
   const auto& cat = coefficient_catalog();
+  const std::vector<int> fixed = fixed_by_convention();
   std::vector<CoefficientBlock> out;
   for (const auto& [family, block] : families) {
     if (!on(*block)) continue;
-    int first = -1, count = 0;
+    std::vector<int> members;
     for (int i = 0; i < static_cast<int>(cat.size()); ++i)
-      if (coefficient_family(cat[i].name) == family) {
-        if (first < 0) first = i;
-        ++count;
-      }
-    if (count != block->size)
+      if (coefficient_family(cat[i].name) == family &&
+          std::find(fixed.begin(), fixed.end(), i) == fixed.end())
+        members.push_back(i);
+    if (static_cast<int>(members.size()) != block->size)
       throw std::logic_error(std::string("state layout: block ") + family + " has " +
                              std::to_string(block->size) + " states, the catalog " +
-                             std::to_string(count) + " coefficients");
-    out.push_back({family, *block, first});
+                             std::to_string(members.size()) + " coefficients");
+    out.push_back({family, *block, members});
   }
+  return out;
+}
+
+std::vector<int> StateLayout::fixed_by_convention() const {
+  std::vector<int> out;
+  if (!accel_triad_frame) return out;
+  const auto& cat = coefficient_catalog();
+  for (const char* name :
+       {"accel.misalignment.xy", "accel.misalignment.xz", "accel.misalignment.yz"})
+    for (int i = 0; i < static_cast<int>(cat.size()); ++i)
+      if (cat[i].name == name) out.push_back(i);
   return out;
 }
 

@@ -21,6 +21,10 @@ struct StateLayoutOptions {
   bool time_delay = false;
   bool g_sensitivity = false;
   bool scale_asym = false;
+  /// Body frame defined by the accelerometer triad (calibration without known attitude): the
+  /// accelerometer misalignments xy, xz, yz are zero by this convention and not estimated; the
+  /// block holds yx, zx, zy only (docs/conventions.md).
+  bool accel_triad_frame = false;
 };
 
 struct StateLayout {
@@ -48,10 +52,13 @@ struct StateLayout {
   struct CoefficientBlock {
     std::string family;  // e.g. "gyro.bias"
     Block block;
-    int catalog_index;  // index of the family's first coefficient in coefficient_catalog()
+    std::vector<int> catalog;  // coefficient_catalog() index of each state of the block
   };
   std::vector<CoefficientBlock> coefficient_blocks() const;
   static bool on(const Block& b) { return b.size > 0; }
+  /// Catalog indices of the coefficients fixed at zero by the frame convention (not states).
+  std::vector<int> fixed_by_convention() const;
+  bool accel_triad_frame = false;
 };
 
 }  // namespace sinscal

@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
+#include <Eigen/QR>
 #include <stdexcept>
 
 #include "models/units.hpp"
@@ -178,6 +179,33 @@ const std::vector<CoefficientInfo>& coefficient_catalog() {
     return out;
   }();
   return catalog;
+}
+
+ImuErrorModel in_accel_triad_frame(const ImuErrorModel& model, Eigen::Matrix3d* C_a_b) {
+  // Accelerometer outputs y = A x_b + ... with x_b = R x_a: choose the rotation R that makes A R
+  // lower triangular (positive diagonal). A^T = Q U (QR) gives A = U^T Q^T, so R = Q.
+  const Eigen::Matrix3d A = model.accel.linear();
+  const Eigen::HouseholderQR<Eigen::Matrix3d> qr(A.transpose());
+  Eigen::Matrix3d Q = qr.householderQ();
+  const Eigen::Matrix3d U = qr.matrixQR().triangularView<Eigen::Upper>();
+  for (int i = 0; i < 3; ++i)
+    if (U(i, i) < 0.0) Q.col(i) = -Q.col(i);
+  if (Q.determinant() < 0.0)
+    throw std::invalid_argument("accelerometer triad is left-handed: no body frame can follow it");
+  ImuErrorModel out = model;
+  auto split = [](TriadErrors& t, const Eigen::Matrix3d& linear) {
+    t.scale = linear.diagonal() - Eigen::Vector3d::Ones();
+    t.misalignment = linear;
+    t.misalignment.diagonal().setZero();
+  };
+  Eigen::Matrix3d L = A * Q;
+  L.triangularView<Eigen::StrictlyUpper>().setZero();  // rounding
+  split(out.accel, L);
+  split(out.gyro, model.gyro.linear() * Q);
+  out.gyro_g_sensitivity = model.gyro_g_sensitivity * Q;
+  out.accel_lever_arm_b = Q.transpose() * model.accel_lever_arm_b;
+  if (C_a_b) *C_a_b = Q;
+  return out;
 }
 
 }  // namespace sinscal

@@ -99,6 +99,16 @@ class ImuErrorModel {
   void set(const std::string& name, double value_in_unit);
 };
 
+/// The same sensors with the body frame re-defined by the accelerometer triad (the convention of
+/// calibration without known attitude, docs/conventions.md): body x along the x accelerometer's
+/// sensitive axis, body y in the plane of the x and y accelerometers, so that
+/// accel.misalignment.xy = .xz = .yz = 0. Exact for the linear part of both triads (an LQ
+/// factorization of the accelerometer matrix); g-sensitivity and lever arms are rotated with the
+/// frame; the per-axis nonlinear terms (K2, asymmetry) keep their values (the change is of second
+/// order in the misalignments). `C_a_b` (optional) receives the rotation from the new frame to
+/// the old body frame: x_b = C_a_b x_a.
+ImuErrorModel in_accel_triad_frame(const ImuErrorModel& model, Eigen::Matrix3d* C_a_b = nullptr);
+
 /// Names, units and groups of all coefficients in contract order.
 const std::vector<CoefficientInfo>& coefficient_catalog();
 

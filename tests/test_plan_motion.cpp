@@ -48,8 +48,12 @@ TEST_CASE("Plans: seed8 and rot19 build the documented timelines", "[plan]") {
         1e-12);
   CHECK((m19.dwells().back().C_b_n_true - m19.dwells().back().C_b_n_known).cwiseAbs().maxCoeff() <
         1e-12);
-  // After the first +y turn (ned-frd, start x North): x points up (nose up 90 deg).
-  CHECK(m19.dwells()[1].C_b_n_known.col(0).z() == Approx(-1.0));
+  // Start (ned-frd, pitch 90 deg): x up, y East, z North.
+  CHECK(m19.dwells()[0].C_b_n_known.col(0).z() == Approx(-1.0));
+  CHECK(m19.dwells()[0].C_b_n_known.col(2).x() == Approx(1.0));
+  // The first +y turn is about East: z turns from North to up, x from up to South.
+  CHECK(m19.dwells()[1].C_b_n_known.col(2).z() == Approx(-1.0));
+  CHECK(m19.dwells()[1].C_b_n_known.col(0).x() == Approx(-1.0));
 }
 
 TEST_CASE("Plans: table errors move the truth away from the known attitude", "[plan]") {
