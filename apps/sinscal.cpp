@@ -1,4 +1,6 @@
 // sinscal command-line tool: parses options, calls the library, prints. No algorithms here.
+#include <unistd.h>  // isatty: the live table only on a terminal
+
 #include <boost/program_options.hpp>
 #include <chrono>
 #include <cmath>
@@ -206,10 +208,18 @@ int cmd_navigate(const std::vector<std::string>& args) {
 }
 
 // Coefficient, estimate, sigma, unit; truth, error and error/sigma when the session has truth.
-void print_coefficient_table(const ResultCoefficients& coefficients, const Session& session) {
+void print_coefficient_table(const ResultCoefficients& coefficients, const Session& session,
+                             bool accel_triad_frame = false) {
   std::map<std::string, ResultCoefficient> truth;
-  if (!session.truth_file.empty() && std::filesystem::exists(session.truth_file))
+  if (!session.truth_file.empty() && std::filesystem::exists(session.truth_file)) {
     truth = read_result_json(session.truth_file);
+    if (accel_triad_frame) {
+      // Compare in the frame of the result (docs/conventions.md).
+      ImuErrorModel m;
+      for (const auto& [name, t] : truth) m.set(name, t.value);
+      for (const auto& [name, v] : in_accel_triad_frame(m).coefficients()) truth[name].value = v;
+    }
+  }
   std::printf("\n%-24s %12s %10s %-7s", "coefficient", "estimate", "sigma", "unit");
   if (!truth.empty()) std::printf(" %12s %10s %7s", "truth", "error", "err/sig");
   std::printf("\n");
@@ -217,14 +227,17 @@ void print_coefficient_table(const ResultCoefficients& coefficients, const Sessi
     const auto it = coefficients.find(info.name);
     if (it == coefficients.end()) continue;
     const ResultCoefficient& c = it->second;
-    if (!c.observable) {
+    const bool estimated = c.observable && !c.fixed_by_convention;
+    if (c.fixed_by_convention) {
+      std::printf("%-24s %23s %-7s", info.name.c_str(), "0 (convention)", c.unit.c_str());
+    } else if (!c.observable) {
       std::printf("%-24s %23s %-7s", info.name.c_str(), "unobservable", c.unit.c_str());
     } else {
       std::printf("%-24s %12.4f %10.4f %-7s", info.name.c_str(), c.value, *c.sigma, c.unit.c_str());
     }
     const auto t = truth.find(info.name);
     if (t != truth.end()) {
-      if (c.observable)
+      if (estimated)
         std::printf(" %12.4f %10.4f %7.2f", t->second.value, c.value - t->second.value,
                     (c.value - t->second.value) / *c.sigma);
       else
@@ -234,11 +247,72 @@ void print_coefficient_table(const ResultCoefficients& coefficients, const Sessi
   }
 }
 
+// Live convergence table on a terminal (standard error), redrawn at every monitor record: per
+// coefficient family, the largest sigma against its target.
+void print_live_table(const nlohmann::ordered_json& rec,
+                      const std::map<std::string, double>& targets) {
+  std::map<std::string, std::pair<double, std::string>> worst;  // family -> max sigma, unit
+  for (const auto& info : coefficient_catalog()) {
+    if (!rec["coefficients"].contains(info.name)) continue;
+    const double sigma = rec["coefficients"][info.name][1].get<double>();
+    auto& w = worst[coefficient_family(info.name)];
+    if (sigma >= w.first) w = {sigma, info.unit};
+  }
+  std::fprintf(stderr, "\033[H\033[J");  // home, clear
+  std::fprintf(stderr, "sinscal calibrate --method kf   t = %.1f s   NIS/dof %.3f   %s\n",
+               rec["t"].get<double>(), rec["nis_per_dof"].get<double>(),
+               rec["converged"].get<bool>() ? "CONVERGED" : "converging");
+  std::fprintf(stderr, "%-22s %12s %12s %-8s\n", "family", "max sigma", "target", "unit");
+  for (const auto& [family, w] : worst) {
+    const auto t = targets.find(family);
+    double target_in_unit = 0.0;
+    if (t != targets.end())
+      for (const auto& info : coefficient_catalog())
+        if (coefficient_family(info.name) == family) {
+          target_in_unit = t->second / info.si_per_unit;
+          break;
+        }
+    std::fprintf(stderr, "%-22s %12.4g %12s %-8s %s\n", family.c_str(), w.first,
+                 t == targets.end() ? "-" : std::to_string(target_in_unit).c_str(),
+                 w.second.c_str(),
+                 t == targets.end() ? "" : (w.first <= target_in_unit ? "ok" : ""));
+  }
+}
+
+void print_kalman_verdicts(const KalmanReport& kr, const SensorProfile& profile) {
+  std::vector<std::string> fixed;
+  for (const auto& [name, c] : kr.coefficients)
+    if (c.fixed_by_convention) fixed.push_back(name);
+  if (!fixed.empty()) {
+    std::printf("\nBody frame = accelerometer triad (no table attitude): zero by convention:");
+    for (const auto& n : fixed) std::printf(" %s", n.c_str());
+    std::printf("\n");
+  }
+  if (!kr.unobservable.empty()) {
+    std::fprintf(stderr,
+                 "sinscal calibrate: warning: the plan does not observe these coefficients (the "
+                 "data determine them worse than the prior did; reported as not observable):");
+    for (const auto& n : kr.unobservable) std::fprintf(stderr, " %s", n.c_str());
+    std::fprintf(stderr, "\n");
+  }
+  if (profile.sigma_targets.empty())
+    std::printf("Convergence: the sensor profile sets no sigma targets ([targets])\n");
+  else if (kr.converged_at)
+    std::printf("Convergence: every sigma below its target from t = %.1f s\n", *kr.converged_at);
+  else
+    std::printf("Convergence: NOT converged: some sigma is above its target at the end\n");
+  if (kr.skipped > 0) {
+    std::fprintf(stderr, "sinscal calibrate: warning: %zu bad samples skipped, the first:\n",
+                 kr.skipped);
+    for (const auto& m : kr.skipped_examples) std::fprintf(stderr, "  %s\n", m.c_str());
+  }
+}
+
 int cmd_calibrate(const std::vector<std::string>& args) {
   po::options_description d("sinscal calibrate options");
   std::string session_path, out_path, method, stage1, model, channels;
   double table_sigma = 2.5, arw = 0.0, vrw = 0.0, min_dwell = 20.0, monitor_interval = 10.0;
-  std::string monitor_path;
+  std::string monitor_path, attitude, on_bad_sample;
   // clang-format off
   d.add_options()
       ("help,h", "this help")
@@ -260,7 +334,15 @@ int cmd_calibrate(const std::vector<std::string>& args) {
       ("stream", "kf: read the samples from standard input (the session's log format)")
       ("monitor", po::value(&monitor_path), "kf: write a JSON line of estimates and sigmas here")
       ("monitor-interval", po::value(&monitor_interval)->default_value(10.0),
-       "kf: seconds of data between monitor lines");
+       "kf: seconds of data between monitor lines (and live-table refreshes on a terminal)")
+      ("attitude", po::value(&attitude),
+       "kf: table-attitude updates: every (dwell) | first (dwell) | none (zero velocity only; "
+       "body frame = accelerometer triad). Default: every for orientation plans, first for "
+       "rotation plans")
+      ("no-position", "kf: no known-position updates")
+      ("no-motion-zero-velocity", "kf: no zero-velocity updates while the table turns")
+      ("on-bad-sample", po::value(&on_bad_sample)->default_value("stop"),
+       "kf: stop | skip (NaN, saturated, time going backwards; each reported)");
   // clang-format on
   const auto vm = parse(
       args, d,
@@ -281,15 +363,33 @@ int cmd_calibrate(const std::vector<std::string>& args) {
     ko.attitude = session.plan.type == Plan::Type::Orientations
                       ? CalibratorOptions::AttitudeUpdates::Every
                       : CalibratorOptions::AttitudeUpdates::First;
+    if (attitude == "every")
+      ko.attitude = CalibratorOptions::AttitudeUpdates::Every;
+    else if (attitude == "first")
+      ko.attitude = CalibratorOptions::AttitudeUpdates::First;
+    else if (attitude == "none")
+      ko.attitude = CalibratorOptions::AttitudeUpdates::None;
+    else if (!attitude.empty())
+      throw UsageError("--attitude must be every, first or none");
+    ko.position = !vm.count("no-position");
+    ko.zero_velocity_in_motion = !vm.count("no-motion-zero-velocity");
     ko.time_offset = session.time_offset;
     KalmanRunOptions run;
+    if (on_bad_sample != "stop" && on_bad_sample != "skip")
+      throw UsageError("--on-bad-sample must be stop or skip");
+    run.skip_bad_samples = on_bad_sample == "skip";
+    run.sigma_targets = profile.sigma_targets;
     std::ofstream monitor;
     if (!monitor_path.empty()) {
       monitor.open(monitor_path);
       if (!monitor) throw std::runtime_error(monitor_path + ": cannot create");
+    }
+    const bool live = isatty(fileno(stderr)) != 0;
+    if (monitor || live) {
       run.monitor_interval = monitor_interval;
       run.monitor = [&](const nlohmann::ordered_json& rec) {
-        monitor << rec.dump() << "\n" << std::flush;
+        if (monitor) monitor << rec.dump() << "\n" << std::flush;
+        if (live) print_live_table(rec, profile.sigma_targets);
       };
     }
     std::unique_ptr<LogReader> stdin_reader;
@@ -305,14 +405,21 @@ int cmd_calibrate(const std::vector<std::string>& args) {
     write_result_json(out_path, kr.coefficients, kr.details);
     std::printf("Kalman-filter calibration of '%s': %d states, %zu samples, NIS per dof %.3f\n",
                 session.name.c_str(), kr.states, kr.samples, kr.nis_per_dof);
-    print_coefficient_table(kr.coefficients, session);
+    print_coefficient_table(kr.coefficients, session,
+                            kr.details["method"]["body_frame"] == "accelerometer triad");
     std::printf("\nResult written to %s (%.2f s, %.0fx real time)\n", out_path.c_str(), seconds,
                 kr.duration / seconds);
+    print_kalman_verdicts(kr, profile);
     if (!kr.stopped.empty()) {
       std::fprintf(stderr,
                    "sinscal calibrate: error: input stopped: %s (the estimates up to there are "
                    "written)\n",
                    kr.stopped.c_str());
+      return kDataError;
+    }
+    if (!kr.diverged.empty()) {
+      std::fprintf(stderr, "sinscal calibrate: error: %s (the estimates up to there are written)\n",
+                   kr.diverged.c_str());
       return kDataError;
     }
     return 0;

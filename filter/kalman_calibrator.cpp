@@ -68,6 +68,7 @@ Calibrator::Calibrator(std::vector<Dwell> dwells, const Site& site,
   const int n = layout_.size, m = n - n_nav_;
   const auto& cat = coefficient_catalog();
   state_of_coefficient_.assign(cat.size(), -1);
+  prior_sigma_.assign(cat.size(), 0.0);
   P_ = Eigen::MatrixXd::Zero(n, n);
   P_.block(layout_.attitude.index, layout_.attitude.index, 3, 3)
       .diagonal()
@@ -86,6 +87,7 @@ Calibrator::Calibrator(std::vector<Dwell> dwells, const Site& site,
                       : 0.0;
       if (!(s0 > 0.0)) s0 = default_sigma(cb.family);
       P_(x, x) = s0 * s0;
+      prior_sigma_[static_cast<std::size_t>(c)] = s0;
     }
   Phi_nn_ = Eigen::MatrixXd::Identity(n_nav_, n_nav_);
   Phi_nc_ = Eigen::MatrixXd::Zero(n_nav_, m);
@@ -255,8 +257,11 @@ void Calibrator::apply_update(const std::vector<std::pair<int, double>>& rows,
   if (llt.info() != Eigen::Success)
     throw std::runtime_error("Kalman update: innovation covariance not positive definite");
   const Eigen::MatrixXd K = llt.solve(PHt.transpose()).transpose();
-  nis_sum_ += z.dot(llt.solve(z));
+  last_nis_ = z.dot(llt.solve(z));
+  last_nis_dof_ = r;
+  nis_sum_ += last_nis_;
   nis_dof_ += r;
+  ++updates_;
   const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(n, n) - K * H;
   P_ = IKH * P_ * IKH.transpose() + K * R * K.transpose();
   P_ = 0.5 * (P_ + P_.transpose());
@@ -289,6 +294,7 @@ std::vector<CoefficientEstimate> Calibrator::estimate() const {
     out[c].sigma = xs >= 0 ? std::sqrt(P_(xs, xs)) : 0.0;
     out[c].status =
         xs >= 0 ? CoefficientEstimate::Status::Estimated : CoefficientEstimate::Status::Off;
+    out[c].prior_sigma = prior_sigma_[c];
   }
   for (int c : layout_.fixed_by_convention())
     out[static_cast<std::size_t>(c)].status = CoefficientEstimate::Status::FixedByConvention;
@@ -297,6 +303,8 @@ std::vector<CoefficientEstimate> Calibrator::estimate() const {
 
 }  // namespace sinscal
 
+#include <cstdio>
+#include <deque>
 #include <memory>
 
 #include "rig/log_io.hpp"
@@ -305,19 +313,41 @@ std::vector<CoefficientEstimate> Calibrator::estimate() const {
 namespace sinscal {
 
 namespace {
-ResultCoefficients coefficients_of(const Calibrator& kf) {
+ResultCoefficients coefficients_of(const std::vector<CoefficientEstimate>& est) {
   ResultCoefficients out;
-  const auto est = kf.estimate();
   const auto& cat = coefficient_catalog();
   for (std::size_t i = 0; i < cat.size(); ++i) {
-    if (est[i].sigma == 0.0) continue;  // block off
+    if (est[i].status == CoefficientEstimate::Status::Off) continue;
     ResultCoefficient c;
-    c.value = est[i].value / cat[i].si_per_unit;
-    c.sigma = est[i].sigma / cat[i].si_per_unit;
     c.unit = cat[i].unit;
+    c.fixed_by_convention = est[i].status == CoefficientEstimate::Status::FixedByConvention;
+    if (!c.fixed_by_convention) {
+      c.value = est[i].value / cat[i].si_per_unit;
+      c.sigma = est[i].sigma / cat[i].si_per_unit;
+      c.observable = est[i].observed();
+    }
     out[cat[i].name] = c;
   }
   return out;
+}
+
+// Every estimated coefficient with a target for its family has sigma at or below it.
+bool converged(const std::vector<CoefficientEstimate>& est,
+               const std::map<std::string, double>& targets) {
+  if (targets.empty()) return false;
+  const auto& cat = coefficient_catalog();
+  for (std::size_t i = 0; i < cat.size(); ++i) {
+    if (est[i].status != CoefficientEstimate::Status::Estimated) continue;
+    const auto t = targets.find(coefficient_family(cat[i].name));
+    if (t != targets.end() && est[i].sigma > t->second) return false;
+  }
+  return true;
+}
+
+// Upper quantile of chi-square(n) at z standard deviations (Wilson-Hilferty).
+double chi2_upper(double n, double z) {
+  const double a = 2.0 / (9.0 * n);
+  return n * std::pow(1.0 - a + z * std::sqrt(a), 3);
 }
 }  // namespace
 
@@ -331,8 +361,32 @@ KalmanReport run_kalman(const Session& session, const CalibratorOptions& options
     source = reader.get();
   }
   KalmanReport r;
+  if (run.skip_bad_samples) {
+    auto* log = dynamic_cast<LogReader*>(source);
+    if (!log) throw std::invalid_argument("skipping bad samples needs a log reader");
+    log->skip_bad_samples([&r](const BadSampleError& e) {
+      ++r.skipped;
+      if (r.skipped_examples.size() < KalmanReport::kSkippedExamples)
+        r.skipped_examples.push_back(e.what());
+    });
+  }
   ImuSample s;
   double t_first = 0.0, t_last = 0.0, next_monitor = run.monitor_interval;
+  // NIS over a sliding window of updates (constant memory).
+  std::deque<std::pair<double, int>> window;
+  double window_nis = 0.0;
+  int window_dof = 0, seen_updates = 0;
+  auto record = [&](double t, const std::vector<CoefficientEstimate>& est) {
+    nlohmann::ordered_json rec;
+    rec["t"] = t;
+    rec["nis_per_dof"] = kf.nis_dof() > 0 ? kf.nis_sum() / kf.nis_dof() : 0.0;
+    rec["converged"] = r.converged_at.has_value();
+    nlohmann::ordered_json c = nlohmann::ordered_json::object();
+    for (const auto& [name, e] : coefficients_of(est))
+      if (!e.fixed_by_convention) c[name] = {e.value, *e.sigma};
+    rec["coefficients"] = c;
+    return rec;
+  };
   try {
     while (source->next(s)) {
       if (r.samples == 0) {
@@ -342,35 +396,68 @@ KalmanReport run_kalman(const Session& session, const CalibratorOptions& options
       t_last = s.t;
       kf.push(s);
       ++r.samples;
+      if (kf.updates() != seen_updates) {
+        seen_updates = kf.updates();
+        window.emplace_back(kf.last_nis(), kf.last_nis_dof());
+        window_nis += kf.last_nis();
+        window_dof += kf.last_nis_dof();
+        if (static_cast<int>(window.size()) > run.nis_window) {
+          window_nis -= window.front().first;
+          window_dof -= window.front().second;
+          window.pop_front();
+        }
+        if (static_cast<int>(window.size()) == run.nis_window &&
+            window_nis > chi2_upper(window_dof, run.nis_alarm_z)) {
+          char msg[256];
+          std::snprintf(msg, sizeof msg,
+                        "filter diverging at t = %.3f s: NIS per dof %.3g over the last %d updates "
+                        "(%d dof; a consistent filter stays below %.3g)",
+                        s.t, window_nis / window_dof, run.nis_window, window_dof,
+                        chi2_upper(window_dof, run.nis_alarm_z) / window_dof);
+          r.diverged = msg;
+          break;
+        }
+        if (!r.converged_at && !run.sigma_targets.empty() &&
+            converged(kf.estimate(), run.sigma_targets))
+          r.converged_at = s.t;
+      }
       if (run.monitor && run.monitor_interval > 0.0 && s.t >= next_monitor - 1e-9) {
-        nlohmann::ordered_json rec;
-        rec["t"] = s.t;
-        rec["nis_per_dof"] = kf.nis_dof() > 0 ? kf.nis_sum() / kf.nis_dof() : 0.0;
-        nlohmann::ordered_json c = nlohmann::ordered_json::object();
-        for (const auto& [name, e] : coefficients_of(kf)) c[name] = {e.value, *e.sigma};
-        rec["coefficients"] = c;
-        run.monitor(rec);
+        run.monitor(record(s.t, kf.estimate()));
         next_monitor += run.monitor_interval;
       }
     }
   } catch (const LogError& e) {
     r.stopped = e.what();
   }
-  kf.finish();
+  if (r.diverged.empty()) kf.finish();
   r.duration = t_last - t_first;
   r.states = kf.layout().size;
   r.nis_per_dof = kf.nis_dof() > 0 ? kf.nis_sum() / kf.nis_dof() : 0.0;
-  r.coefficients = coefficients_of(kf);
+  const auto est = kf.estimate();
+  r.coefficients = coefficients_of(est);
+  for (std::size_t i = 0; i < est.size(); ++i)
+    if (est[i].status == CoefficientEstimate::Status::Estimated && !est[i].observed())
+      r.unobservable.push_back(coefficient_catalog()[i].name);
   r.details["method"] = {
       {"name", "kf"},
       {"states", r.states},
       {"zero_velocity", options.zero_velocity},
+      {"zero_velocity_in_motion", options.zero_velocity_in_motion},
       {"position", options.position},
       {"attitude", options.attitude == CalibratorOptions::AttitudeUpdates::Every   ? "every dwell"
                    : options.attitude == CalibratorOptions::AttitudeUpdates::First ? "first dwell"
                                                                                    : "none"},
+      {"body_frame", kf.layout().accel_triad_frame ? "accelerometer triad" : "table"},
       {"update_interval_s", options.update_interval}};
   r.details["consistency"] = {{"nis_per_dof", r.nis_per_dof}, {"samples", r.samples}};
+  nlohmann::ordered_json conv = {{"targets", !run.sigma_targets.empty()},
+                                 {"converged", r.converged_at.has_value()}};
+  if (r.converged_at) conv["converged_at_t"] = *r.converged_at;
+  conv["unobservable"] = r.unobservable;
+  r.details["convergence"] = conv;
+  if (r.skipped > 0)
+    r.details["skipped_samples"] = {{"count", r.skipped}, {"first", r.skipped_examples}};
+  if (!r.diverged.empty()) r.details["diverged"] = {{"reason", r.diverged}, {"t", t_last}};
   if (!r.stopped.empty()) r.details["stopped"] = {{"reason", r.stopped}, {"last_good_t", t_last}};
   return r;
 }

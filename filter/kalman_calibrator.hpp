@@ -17,6 +17,8 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -78,6 +80,12 @@ struct CoefficientEstimate {
   /// Off: its block is not in the state; FixedByConvention: zero by the body-frame convention.
   enum class Status { Off, Estimated, FixedByConvention };
   Status status = Status::Off;
+  double prior_sigma = 0.0;  // SI, the sigma before any data
+  /// Observed: the data alone determine it better than the prior did (sigma below prior /
+  /// sqrt(2)); otherwise the plan cannot observe it and the value is the prior's.
+  bool observed() const {
+    return status == Status::Estimated && sigma * sigma < 0.5 * prior_sigma * prior_sigma;
+  }
 };
 
 class Calibrator {
@@ -98,6 +106,10 @@ class Calibrator {
   /// NIS of the updates so far (sum and count of the measurement dimensions).
   double nis_sum() const { return nis_sum_; }
   int nis_dof() const { return nis_dof_; }
+  /// Number of measurement updates so far, and the NIS and dimension of the last one.
+  int updates() const { return updates_; }
+  double last_nis() const { return last_nis_; }
+  int last_nis_dof() const { return last_nis_dof_; }
 
  private:
   void process(const ImuSample& s, const Eigen::Vector3d& omega_dot, const Eigen::Vector3d& f_dot,
@@ -131,6 +143,10 @@ class Calibrator {
   int attitude_dwell_done_ = 0;
   double nis_sum_ = 0.0;
   int nis_dof_ = 0;
+  int updates_ = 0;
+  double last_nis_ = 0.0;
+  int last_nis_dof_ = 0;
+  std::vector<double> prior_sigma_;  // catalog order, SI
 };
 
 /// The filter over a session's samples (batch from the log, or streaming from any source).
@@ -141,14 +157,28 @@ struct KalmanReport {
   std::size_t samples = 0;
   double duration = 0.0;  // s of data
   double nis_per_dof = 0.0;
-  std::string stopped;  // empty, or why the input stopped early (bad sample); estimates kept
+  std::string stopped;   // empty, or why the input stopped early (bad sample); estimates kept
+  std::string diverged;  // empty, or the NIS alarm that stopped the run; estimates kept
+  std::optional<double> converged_at;     // s: first update with every sigma below its target
+  std::vector<std::string> unobservable;  // estimated, but the plan's data do not observe them
+  std::size_t skipped = 0;                // bad samples skipped
+  static constexpr std::size_t kSkippedExamples = 20;
+  std::vector<std::string> skipped_examples;  // the first few, "FILE:LINE: cause"
 };
 
 struct KalmanRunOptions {
   double monitor_interval = 0.0;  // s of data between monitor records (0: none)
-  /// Called with one JSON record per monitor interval: t, NIS, estimate and sigma of every
-  /// coefficient (engineering units).
+  /// Called with one JSON record per monitor interval: t, NIS, converged, estimate and sigma of
+  /// every coefficient (engineering units).
   std::function<void(const nlohmann::ordered_json&)> monitor;
+  /// Sigma targets by family (SI), from the sensor profile: the "converged" verdict.
+  std::map<std::string, double> sigma_targets;
+  /// Bad samples (NaN, saturated, time backwards): skip them (reported) or stop the run.
+  bool skip_bad_samples = false;
+  /// Divergence alarm: the NIS summed over the last `nis_window` updates beyond the chi-square
+  /// quantile `nis_alarm_z` standard deviations up stops the run (estimates kept).
+  int nis_window = 30;
+  double nis_alarm_z = 6.0;
 };
 
 /// Runs the filter over `source` (the session's log when null). A bad sample (LogError) stops the

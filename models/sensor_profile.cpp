@@ -1,5 +1,6 @@
 #include "models/sensor_profile.hpp"
 
+#include <algorithm>
 #include <random>
 #include <vector>
 
@@ -59,6 +60,16 @@ SensorProfile SensorProfile::load(const std::string& path) {
       throw ConfigError(ini.where(key) + "a range needs 0 <= lo <= hi");
     p.ranges[f.section == std::string("timing") ? std::string(f.key) : key] = r;
   }
+  for (const auto& f : families) {
+    const std::string family = f.section == std::string("timing")
+                                   ? std::string(f.key)
+                                   : std::string(f.section) + "." + f.key;
+    const std::string key = "targets." + family;
+    if (!ini.has(key)) continue;
+    const double v = ini.get_quantity(key, f.kind, f.unit);
+    if (!(v > 0.0)) throw ConfigError(ini.where(key) + "a sigma target must be positive");
+    p.sigma_targets[family] = v;
+  }
   using Q = QuantityKind;
   auto& g = p.noise.gyro;
   g.white = ini.get_quantity("gyro.arw", Q::AngleRandomWalk, "deg/sqrt(h)", 0.0);
@@ -87,8 +98,21 @@ SensorProfile SensorProfile::load(const std::string& path) {
   ini.check_keys("timing", {"time_delay"});
   for (const auto& key : ini.keys()) {
     const auto section = key.substr(0, key.find('.'));
+    if (section == "targets") {
+      const std::string family = key.substr(8);
+      if (std::none_of(families.begin(), families.end(), [&](const Family& f) {
+            return family == (f.section == std::string("timing")
+                                  ? std::string(f.key)
+                                  : std::string(f.section) + "." + f.key);
+          }))
+        throw ConfigError(ini.where(key) +
+                          "unknown coefficient family in [targets] (e.g. gyro.bias, accel.k2, "
+                          "time_delay)");
+      continue;
+    }
     if (section != "sensor" && section != "gyro" && section != "accel" && section != "timing")
-      throw ConfigError(ini.where(key) + "unknown section (known: sensor, gyro, accel, timing)");
+      throw ConfigError(ini.where(key) +
+                        "unknown section (known: sensor, gyro, accel, timing, targets)");
   }
   return p;
 }

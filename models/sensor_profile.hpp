@@ -28,6 +28,9 @@ struct SensorProfile {
   NoiseModel noise;
   double gyro_range = 0.0;   // rad/s, |rate| at which the gyros saturate (0: none)
   double accel_range = 0.0;  // m/s^2, |specific force| at which the accels saturate (0: none)
+  /// Sigma targets by family ([targets] gyro.bias = 0.005 deg/h): calibration has converged when
+  /// every estimated coefficient's sigma is below its family's target. SI.
+  std::map<std::string, double> sigma_targets;
 
   /// Loads and validates a profile; throws ConfigError naming the file, line and key.
   static SensorProfile load(const std::string& path);

@@ -200,6 +200,12 @@ void LogReader::start() {
 
 void LogReader::fail(const std::string& cause) const { throw LogError(f_.file, line_, cause); }
 
+void LogReader::bad_sample(const std::string& cause) const {
+  BadSampleError e(f_.file, line_, cause);
+  e.t_prev = t_prev_;
+  throw e;
+}
+
 bool LogReader::read_line(std::string& line, bool& had_newline) {
   if (!std::getline(*in_, line)) {
     if (in_->bad()) fail("read error");
@@ -214,10 +220,23 @@ bool LogReader::read_line(std::string& line, bool& had_newline) {
 bool LogReader::next(ImuSample& s) {
   std::string line;
   bool had_newline = true;
-  do {
-    if (!read_line(line, had_newline)) return false;
-  } while (line.empty() || line[0] == '#');
+  for (;;) {
+    do {
+      if (!read_line(line, had_newline)) return false;
+    } while (line.empty() || line[0] == '#');
+    try {
+      return parse(line, had_newline, s);
+    } catch (const BadSampleError& e) {
+      if (!on_skip_) throw;
+      on_skip_(e);
+      skipped_ = true;
+      ++skipped_count_;
+      ++skipped_run_;
+    }
+  }
+}
 
+bool LogReader::parse(const std::string& line, bool had_newline, ImuSample& s) {
   // Split and parse.
   fields_.clear();
   const std::size_t expected = f_.columns.size();
@@ -239,11 +258,11 @@ bool LogReader::next(ImuSample& s) {
     const std::string text = line.substr(pos, end - pos);
     const std::string which = "field " + std::to_string(fields_.size() + 1);
     if (r.ec == std::errc() && r.ptr == line.data() + e && !std::isfinite(v))
-      fail(which + " is " + (std::isnan(v) ? "NaN" : "infinite"));
+      bad_sample(which + " is " + (std::isnan(v) ? "NaN" : "infinite"));
     if (b == e || r.ec != std::errc() || r.ptr != line.data() + e) {
       if (!had_newline && fields_.size() + 1 < expected)
         fail("truncated line: the file ends in the middle of a sample");
-      fail(which + " '" + text + "' is not a number");
+      bad_sample(which + " '" + text + "' is not a number");
     }
     fields_.push_back(v);
     pos = end + 1;
@@ -258,17 +277,18 @@ bool LogReader::next(ImuSample& s) {
 
   // Time.
   const double nominal_dt = 1.0 / f_.rate_hz;
-  const double t =
-      col_t_ >= 0 ? fields_[col_t_] * f_.time_scale : static_cast<double>(count_ + 1) * nominal_dt;
+  const double t = col_t_ >= 0 ? fields_[col_t_] * f_.time_scale
+                               : static_cast<double>(count_ + skipped_count_ + 1) * nominal_dt;
   double dt = nominal_dt;
   if (count_ > 0) {
     dt = t - t_prev_;
     char msg[200];
     if (dt <= 0.0) {
       std::snprintf(msg, sizeof msg, "time goes backwards: t = %.6f s after %.6f s", t, t_prev_);
-      fail(dt == 0.0 ? "time repeats: t = " + format_number(t) + " s twice" : msg);
+      bad_sample(dt == 0.0 ? "time repeats: t = " + format_number(t) + " s twice" : msg);
     }
-    if (dt > f_.max_gap * nominal_dt) {
+    // Skipped samples leave their intervals to the next good one (bridged, see skip_bad_samples).
+    if (dt > (f_.max_gap + static_cast<double>(skipped_run_)) * nominal_dt) {
       std::snprintf(msg, sizeof msg,
                     "gap in the data: %.6f s from t = %.6f s to %.6f s (about %.0f samples missing "
                     "at %g Hz)",
@@ -290,10 +310,13 @@ bool LogReader::next(ImuSample& s) {
     for (int i = 0; i < 3; ++i) {
       const double raw = fields_[col[c.axis[i]]];
       if (c.saturation > 0.0 && std::abs(raw) >= c.saturation)
-        fail(std::string("saturated sample: ") + name + " log axis " + char('x' + c.axis[i]) +
-             " reads " + format_number(raw) + " (limit " + format_number(c.saturation) + ")");
+        bad_sample(std::string("saturated sample: ") + name + " log axis " + char('x' + c.axis[i]) +
+                   " reads " + format_number(raw) + " (limit " + format_number(c.saturation) + ")");
       v(i) = c.sign[i] * (raw - c.offset) * c.scale;
     }
+    // After a skipped sample, hold this sample's rate over the whole interval since the last
+    // good one (increments cover one nominal interval only).
+    if (c.increments && skipped_) return Eigen::Vector3d(v * (dt / nominal_dt));
     return c.increments ? v : Eigen::Vector3d(v * dt);
   };
   s.dtheta_b = triad(f_.gyro, col_g_, "gyro");
@@ -302,6 +325,8 @@ bool LogReader::next(ImuSample& s) {
   s.dt = dt;
   t_prev_ = t;
   ++count_;
+  skipped_ = false;
+  skipped_run_ = 0;
   return true;
 }
 

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -30,6 +31,14 @@ class LogError : public std::runtime_error {
   std::string file_;
   std::size_t line_;
   std::string cause_;
+};
+
+/// A bad sample that a reader may skip (a value NaN, infinite, not a number or saturated; time
+/// going backwards or repeating). Other problems (gaps, truncation, wrong field counts) are not.
+class BadSampleError : public LogError {
+ public:
+  using LogError::LogError;
+  double t_prev = 0.0;  // s, time of the last good sample before it
 };
 
 /// How one triad is stored in a log.
@@ -82,9 +91,18 @@ class LogReader : public SampleSource {
   std::size_t line() const { return line_; }
   /// Samples read so far.
   std::size_t count() const { return count_; }
+  /// Skip bad samples (BadSampleError) instead of throwing: each is passed to `on_skip` and the
+  /// reading goes on. The motion of a skipped interval is bridged by holding the next good
+  /// sample's rate over it (its increments are scaled to the whole interval since the last good
+  /// sample).
+  void skip_bad_samples(std::function<void(const BadSampleError&)> on_skip) {
+    on_skip_ = std::move(on_skip);
+  }
 
  private:
   [[noreturn]] void fail(const std::string& cause) const;
+  [[noreturn]] void bad_sample(const std::string& cause) const;
+  bool parse(const std::string& line, bool had_newline, ImuSample& s);
   bool read_line(std::string& line, bool& had_newline);
   void start();
   LogFormat f_;
@@ -95,6 +113,10 @@ class LogReader : public SampleSource {
   std::array<int, 3> col_g_{-1, -1, -1}, col_a_{-1, -1, -1};
   double t_prev_ = 0.0;
   std::vector<double> fields_;
+  std::function<void(const BadSampleError&)> on_skip_;
+  bool skipped_ = false;  // a sample was skipped since the last good one
+  std::size_t skipped_count_ = 0;
+  std::size_t skipped_run_ = 0;  // consecutive skipped samples before the next good one
 };
 
 }  // namespace sinscal

@@ -65,11 +65,15 @@ void write_result_json(const std::string& path, const ResultCoefficients& coeffi
     const auto it = coefficients.find(info.name);
     if (it == coefficients.end()) continue;
     nlohmann::ordered_json e = nlohmann::ordered_json::object();
-    if (it->second.observable) {
+    if (it->second.fixed_by_convention) {
+      e["value"] = 0.0;
+      e["fixed_by_convention"] = true;
+    } else if (it->second.observable) {
       e["value"] = it->second.value;
       if (it->second.sigma) e["sigma"] = *it->second.sigma;
     } else {
       e["observable"] = false;
+      if (it->second.sigma) e["sigma"] = *it->second.sigma;
     }
     e["unit"] = it->second.unit;
     c[info.name] = e;
@@ -89,6 +93,7 @@ ResultCoefficients read_result_json(const std::string& path) {
     for (const auto& [name, e] : j.at("coefficients").items()) {
       ResultCoefficient r;
       r.observable = e.value("observable", true);
+      r.fixed_by_convention = e.value("fixed_by_convention", false);
       if (r.observable) r.value = e.at("value").get<double>();
       if (e.contains("sigma")) r.sigma = e.at("sigma").get<double>();
       r.unit = e.value("unit", "");

@@ -34,7 +34,8 @@ struct ResultCoefficient {
   double value = 0.0;
   std::optional<double> sigma;  // absent: not estimated (truth files)
   std::string unit;
-  bool observable = true;  // false: the data cannot determine it; no value is given
+  bool observable = true;            // false: the data cannot determine it; no value is given
+  bool fixed_by_convention = false;  // zero by the body-frame convention, not estimated
 };
 
 /// Result / truth JSON: {"coefficients": {"gyro.bias.x": {"value": .., "sigma": .., "unit": ..}}}.
