@@ -1,6 +1,8 @@
 // sinscal command-line tool: parses options, calls the library, prints. No algorithms here.
 #include <unistd.h>  // isatty: the live table only on a terminal
 
+#include <algorithm>
+#include <atomic>
 #include <boost/program_options.hpp>
 #include <chrono>
 #include <cmath>
@@ -10,8 +12,10 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <sstream>
 #include <string>
+#include <thread>
 
 #include "filter/closed_form.hpp"
 #include "filter/dwell_navigation.hpp"
@@ -31,6 +35,7 @@ namespace {
 
 constexpr int kUsageError = 1;
 constexpr int kDataError = 2;
+constexpr int kDisagree = 3;  // compare: the results differ beyond the given tolerance
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -76,59 +81,31 @@ int cmd_simulate(const std::vector<std::string>& args) {
                         "[--seed N] [--no-noise]\nSimulates a calibration session: DIR/imu.csv, "
                         "session.ini, plan.ini, sensor.ini, truth.json.");
   if (!(rate > 0.0)) throw UsageError("--rate must be positive");
-  const Plan plan = Plan::load(plan_path);
-  if (!plan.has_site) throw ConfigError(plan_path + ": the plan has no [site] for the simulation");
-  const SensorProfile profile = SensorProfile::load(sensor_path);
-  const bool perfect = vm.count("perfect") > 0;
-  const ImuErrorModel truth = perfect ? ImuErrorModel{} : profile.draw(derive_seed(seed, 1));
-  TableErrors table_errors;
-  table_errors.angle_sigma = angle_sigma_arcsec * units::arcsec;
-  table_errors.non_orthogonality = non_orth_arcsec * units::arcsec;
-  table_errors.seed = derive_seed(seed, 3);
-  const Motion motion = build_motion(plan, plan.site, table_errors);
-  SimulatorOptions so;
-  so.rate_hz = rate;
-  so.noise = !perfect && !vm.count("no-noise");
-  so.noise_seed = derive_seed(seed, 2);
-  so.gyro_range = profile.gyro_range;
-  so.accel_range = profile.accel_range;
-  ImuSimulator sim(motion, truth, profile.noise, so);
-
-  std::filesystem::create_directories(out_dir);
+  SessionSimulation spec;
+  spec.plan_path = plan_path;
+  spec.data_sensor_path = sensor_path;
+  spec.rate_hz = rate;
+  spec.seed = seed;
+  spec.perfect = vm.count("perfect") > 0;
+  spec.noise = !vm.count("no-noise");
+  spec.table.angle_sigma = angle_sigma_arcsec * units::arcsec;
+  spec.table.non_orthogonality = non_orth_arcsec * units::arcsec;
+  spec.table.seed = derive_seed(seed, 3);
   const auto t0 = std::chrono::steady_clock::now();
-  LogWriter log(out_dir + "/imu.csv", rate);
-  ImuSample s;
-  while (sim.next(s)) log.write(s);
-  log.close();
+  const SimulatedSession sim = simulate_session(out_dir, spec);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  {
-    std::ofstream p(out_dir + "/plan.ini");
-    p << plan.text;
-    std::ifstream in(sensor_path);
-    std::ofstream o(out_dir + "/sensor.ini");
-    o << in.rdbuf();
-  }
-  std::ofstream ses(out_dir + "/session.ini");
-  ses << "# Written by sinscal simulate\n[session]\nname = " << plan.name << "\nrate = " << rate
-      << " Hz\nplan = plan.ini\nsensor = sensor.ini\ntruth = truth.json\n\n[site]\nlatitude = "
-      << fmt("%.12g", plan.site.lat_rad / units::deg)
-      << " deg\nlongitude = " << fmt("%.12g", plan.site.lon_rad / units::deg)
-      << " deg\nheight = " << plan.site.h_m << " m\n\n[log]\nfile = imu.csv\nformat = sinscal\n";
-  ses.close();
-  if (!ses) throw std::runtime_error(out_dir + "/session.ini: cannot write");
-  write_truth_json(out_dir + "/truth.json", truth,
-                   "simulate --plan " + plan_path + " --sensor " + sensor_path + " --seed " +
-                       std::to_string(seed) + (so.noise ? "" : " (no noise)"));
-
+  const bool noise = spec.noise && !spec.perfect;
+  const Plan& plan = sim.plan;
+  const SensorProfile& profile = sim.profile;
+  const ImuErrorModel& truth = sim.truth;
   std::cout << "Simulated plan '" << plan.name << "' (" << plan.path << "), sensor '"
-            << profile.name << "'\n  " << sim.total_samples() << " samples at " << rate << " Hz, "
-            << fmt("%.1f", motion.duration()) << " s, " << motion.dwells().size() << " dwells, "
-            << (so.noise ? "noise on" : "noise off") << ", "
-            << fmt("%.0f", static_cast<double>(sim.total_samples()) / seconds)
-            << " samples/s written\n";
-  if (sim.saturated())
-    std::cout << "  WARNING: " << sim.saturated() << " samples clipped at the sensor range\n";
+            << profile.name << "'\n  " << sim.samples << " samples at " << rate << " Hz, "
+            << fmt("%.1f", sim.duration) << " s, " << sim.dwells << " dwells, "
+            << (noise ? "noise on" : "noise off") << ", "
+            << fmt("%.0f", static_cast<double>(sim.samples) / seconds) << " samples/s written\n";
+  if (sim.saturated > 0)
+    std::cout << "  WARNING: " << sim.saturated << " samples clipped at the sensor range\n";
   std::cout << "  session: " << out_dir << "/session.ini\n  injected coefficients (truth.json):\n";
   for (const auto& info : coefficient_catalog()) {
     const double v = truth.coefficients().at(info.name);
@@ -210,16 +187,7 @@ int cmd_navigate(const std::vector<std::string>& args) {
 // Coefficient, estimate, sigma, unit; truth, error and error/sigma when the session has truth.
 void print_coefficient_table(const ResultCoefficients& coefficients, const Session& session,
                              bool accel_triad_frame = false) {
-  std::map<std::string, ResultCoefficient> truth;
-  if (!session.truth_file.empty() && std::filesystem::exists(session.truth_file)) {
-    truth = read_result_json(session.truth_file);
-    if (accel_triad_frame) {
-      // Compare in the frame of the result (docs/conventions.md).
-      ImuErrorModel m;
-      for (const auto& [name, t] : truth) m.set(name, t.value);
-      for (const auto& [name, v] : in_accel_triad_frame(m).coefficients()) truth[name].value = v;
-    }
-  }
+  const ResultCoefficients truth = load_truth(session, accel_triad_frame);
   std::printf("\n%-24s %12s %10s %-7s", "coefficient", "estimate", "sigma", "unit");
   if (!truth.empty()) std::printf(" %12s %10s %7s", "truth", "error", "err/sig");
   std::printf("\n");
@@ -308,138 +276,102 @@ void print_kalman_verdicts(const KalmanReport& kr, const SensorProfile& profile)
   }
 }
 
-int cmd_calibrate(const std::vector<std::string>& args) {
-  po::options_description d("sinscal calibrate options");
-  std::string session_path, out_path, method, stage1, model, channels;
+// Options of `calibrate`, shared by every session of a run.
+struct CalibrateOptions {
+  std::string method, stage1, model, channels, attitude, on_bad_sample;
   double table_sigma = 2.5, arw = 0.0, vrw = 0.0, min_dwell = 20.0, monitor_interval = 10.0;
-  std::string monitor_path, attitude, on_bad_sample;
-  // clang-format off
-  d.add_options()
-      ("help,h", "this help")
-      ("session", po::value(&session_path)->required(), "session.ini of the recording")
-      ("method", po::value(&method)->default_value("closed-form"),
-       "closed-form | kf (error-state Kalman filter)")
-      ("out", po::value(&out_path)->required(), "result JSON to write")
-      ("stage1", po::value(&stage1)->default_value("fit"),
-       "closed-form: fit (weighted least squares over each dwell) | point (the paper's eq. 5)")
-      ("model", po::value(&model)->default_value("coupled"),
-       "closed-form: coupled | uncoupled (the paper's Schuler channels)")
-      ("channels", po::value(&channels)->default_value("north,east,vertical,heading"),
-       "closed-form: stage-1 channels, comma separated (the paper: north,east)")
-      ("table-sigma", po::value(&table_sigma)->default_value(2.5),
-       "table attitude error per orientation, 1-sigma [arcsec]")
-      ("arw", po::value(&arw), "gyro angle random walk [deg/sqrt(h)] (default: the session's sensor)")
-      ("vrw", po::value(&vrw), "accelerometer velocity random walk [ug/sqrt(Hz)] (default: sensor)")
-      ("min-dwell", po::value(&min_dwell)->default_value(20.0), "closed-form: shortest dwell [s]")
-      ("stream", "kf: read the samples from standard input (the session's log format)")
-      ("monitor", po::value(&monitor_path), "kf: write a JSON line of estimates and sigmas here")
-      ("monitor-interval", po::value(&monitor_interval)->default_value(10.0),
-       "kf: seconds of data between monitor lines (and live-table refreshes on a terminal)")
-      ("attitude", po::value(&attitude),
-       "kf: table-attitude updates: every (dwell) | first (dwell) | none (zero velocity only; "
-       "body frame = accelerometer triad). Default: every for orientation plans, first for "
-       "rotation plans")
-      ("no-position", "kf: no known-position updates")
-      ("no-motion-zero-velocity", "kf: no zero-velocity updates while the table turns")
-      ("on-bad-sample", po::value(&on_bad_sample)->default_value("stop"),
-       "kf: stop | skip (NaN, saturated, time going backwards; each reported)");
-  // clang-format on
-  const auto vm = parse(
-      args, d,
-      "Usage: sinscal calibrate --session DIR/session.ini --method closed-form|kf --out "
-      "result.json\n"
-      "Estimates the calibration coefficients with their sigma. closed-form: the 24 base\n"
-      "coefficients from the static dwells; the paper's method exactly:\n"
-      "  --stage1 point --model uncoupled --channels north,east\n"
-      "kf: the error-state Kalman filter, with the extended terms the sensor profile declares;\n"
-      "--stream reads the samples from standard input as they arrive.");
-  if (method == "kf") {
-    const Session session = Session::load(session_path);
-    if (session.sensor_file.empty())
-      throw UsageError("--method kf needs the session's sensor profile ([session] sensor =)");
-    const SensorProfile profile = SensorProfile::load(session.sensor_file);
-    CalibratorOptions ko = calibrator_options_from_profile(profile);
-    ko.attitude_sigma = table_sigma * units::arcsec;
-    ko.attitude = session.plan.type == Plan::Type::Orientations
-                      ? CalibratorOptions::AttitudeUpdates::Every
-                      : CalibratorOptions::AttitudeUpdates::First;
-    if (attitude == "every")
-      ko.attitude = CalibratorOptions::AttitudeUpdates::Every;
-    else if (attitude == "first")
-      ko.attitude = CalibratorOptions::AttitudeUpdates::First;
-    else if (attitude == "none")
-      ko.attitude = CalibratorOptions::AttitudeUpdates::None;
-    else if (!attitude.empty())
-      throw UsageError("--attitude must be every, first or none");
-    ko.position = !vm.count("no-position");
-    ko.zero_velocity_in_motion = !vm.count("no-motion-zero-velocity");
-    ko.time_offset = session.time_offset;
-    KalmanRunOptions run;
-    if (on_bad_sample != "stop" && on_bad_sample != "skip")
-      throw UsageError("--on-bad-sample must be stop or skip");
-    run.skip_bad_samples = on_bad_sample == "skip";
-    run.sigma_targets = profile.sigma_targets;
-    std::ofstream monitor;
-    if (!monitor_path.empty()) {
-      monitor.open(monitor_path);
-      if (!monitor) throw std::runtime_error(monitor_path + ": cannot create");
-    }
-    const bool live = isatty(fileno(stderr)) != 0;
-    if (monitor || live) {
-      run.monitor_interval = monitor_interval;
-      run.monitor = [&](const nlohmann::ordered_json& rec) {
-        if (monitor) monitor << rec.dump() << "\n" << std::flush;
-        if (live) print_live_table(rec, profile.sigma_targets);
-      };
-    }
-    std::unique_ptr<LogReader> stdin_reader;
-    if (vm.count("stream")) {
-      LogFormat f = session.log;
-      f.file = "<stdin>";
-      stdin_reader = std::make_unique<LogReader>(std::cin, f);
-    }
-    const auto t0 = std::chrono::steady_clock::now();
-    const KalmanReport kr = run_kalman(session, ko, stdin_reader.get(), run);
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    write_result_json(out_path, kr.coefficients, kr.details);
-    std::printf("Kalman-filter calibration of '%s': %d states, %zu samples, NIS per dof %.3f\n",
-                session.name.c_str(), kr.states, kr.samples, kr.nis_per_dof);
-    print_coefficient_table(kr.coefficients, session,
-                            kr.details["method"]["body_frame"] == "accelerometer triad");
-    std::printf("\nResult written to %s (%.2f s, %.0fx real time)\n", out_path.c_str(), seconds,
-                kr.duration / seconds);
-    print_kalman_verdicts(kr, profile);
-    if (!kr.stopped.empty()) {
-      std::fprintf(stderr,
-                   "sinscal calibrate: error: input stopped: %s (the estimates up to there are "
-                   "written)\n",
-                   kr.stopped.c_str());
-      return kDataError;
-    }
-    if (!kr.diverged.empty()) {
-      std::fprintf(stderr, "sinscal calibrate: error: %s (the estimates up to there are written)\n",
-                   kr.diverged.c_str());
-      return kDataError;
-    }
-    return 0;
+  bool stream = false, no_position = false, no_motion_zero_velocity = false;
+};
+
+// The Kalman filter on one session. `verbose`: the tables and verdicts on standard output (a
+// single session); `live`: the live table on the terminal.
+SessionSummary calibrate_kf(const CalibrateOptions& o, const std::string& session_path,
+                            const std::string& out_path, const std::string& monitor_path,
+                            bool verbose, bool live) {
+  const Session session = Session::load(session_path);
+  if (session.sensor_file.empty())
+    throw UsageError(session_path +
+                     ": --method kf needs the session's sensor profile ([session] sensor =)");
+  const SensorProfile profile = SensorProfile::load(session.sensor_file);
+  CalibratorOptions ko = calibrator_options_from_profile(profile);
+  ko.attitude_sigma = o.table_sigma * units::arcsec;
+  ko.attitude = session.plan.type == Plan::Type::Orientations
+                    ? CalibratorOptions::AttitudeUpdates::Every
+                    : CalibratorOptions::AttitudeUpdates::First;
+  if (o.attitude == "every")
+    ko.attitude = CalibratorOptions::AttitudeUpdates::Every;
+  else if (o.attitude == "first")
+    ko.attitude = CalibratorOptions::AttitudeUpdates::First;
+  else if (o.attitude == "none")
+    ko.attitude = CalibratorOptions::AttitudeUpdates::None;
+  ko.position = !o.no_position;
+  ko.zero_velocity_in_motion = !o.no_motion_zero_velocity;
+  ko.time_offset = session.time_offset;
+  KalmanRunOptions run;
+  run.skip_bad_samples = o.on_bad_sample == "skip";
+  run.sigma_targets = profile.sigma_targets;
+  std::ofstream monitor;
+  if (!monitor_path.empty()) {
+    monitor.open(monitor_path);
+    if (!monitor) throw std::runtime_error(monitor_path + ": cannot create");
   }
-  if (method != "closed-form") throw UsageError("--method must be closed-form or kf");
+  if (monitor || live) {
+    run.monitor_interval = o.monitor_interval;
+    run.monitor = [&](const nlohmann::ordered_json& rec) {
+      if (monitor) monitor << rec.dump() << "\n" << std::flush;
+      if (live) print_live_table(rec, profile.sigma_targets);
+    };
+  }
+  std::unique_ptr<LogReader> stdin_reader;
+  if (o.stream) {
+    LogFormat f = session.log;
+    f.file = "<stdin>";
+    stdin_reader = std::make_unique<LogReader>(std::cin, f);
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const KalmanReport kr = run_kalman(session, ko, stdin_reader.get(), run);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  write_result_json(out_path, kr.coefficients, kr.details);
+  const bool accel_frame = kr.details["method"]["body_frame"] == "accelerometer triad";
+
+  SessionSummary row;
+  row.session = session_path;
+  row.name = session.name;
+  row.result = out_path;
+  row.samples = kr.samples;
+  row.duration = kr.duration;
+  row.nis_per_dof = kr.nis_per_dof;
+  row.converged_at = kr.converged_at;
+  row.coefficients = kr.coefficients;
+  row.max_error_over_sigma =
+      max_error_over_sigma(kr.coefficients, load_truth(session, accel_frame));
+  row.status = "ok";
+  if (!kr.stopped.empty()) {
+    row.status = "stopped";
+    row.message = "input stopped: " + kr.stopped;
+  } else if (!kr.diverged.empty()) {
+    row.status = "diverged";
+    row.message = kr.diverged;
+  }
+  if (!verbose) return row;
+  std::printf("Kalman-filter calibration of '%s': %d states, %zu samples, NIS per dof %.3f\n",
+              session.name.c_str(), kr.states, kr.samples, kr.nis_per_dof);
+  print_coefficient_table(kr.coefficients, session, accel_frame);
+  std::printf("\nResult written to %s (%.2f s, %.0fx real time)\n", out_path.c_str(), seconds,
+              kr.duration / seconds);
+  print_kalman_verdicts(kr, profile);
+  return row;
+}
+
+// The closed-form method on one session; `verbose` as calibrate_kf.
+SessionSummary calibrate_closed_form(const CalibrateOptions& co, const std::string& session_path,
+                                     const std::string& out_path, bool verbose) {
   Stage1Options o;
-  if (stage1 == "fit")
-    o.method = Stage1Method::Fit;
-  else if (stage1 == "point")
-    o.method = Stage1Method::Point;
-  else
-    throw UsageError("--stage1 must be fit or point");
-  if (model == "coupled")
-    o.model = ErrorModelKind::Coupled;
-  else if (model == "uncoupled")
-    o.model = ErrorModelKind::Uncoupled;
-  else
-    throw UsageError("--model must be coupled or uncoupled");
+  o.method = co.stage1 == "point" ? Stage1Method::Point : Stage1Method::Fit;
+  o.model = co.model == "uncoupled" ? ErrorModelKind::Uncoupled : ErrorModelKind::Coupled;
   o.channels = ChannelSet{false, false, false, false};
-  std::stringstream cs(channels);
+  std::stringstream cs(co.channels);
   for (std::string c; std::getline(cs, c, ',');) {
     if (c == "north")
       o.channels.north = true;
@@ -449,29 +381,36 @@ int cmd_calibrate(const std::vector<std::string>& args) {
       o.channels.vertical = true;
     else if (c == "heading")
       o.channels.heading = true;
-    else
-      throw UsageError("--channels: unknown channel '" + c + "' (north, east, vertical, heading)");
   }
-  if (!o.channels.north || !o.channels.east)
-    throw UsageError("--channels needs at least north,east");
-  o.min_dwell = min_dwell;
+  o.min_dwell = co.min_dwell;
   const Session session = Session::load(session_path);
   if (!session.sensor_file.empty()) {
     const SensorProfile p = SensorProfile::load(session.sensor_file);
     o.arw = p.noise.gyro.white;
     o.vrw = p.noise.accel.white;
   }
-  if (arw > 0.0) o.arw = arw * units::deg_per_sqrt_h;
-  if (vrw > 0.0) o.vrw = vrw * units::ug_per_sqrt_hz;
+  if (co.arw > 0.0) o.arw = co.arw * units::deg_per_sqrt_h;
+  if (co.vrw > 0.0) o.vrw = co.vrw * units::ug_per_sqrt_hz;
   const auto t0 = std::chrono::steady_clock::now();
-  const ClosedFormReport r = run_closed_form(session, o, table_sigma * units::arcsec);
+  const ClosedFormReport r = run_closed_form(session, o, co.table_sigma * units::arcsec);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_result_json(out_path, r.coefficients, r.details);
 
+  SessionSummary row;
+  row.session = session_path;
+  row.name = session.name;
+  row.result = out_path;
+  row.status = "ok";
+  row.coefficients = r.coefficients;
+  row.max_error_over_sigma = max_error_over_sigma(r.coefficients, load_truth(session));
+  for (const auto& e : r.stage1) row.duration += e.duration;
+  if (!verbose) return row;
+
   std::printf(
       "Closed-form calibration of '%s': stage 1 %s, %s model, channels %s, table %.2f arcsec\n",
-      session.name.c_str(), stage1.c_str(), model.c_str(), channels.c_str(), table_sigma);
+      session.name.c_str(), co.stage1.c_str(), co.model.c_str(), co.channels.c_str(),
+      co.table_sigma);
   std::printf("\nStage 1: equivalent inputs per dwell (value +- sigma)\n");
   std::printf("%5s %-10s %6s %20s %20s %20s %20s %20s %20s %8s\n", "dwell", "label", "T [s]",
               "df_n [ug]", "df_e [ug]", "df_d [ug]", "dw_n [deg/h]", "dw_e [deg/h]", "dw_d [deg/h]",
@@ -536,6 +475,274 @@ int cmd_calibrate(const std::vector<std::string>& args) {
     }
   }
   std::printf("\nResult written to %s (%.2f s)\n", out_path.c_str(), seconds);
+  return row;
+}
+
+// Result file stems for a batch: the session directory's name, made unique with -2, -3, ...
+std::vector<std::string> result_stems(const std::vector<std::string>& sessions) {
+  std::vector<std::string> stems;
+  std::map<std::string, int> seen;
+  for (const auto& s : sessions) {
+    const std::filesystem::path p(s);
+    std::string stem = p.filename() == "session.ini" && p.has_parent_path()
+                           ? p.parent_path().filename().string()
+                           : p.stem().string();
+    if (stem.empty() || stem == ".") stem = "session";
+    const int n = ++seen[stem];
+    stems.push_back(n == 1 ? stem : stem + "-" + std::to_string(n));
+  }
+  return stems;
+}
+
+// Every session of a batch, on `jobs` threads; one result (and for kf one monitor file) per
+// session in `out_dir`, the summary table in out_dir/summary.csv. A session that fails does not
+// stop the others.
+int calibrate_batch(const CalibrateOptions& o, const std::vector<std::string>& sessions,
+                    const std::string& out_dir, unsigned jobs) {
+  std::filesystem::create_directories(out_dir);
+  const auto stems = result_stems(sessions);
+  std::vector<SessionSummary> rows(sessions.size());
+  std::atomic<std::size_t> next{0};
+  std::mutex print_mutex;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto worker = [&] {
+    for (std::size_t i; (i = next++) < sessions.size();) {
+      const std::string result = out_dir + "/" + stems[i] + ".json";
+      SessionSummary& row = rows[i];
+      try {
+        row = o.method == "kf"
+                  ? calibrate_kf(o, sessions[i], result,
+                                 out_dir + "/" + stems[i] + ".monitor.jsonl", false, false)
+                  : calibrate_closed_form(o, sessions[i], result, false);
+      } catch (const std::exception& e) {
+        row.session = sessions[i];
+        row.status = "failed";
+        row.message = e.what();
+      }
+      const std::lock_guard<std::mutex> lock(print_mutex);
+      std::fprintf(stderr, "[%zu/%zu] %s: %s%s%s\n", i + 1, sessions.size(), sessions[i].c_str(),
+                   row.status.c_str(), row.message.empty() ? "" : ": ", row.message.c_str());
+    }
+  };
+  jobs = std::max(1u, std::min<unsigned>(jobs, static_cast<unsigned>(sessions.size())));
+  std::vector<std::thread> threads;
+  for (unsigned k = 1; k < jobs; ++k) threads.emplace_back(worker);
+  worker();
+  for (auto& t : threads) t.join();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  const std::string summary = out_dir + "/summary.csv";
+  write_summary_csv(summary, rows);
+  std::printf("Batch calibration (%s) of %zu sessions on %u threads, %.2f s\n\n", o.method.c_str(),
+              sessions.size(), jobs, seconds);
+  std::printf("%-24s %-9s %9s %9s %10s %12s %12s  %s\n", "result", "status", "samples", "data [s]",
+              "NIS/dof", "converged [s]", "max|err|/sig", "session");
+  int bad = 0;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const SessionSummary& r = rows[i];
+    auto opt = [](const std::optional<double>& v, const char* f) {
+      return v ? fmt(f, *v) : std::string("-");
+    };
+    std::printf("%-24s %-9s %9zu %9.1f %10s %12s %12s  %s\n", (stems[i] + ".json").c_str(),
+                r.status.c_str(), r.samples, r.duration, opt(r.nis_per_dof, "%.3f").c_str(),
+                opt(r.converged_at, "%.1f").c_str(), opt(r.max_error_over_sigma, "%.2f").c_str(),
+                r.session.c_str());
+    if (r.status != "ok") ++bad;
+  }
+  std::printf("\nSummary table written to %s\n", summary.c_str());
+  if (bad > 0) {
+    std::fprintf(stderr, "sinscal calibrate: error: %d of %zu sessions not ok (see %s)\n", bad,
+                 sessions.size(), summary.c_str());
+    return kDataError;
+  }
+  return 0;
+}
+
+int cmd_calibrate(const std::vector<std::string>& args) {
+  po::options_description d("sinscal calibrate options");
+  CalibrateOptions o;
+  std::vector<std::string> session_paths;
+  std::string session_list, out_path, monitor_path;
+  unsigned jobs = 0;
+  // clang-format off
+  d.add_options()
+      ("help,h", "this help")
+      ("session", po::value(&session_paths)->composing(),
+       "session.ini of the recording; or a directory: its session.ini, else every subdirectory "
+       "holding one (batch). Repeatable (batch)")
+      ("session-list", po::value(&session_list),
+       "batch: a file naming one session (session.ini or directory) per line")
+      ("method", po::value(&o.method)->default_value("closed-form"),
+       "closed-form | kf (error-state Kalman filter)")
+      ("out", po::value(&out_path)->required(),
+       "result JSON to write; in a batch, the directory of the results and summary.csv")
+      ("jobs", po::value(&jobs)->default_value(0),
+       "batch: sessions calibrated at once (0: one per processor core)")
+      ("stage1", po::value(&o.stage1)->default_value("fit"),
+       "closed-form: fit (weighted least squares over each dwell) | point (the paper's eq. 5)")
+      ("model", po::value(&o.model)->default_value("coupled"),
+       "closed-form: coupled | uncoupled (the paper's Schuler channels)")
+      ("channels", po::value(&o.channels)->default_value("north,east,vertical,heading"),
+       "closed-form: stage-1 channels, comma separated (the paper: north,east)")
+      ("table-sigma", po::value(&o.table_sigma)->default_value(2.5),
+       "table attitude error per orientation, 1-sigma [arcsec]")
+      ("arw", po::value(&o.arw), "gyro angle random walk [deg/sqrt(h)] (default: the session's sensor)")
+      ("vrw", po::value(&o.vrw), "accelerometer velocity random walk [ug/sqrt(Hz)] (default: sensor)")
+      ("min-dwell", po::value(&o.min_dwell)->default_value(20.0), "closed-form: shortest dwell [s]")
+      ("stream", "kf: read the samples from standard input (the session's log format)")
+      ("monitor", po::value(&monitor_path),
+       "kf: write a JSON line of estimates and sigmas here (a batch writes RESULT.monitor.jsonl "
+       "beside each result)")
+      ("monitor-interval", po::value(&o.monitor_interval)->default_value(10.0),
+       "kf: seconds of data between monitor lines (and live-table refreshes on a terminal)")
+      ("attitude", po::value(&o.attitude),
+       "kf: table-attitude updates: every (dwell) | first (dwell) | none (zero velocity only; "
+       "body frame = accelerometer triad). Default: every for orientation plans, first for "
+       "rotation plans")
+      ("no-position", "kf: no known-position updates")
+      ("no-motion-zero-velocity", "kf: no zero-velocity updates while the table turns")
+      ("on-bad-sample", po::value(&o.on_bad_sample)->default_value("stop"),
+       "kf: stop | skip (NaN, saturated, time going backwards; each reported)");
+  // clang-format on
+  const auto vm = parse(
+      args, d,
+      "Usage: sinscal calibrate --session DIR/session.ini --method closed-form|kf --out "
+      "result.json\n"
+      "       sinscal calibrate --session DIR_OF_SESSIONS | --session-list FILE [--session ...] "
+      "--out OUT_DIR\n"
+      "Estimates the calibration coefficients with their sigma. closed-form: the 24 base\n"
+      "coefficients from the static dwells; the paper's method exactly:\n"
+      "  --stage1 point --model uncoupled --channels north,east\n"
+      "kf: the error-state Kalman filter, with the extended terms the sensor profile declares;\n"
+      "--stream reads the samples from standard input as they arrive.\n"
+      "Batch (several sessions): OUT_DIR/NAME.json per session and OUT_DIR/summary.csv.");
+  o.stream = vm.count("stream") > 0;
+  o.no_position = vm.count("no-position") > 0;
+  o.no_motion_zero_velocity = vm.count("no-motion-zero-velocity") > 0;
+  if (o.method != "kf" && o.method != "closed-form")
+    throw UsageError("--method must be closed-form or kf");
+  if (o.stage1 != "fit" && o.stage1 != "point") throw UsageError("--stage1 must be fit or point");
+  if (o.model != "coupled" && o.model != "uncoupled")
+    throw UsageError("--model must be coupled or uncoupled");
+  {
+    bool north = false, east = false;
+    std::stringstream cs(o.channels);
+    for (std::string c; std::getline(cs, c, ',');) {
+      if (c != "north" && c != "east" && c != "vertical" && c != "heading")
+        throw UsageError("--channels: unknown channel '" + c +
+                         "' (north, east, vertical, heading)");
+      north |= c == "north";
+      east |= c == "east";
+    }
+    if (!north || !east) throw UsageError("--channels needs at least north,east");
+  }
+  if (!o.attitude.empty() && o.attitude != "every" && o.attitude != "first" && o.attitude != "none")
+    throw UsageError("--attitude must be every, first or none");
+  if (o.on_bad_sample != "stop" && o.on_bad_sample != "skip")
+    throw UsageError("--on-bad-sample must be stop or skip");
+  if (o.stream && o.method != "kf") throw UsageError("--stream needs --method kf");
+
+  // One session.ini given as a file: a single run. Anything naming a folder of sessions, a
+  // list, or several sessions: a batch.
+  if (session_paths.empty() && session_list.empty())
+    throw UsageError("give --session (or --session-list)");
+  std::vector<std::string> sessions;
+  bool batch = !session_list.empty() || session_paths.size() > 1;
+  for (const auto& p : session_paths) {
+    const auto found = find_sessions(p);
+    batch |=
+        found.size() > 1 || (std::filesystem::is_directory(p) &&
+                             !std::filesystem::exists(std::filesystem::path(p) / "session.ini"));
+    sessions.insert(sessions.end(), found.begin(), found.end());
+  }
+  if (!session_list.empty()) {
+    const auto listed = read_session_list(session_list);
+    sessions.insert(sessions.end(), listed.begin(), listed.end());
+  }
+  if (batch) {
+    if (o.stream) throw UsageError("--stream reads one session from standard input, not a batch");
+    if (!monitor_path.empty())
+      throw UsageError("--monitor names one file; a batch writes OUT_DIR/NAME.monitor.jsonl");
+    return calibrate_batch(o, sessions, out_path,
+                           jobs > 0 ? jobs : std::max(1u, std::thread::hardware_concurrency()));
+  }
+  const SessionSummary row = o.method == "kf"
+                                 ? calibrate_kf(o, sessions.front(), out_path, monitor_path, true,
+                                                isatty(fileno(stderr)) != 0)
+                                 : calibrate_closed_form(o, sessions.front(), out_path, true);
+  if (row.status != "ok") {
+    std::fprintf(stderr, "sinscal calibrate: error: %s (the estimates up to there are written)\n",
+                 row.message.c_str());
+    return kDataError;
+  }
+  return 0;
+}
+
+int cmd_compare(const std::vector<std::string>& args) {
+  po::options_description d("sinscal compare options");
+  std::vector<std::string> files;
+  double max_sigma = 0.0, max_relative = 0.0;
+  // clang-format off
+  d.add_options()
+      ("help,h", "this help")
+      ("result", po::value(&files)->composing(), "the two result JSON files (also positional)")
+      ("max-sigma", po::value(&max_sigma),
+       "fail (exit 3) if a difference exceeds this many sigma of the difference")
+      ("max-relative", po::value(&max_relative),
+       "fail (exit 3) if a value or sigma differs by more than this fraction");
+  // clang-format on
+  po::positional_options_description pos;
+  pos.add("result", 2);
+  po::variables_map vm;
+  po::store(po::command_line_parser(args).options(d).positional(pos).run(), vm);
+  if (vm.count("help")) {
+    std::cout << "Usage: sinscal compare A.json B.json [--max-sigma K] [--max-relative R]\n"
+                 "Two calibration results side by side: difference, difference over its sigma\n"
+                 "(sigma from both results, taken as independent) and relative difference.\n"
+              << d << "\n";
+    return 0;
+  }
+  po::notify(vm);
+  if (files.size() != 2) throw UsageError("give two result files");
+  const ResultCoefficients a = read_result_json(files[0]);
+  const ResultCoefficients b = read_result_json(files[1]);
+  const bool check_sigma = vm.count("max-sigma") > 0, check_relative = vm.count("max-relative") > 0;
+  std::printf("A = %s\nB = %s\n\n%-28s %14s %14s %12s %8s %10s %-8s\n", files[0].c_str(),
+              files[1].c_str(), "coefficient", "A", "B", "A - B", "z", "relative", "unit");
+  int failures = 0;
+  for (const auto& c : compare_results(a, b)) {
+    auto num = [](const std::optional<double>& v, const char* f) {
+      return v ? fmt(f, *v) : std::string("-");
+    };
+    std::string verdict;
+    if (!c.a || !c.b) {
+      verdict = !c.a && !c.b ? "in neither as a value" : !c.a ? "no value in A" : "no value in B";
+      if (check_sigma || check_relative) {
+        // Both unobservable (sigma only) is agreement; a value on one side only is not.
+        const bool same_kind = !c.a && !c.b;
+        if (!same_kind) ++failures;
+      }
+    } else {
+      if (check_sigma && c.z && std::abs(*c.z) > max_sigma) {
+        verdict += " |z| > " + fmt("%g", max_sigma);
+        ++failures;
+      }
+      if (check_relative &&
+          (*c.relative > max_relative || (c.sigma_relative && *c.sigma_relative > max_relative))) {
+        verdict += " relative > " + fmt("%g", max_relative);
+        ++failures;
+      }
+    }
+    std::printf("%-28s %14s %14s %12s %8s %10s %-8s%s\n", c.name.c_str(), num(c.a, "%.6g").c_str(),
+                num(c.b, "%.6g").c_str(), c.a && c.b ? fmt("%.4g", *c.a - *c.b).c_str() : "-",
+                num(c.z, "%.2f").c_str(), num(c.relative, "%.2e").c_str(), c.unit.c_str(),
+                verdict.c_str());
+  }
+  if (failures > 0) {
+    std::fprintf(stderr, "sinscal compare: %d coefficients disagree\n", failures);
+    return kDisagree;
+  }
   return 0;
 }
 
@@ -545,7 +752,9 @@ const char* kUsage =
     "Commands:\n"
     "  simulate   simulate a calibration session on a two-axis table\n"
     "  navigate   navigate through the static dwells of a session, report navigation errors\n"
-    "  calibrate  estimate the calibration coefficients of a session (closed-form method)\n";
+    "  calibrate  estimate the calibration coefficients of a session or a batch of sessions\n"
+    "             (closed-form method or Kalman filter)\n"
+    "  compare    two results side by side, difference over its sigma\n";
 
 }  // namespace
 
@@ -560,6 +769,7 @@ int main(int argc, char** argv) {
     if (command == "simulate") return cmd_simulate(args);
     if (command == "navigate") return cmd_navigate(args);
     if (command == "calibrate") return cmd_calibrate(args);
+    if (command == "compare") return cmd_compare(args);
     std::cerr << "sinscal: unknown command '" << command << "'\n" << kUsage;
     return kUsageError;
   } catch (int code) {

@@ -306,6 +306,7 @@ std::vector<CoefficientEstimate> Calibrator::estimate() const {
 #include <cstdio>
 #include <deque>
 #include <memory>
+#include <sstream>
 
 #include "rig/log_io.hpp"
 #include "rig/plan.hpp"
@@ -428,6 +429,16 @@ KalmanReport run_kalman(const Session& session, const CalibratorOptions& options
     }
   } catch (const LogError& e) {
     r.stopped = e.what();
+  }
+  // A log that ends before the plan does: the data do not match the plan. The estimates from the
+  // data up to there are kept, and the run says so.
+  if (r.stopped.empty() && r.diverged.empty() &&
+      (r.samples == 0 || t_last - options.time_offset < motion.duration() - 1.5 * s.dt)) {
+    std::ostringstream m;
+    m << (source == reader.get() ? session.log.file : std::string("the input"))
+      << ": the log ends at t = " << (r.samples ? t_last : 0.0) << " s but the plan runs until "
+      << motion.duration() + options.time_offset << " s: the plan does not match the data";
+    r.stopped = m.str();
   }
   if (r.diverged.empty()) kf.finish();
   r.duration = t_last - t_first;

@@ -1,9 +1,16 @@
 #include "rig/session.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "models/config.hpp"
+#include "models/units.hpp"
+#include "rig/imu_sim.hpp"
 
 namespace sinscal {
 
@@ -42,6 +49,67 @@ Session Session::load(const std::string& path) {
   ini.check_keys("site", {"latitude", "longitude", "height"});
   s.log = LogFormat::from_ini(ini, s.dir, s.rate_hz);
   return s;
+}
+
+SimulatedSession simulate_session(const std::string& out_dir, const SessionSimulation& spec) {
+  if (!(spec.rate_hz > 0.0)) throw std::invalid_argument("simulate_session: rate must be positive");
+  SimulatedSession r;
+  r.plan = Plan::load(spec.plan_path);
+  if (!r.plan.has_site)
+    throw ConfigError(spec.plan_path + ": the plan has no [site] for the simulation");
+  r.profile = SensorProfile::load(spec.data_sensor_path);
+  r.truth = spec.perfect ? ImuErrorModel{} : r.profile.draw(derive_seed(spec.seed, 1));
+  const Motion motion = build_motion(r.plan, r.plan.site, spec.table);
+  r.duration = motion.duration();
+  r.dwells = motion.dwells().size();
+  SimulatorOptions so;
+  so.rate_hz = spec.rate_hz;
+  so.noise = spec.noise && !spec.perfect;
+  so.noise_seed = derive_seed(spec.seed, 2);
+  so.gyro_range = r.profile.gyro_range;
+  so.accel_range = r.profile.accel_range;
+  ImuSimulator sim(motion, r.truth, r.profile.noise, so);
+
+  std::filesystem::create_directories(out_dir);
+  LogWriter log(out_dir + "/imu.csv", spec.rate_hz);
+  ImuSample sample;
+  while (sim.next(sample)) log.write(sample);
+  log.close();
+  r.samples = sim.total_samples();
+  r.saturated = sim.saturated();
+
+  auto write = [](const std::string& path, const std::string& text) {
+    std::ofstream out(path);
+    out << text;
+    out.close();
+    if (!out) throw std::runtime_error(path + ": cannot write");
+  };
+  write(out_dir + "/plan.ini", r.plan.text);
+  const std::string& sensor_source =
+      spec.filter_sensor_path.empty() ? spec.data_sensor_path : spec.filter_sensor_path;
+  {
+    std::ifstream in(sensor_source);
+    if (!in) throw std::runtime_error(sensor_source + ": cannot open");
+    std::ostringstream text;
+    text << in.rdbuf();
+    write(out_dir + "/sensor.ini", text.str());
+  }
+  write_truth_json(out_dir + "/truth.json", r.truth,
+                   "simulate --plan " + spec.plan_path + " --sensor " + spec.data_sensor_path +
+                       " --seed " + std::to_string(spec.seed) + (so.noise ? "" : " (no noise)"));
+  char site[256];
+  std::snprintf(
+      site, sizeof site, "latitude = %.12g deg\nlongitude = %.12g deg\nheight = %.12g m\n",
+      r.plan.site.lat_rad / units::deg, r.plan.site.lon_rad / units::deg, r.plan.site.h_m);
+  char rate[64];
+  std::snprintf(rate, sizeof rate, "%.12g", spec.rate_hz);
+  r.session_path = out_dir + "/session.ini";
+  write(r.session_path, "# Written by sinscal simulate\n[session]\nname = " +
+                            (spec.name.empty() ? r.plan.name : spec.name) + "\nrate = " + rate +
+                            " Hz\nplan = plan.ini\nsensor = sensor.ini\ntruth = truth.json\n\n"
+                            "[site]\n" +
+                            site + "\n[log]\nfile = imu.csv\nformat = sinscal\n");
+  return r;
 }
 
 void write_truth_json(const std::string& path, const ImuErrorModel& model,
@@ -103,6 +171,157 @@ ResultCoefficients read_result_json(const std::string& path) {
     throw std::runtime_error(path + ": not a sinscal result file: " + e.what());
   }
   return out;
+}
+
+ResultCoefficients load_truth(const Session& session, bool accel_triad_frame) {
+  if (session.truth_file.empty() || !std::filesystem::exists(session.truth_file)) return {};
+  ResultCoefficients truth = read_result_json(session.truth_file);
+  if (accel_triad_frame) {
+    ImuErrorModel m;
+    for (const auto& [name, t] : truth) m.set(name, t.value);
+    for (const auto& [name, v] : in_accel_triad_frame(m).coefficients()) truth[name].value = v;
+  }
+  return truth;
+}
+
+std::optional<double> max_error_over_sigma(const ResultCoefficients& result,
+                                           const ResultCoefficients& truth) {
+  std::optional<double> worst;
+  for (const auto& [name, c] : result) {
+    const auto t = truth.find(name);
+    if (t == truth.end() || !c.observable || c.fixed_by_convention || !c.sigma || !(*c.sigma > 0))
+      continue;
+    const double z = std::abs(c.value - t->second.value) / *c.sigma;
+    if (!worst || z > *worst) worst = z;
+  }
+  return worst;
+}
+
+std::vector<CoefficientComparison> compare_results(const ResultCoefficients& a,
+                                                   const ResultCoefficients& b) {
+  auto relative = [](double x, double y) {
+    const double scale = std::max(std::abs(x), std::abs(y));
+    return scale > 0.0 ? std::abs(x - y) / scale : 0.0;
+  };
+  auto value = [](const ResultCoefficients& r, const std::string& name) -> std::optional<double> {
+    const auto it = r.find(name);
+    if (it == r.end() || !it->second.observable) return std::nullopt;
+    return it->second.fixed_by_convention ? 0.0 : it->second.value;
+  };
+  auto sigma = [](const ResultCoefficients& r, const std::string& name) -> std::optional<double> {
+    const auto it = r.find(name);
+    return it == r.end() ? std::nullopt : it->second.sigma;
+  };
+  std::vector<CoefficientComparison> out;
+  for (const auto& info : coefficient_catalog()) {
+    if (!a.count(info.name) && !b.count(info.name)) continue;
+    CoefficientComparison c;
+    c.name = info.name;
+    c.unit = info.unit;
+    c.a = value(a, info.name);
+    c.b = value(b, info.name);
+    c.sigma_a = sigma(a, info.name);
+    c.sigma_b = sigma(b, info.name);
+    if (c.a && c.b) c.relative = relative(*c.a, *c.b);
+    if (c.sigma_a && c.sigma_b) {
+      c.sigma_relative = relative(*c.sigma_a, *c.sigma_b);
+      const double s = std::hypot(*c.sigma_a, *c.sigma_b);
+      if (c.a && c.b && s > 0.0) c.z = (*c.a - *c.b) / s;
+    }
+    out.push_back(c);
+  }
+  return out;
+}
+
+std::vector<std::string> find_sessions(const std::string& path) {
+  namespace fs = std::filesystem;
+  if (!fs::exists(path)) throw std::runtime_error(path + ": no such file or directory");
+  if (!fs::is_directory(path)) return {path};
+  if (fs::exists(fs::path(path) / "session.ini"))
+    return {(fs::path(path) / "session.ini").string()};
+  std::vector<std::string> out;
+  for (const auto& entry : fs::directory_iterator(path))
+    if (entry.is_directory() && fs::exists(entry.path() / "session.ini"))
+      out.push_back((entry.path() / "session.ini").string());
+  std::sort(out.begin(), out.end());
+  if (out.empty())
+    throw std::runtime_error(path + ": no session.ini in this directory nor in its subdirectories");
+  return out;
+}
+
+std::vector<std::string> read_session_list(const std::string& list_path) {
+  std::ifstream in(list_path);
+  if (!in) throw std::runtime_error(list_path + ": cannot open");
+  const std::string dir = directory_of(list_path);
+  std::vector<std::string> out;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.erase(hash);
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos) continue;
+    line = line.substr(first, line.find_last_not_of(" \t\r") - first + 1);
+    try {
+      for (auto& s : find_sessions(resolve(dir, line))) out.push_back(std::move(s));
+    } catch (const std::exception& e) {
+      throw std::runtime_error(list_path + ":" + std::to_string(number) + ": " + e.what());
+    }
+  }
+  if (out.empty()) throw std::runtime_error(list_path + ": the list names no session");
+  return out;
+}
+
+namespace {
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c == '\n' ? ' ' : c);
+  return q + "\"";
+}
+std::string number(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.10g", v);
+  return b;
+}
+std::string number(const std::optional<double>& v) { return v ? number(*v) : std::string(); }
+}  // namespace
+
+void write_summary_csv(const std::string& path, const std::vector<SessionSummary>& rows) {
+  std::vector<const CoefficientInfo*> columns;  // catalog order, those any row has
+  for (const auto& info : coefficient_catalog())
+    for (const auto& r : rows)
+      if (r.coefficients.count(info.name)) {
+        columns.push_back(&info);
+        break;
+      }
+  std::ofstream out(path);
+  out << "session,name,status,result,samples,duration_s,nis_per_dof,converged_at_s,"
+         "max_abs_error_over_sigma,message";
+  for (const auto* c : columns)
+    out << "," << c->name << " [" << c->unit << "]," << c->name << ".sigma [" << c->unit << "]";
+  out << "\n";
+  for (const auto& r : rows) {
+    out << csv_field(r.session) << "," << csv_field(r.name) << "," << r.status << ","
+        << csv_field(r.result) << "," << r.samples << "," << number(r.duration) << ","
+        << number(r.nis_per_dof) << "," << number(r.converged_at) << ","
+        << number(r.max_error_over_sigma) << "," << csv_field(r.message);
+    for (const auto* c : columns) {
+      const auto it = r.coefficients.find(c->name);
+      std::string value, sigma;
+      if (it != r.coefficients.end()) {
+        const ResultCoefficient& e = it->second;
+        if (e.fixed_by_convention)
+          value = "0";
+        else if (e.observable)
+          value = number(e.value);
+        if (!e.fixed_by_convention) sigma = number(e.sigma);
+      }
+      out << "," << value << "," << sigma;
+    }
+    out << "\n";
+  }
+  out.close();
+  if (!out) throw std::runtime_error(path + ": cannot write");
 }
 
 }  // namespace sinscal

@@ -85,6 +85,32 @@ check "bad stream names the line" contains "$work/stream_bad.err" "<stdin>:30000
 check "bad stream keeps the estimates" grep -q '"stopped"' "$work/r19/bad.json"
 check "bad stream estimates are written" grep -q '"gyro.bias.x"' "$work/r19/bad.json"
 
+# Batch: a folder of sessions, one result and monitor file each plus summary.csv; the same
+# numbers as the single streaming run (to 1e-9 relative, checked by `compare`). A session that
+# fails (a log cut short) does not stop the others; the exit code says one was not ok.
+mkdir -p "$work/batch"; ln -s "$work/r19" "$work/batch/a_r19"; ln -s "$work/s8" "$work/batch/b_s8"
+"$bin" calibrate --method kf --session "$work/batch" --out "$work/batch_out" --jobs 2 > "$work/batch.txt" 2> "$work/batch.err"
+check "batch exits 0" test $? -eq 0
+check "batch writes a result per session" test -s "$work/batch_out/a_r19.json" -a -s "$work/batch_out/b_s8.json"
+check "batch writes a monitor per session" test -s "$work/batch_out/a_r19.monitor.jsonl"
+check "batch summary has a row per session" test "$(wc -l < "$work/batch_out/summary.csv")" -eq 3
+check "batch summary names the coefficients with units" contains "$work/batch_out/summary.csv" "gyro.bias.x \[deg/h\],gyro.bias.x.sigma \[deg/h\]"
+"$bin" compare "$work/r19/stream.json" "$work/batch_out/a_r19.json" --max-relative 1e-9 > "$work/cmp.txt"
+check "batch equals streaming to 1e-9" test $? -eq 0
+"$bin" compare "$work/r19/truth.json" "$work/batch_out/a_r19.json" --max-relative 1e-12 > /dev/null 2> "$work/cmp_bad.err"
+check "compare exits 3 on a disagreement" test $? -eq 3
+check "compare counts the disagreements" contains "$work/cmp_bad.err" "coefficients disagree"
+printf '# sessions\n%s\n\nshort   # cut short\n' "$work/r19/session.ini" > "$work/list.txt"
+"$bin" calibrate --method kf --session-list "$work/list.txt" --out "$work/list_out" --jobs 1 > "$work/list.txt.out" 2> "$work/list.err"
+check "batch with a failing session exits 2" test $? -eq 2
+check "batch keeps the good session's result" test -s "$work/list_out/r19.json"
+check "batch summary marks the failing session" grep -q "short/session.ini,.*,\(failed\|stopped\)," "$work/list_out/summary.csv"
+printf 'nowhere\n' > "$work/badlist.txt"
+"$bin" calibrate --method kf --session-list "$work/badlist.txt" --out "$work/x" 2> "$work/badlist.err"
+check "a list naming nothing exits 2 naming file and line" contains "$work/badlist.err" "badlist.txt:1: .*nowhere"
+"$bin" calibrate --method kf --session "$work/batch" --monitor "$work/m.jsonl" --out "$work/x" 2> "$work/batchmon.err"
+check "batch with --monitor is a usage error" test $? -eq 1
+
 # A sensor profile with a wrong unit.
 printf '[gyro]\nbias = 0.1 0.3 ug\n' > "$work/badsensor.ini"
 "$bin" simulate --plan "$src/config/plans/seed8.ini" --sensor "$work/badsensor.ini" --out "$work/x" 2> "$work/unit.err"

@@ -17,27 +17,15 @@ namespace {
 Session make_session(const std::string& name, const std::string& plan_file,
                      const std::string& data_profile, const std::string& filter_profile,
                      std::uint64_t seed, const TableErrors& table = {}) {
+  SessionSimulation spec;
+  spec.plan_path = test::source_path("config/plans/" + plan_file);
+  spec.data_sensor_path = test::source_path(data_profile);
+  spec.filter_sensor_path = test::source_path(filter_profile);
+  spec.name = name;
+  spec.seed = seed;
+  spec.table = table;
   const std::string dir = test::temp_dir(name);
-  const Plan p = test::load_plan(plan_file);
-  const SensorProfile prof = SensorProfile::load(test::source_path(data_profile));
-  const ImuErrorModel truth = prof.draw(derive_seed(seed, 1));
-  const Motion m = build_motion(p, p.site, table);
-  const auto samples = test::simulate(m, truth, 100.0, &prof.noise, derive_seed(seed, 2));
-  LogWriter w(dir + "/imu.csv", 100.0);
-  for (const auto& s : samples) w.write(s);
-  w.close();
-  test::write_file(dir + "/plan.ini", p.text);
-  std::ifstream in(test::source_path(filter_profile));
-  std::ofstream(dir + "/sensor.ini") << in.rdbuf();
-  write_truth_json(dir + "/truth.json", truth);
-  char site[200];
-  std::snprintf(site, sizeof site, "latitude = %.12g deg\nlongitude = %.12g deg\nheight = %g m\n",
-                p.site.lat_rad / units::deg, p.site.lon_rad / units::deg, p.site.h_m);
-  test::write_file(dir + "/session.ini",
-                   "[session]\nname = " + name +
-                       "\nrate = 100 Hz\nplan = plan.ini\nsensor = sensor.ini\ntruth = "
-                       "truth.json\n[site]\n" +
-                       site + "[log]\nfile = imu.csv\nformat = sinscal\n");
+  simulate_session(dir, spec);
   return Session::load(dir + "/session.ini");
 }
 
