@@ -20,6 +20,7 @@
 #include "filter/closed_form.hpp"
 #include "filter/dwell_navigation.hpp"
 #include "filter/kalman_calibrator.hpp"
+#include "filter/monitor.hpp"
 #include "models/config.hpp"
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"
@@ -267,8 +268,18 @@ void print_kalman_verdicts(const KalmanReport& kr, const SensorProfile& profile)
     std::printf("Convergence: the sensor profile sets no sigma targets ([targets])\n");
   else if (kr.converged_at)
     std::printf("Convergence: every sigma below its target from t = %.1f s\n", *kr.converged_at);
-  else
-    std::printf("Convergence: NOT converged: some sigma is above its target at the end\n");
+  else {
+    std::printf("Convergence: NOT converged: sigma above its target at the end:");
+    for (const auto& name : kr.above_target) {
+      const auto& c = kr.coefficients.at(name);
+      for (const auto& info : coefficient_catalog())
+        if (info.name == name)
+          std::printf(" %s (%.3g > %.3g %s)", name.c_str(), c.sigma.value_or(0.0),
+                      profile.sigma_targets.at(coefficient_family(name)) / info.si_per_unit,
+                      info.unit.c_str());
+    }
+    std::printf("\n");
+  }
   if (kr.skipped > 0) {
     std::fprintf(stderr, "sinscal calibrate: warning: %zu bad samples skipped, the first:\n",
                  kr.skipped);
@@ -295,9 +306,8 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const std::string& sessio
   const SensorProfile profile = SensorProfile::load(session.sensor_file);
   CalibratorOptions ko = calibrator_options_from_profile(profile);
   ko.attitude_sigma = o.table_sigma * units::arcsec;
-  ko.attitude = session.plan.type == Plan::Type::Orientations
-                    ? CalibratorOptions::AttitudeUpdates::Every
-                    : CalibratorOptions::AttitudeUpdates::First;
+  // The table sets every orientation of either kind of plan to its stated accuracy.
+  ko.attitude = CalibratorOptions::AttitudeUpdates::Every;
   if (o.attitude == "every")
     ko.attitude = CalibratorOptions::AttitudeUpdates::Every;
   else if (o.attitude == "first")
@@ -598,8 +608,7 @@ int cmd_calibrate(const std::vector<std::string>& args) {
        "kf: seconds of data between monitor lines (and live-table refreshes on a terminal)")
       ("attitude", po::value(&o.attitude),
        "kf: table-attitude updates: every (dwell) | first (dwell) | none (zero velocity only; "
-       "body frame = accelerometer triad). Default: every for orientation plans, first for "
-       "rotation plans")
+       "body frame = accelerometer triad). Default: every")
       ("no-position", "kf: no known-position updates")
       ("no-motion-zero-velocity", "kf: no zero-velocity updates while the table turns")
       ("on-bad-sample", po::value(&o.on_bad_sample)->default_value("stop"),
@@ -746,6 +755,49 @@ int cmd_compare(const std::vector<std::string>& args) {
   return 0;
 }
 
+int cmd_plot_convergence(const std::vector<std::string>& args) {
+  po::options_description d("sinscal plot-convergence options");
+  std::string monitor_path, out_path, session_path, sensor_path;
+  std::vector<std::string> families;
+  ConvergencePlotOptions o;
+  // clang-format off
+  d.add_options()
+      ("help,h", "this help")
+      ("monitor", po::value(&monitor_path)->required(),
+       "monitor JSON lines (calibrate --method kf --monitor)")
+      ("out", po::value(&out_path)->required(), "PNG to write (the gnuplot script goes beside it, .gp)")
+      ("family", po::value(&families)->composing(),
+       "coefficient family to draw, e.g. gyro.scale (repeatable; default: all)")
+      ("session", po::value(&session_path),
+       "session.ini: draw its truth (simulations) and its sensor profile's sigma targets")
+      ("sensor", po::value(&sensor_path), "sensor profile whose [targets] are drawn")
+      ("width", po::value(&o.width_px)->default_value(1400), "picture width [px]")
+      ("row-height", po::value(&o.row_height_px)->default_value(260),
+       "height of each family's row [px]");
+  // clang-format on
+  parse(args, d,
+        "Usage: sinscal plot-convergence --monitor M.jsonl --out conv.png [--session S]\n"
+        "Draws, per coefficient family, the estimates and their sigma (log scale, with the\n"
+        "target) over time, and the NIS per dof and the converged verdict, with gnuplot.");
+  if (o.width_px < 200 || o.row_height_px < 80)
+    throw UsageError("--width must be at least 200 and --row-height at least 80 px");
+  const MonitorSeries series = read_monitor(monitor_path);
+  o.families = families;
+  if (!session_path.empty()) {
+    const Session session = Session::load(session_path);
+    o.truth = load_truth(session, series.body_frame == "accelerometer triad");
+    if (sensor_path.empty() && !session.sensor_file.empty()) sensor_path = session.sensor_file;
+  }
+  if (!sensor_path.empty()) o.sigma_targets = SensorProfile::load(sensor_path).sigma_targets;
+  const ConvergencePlot plot = plot_convergence(series, o, out_path);
+  std::printf(
+      "Convergence of %zu records (t = %.1f to %.1f s), %zu families, drawn to %s (%d x %d "
+      "px)\ngnuplot script: %s\n",
+      series.t.size(), series.t.front(), series.t.back(), plot.families.size(), plot.png.c_str(),
+      plot.width_px, plot.height_px, plot.script.c_str());
+  return 0;
+}
+
 const char* kUsage =
     "sinscal: calibration of strapdown inertial navigation systems\n"
     "Usage: sinscal COMMAND [options]   (sinscal COMMAND --help for the options)\n"
@@ -754,7 +806,9 @@ const char* kUsage =
     "  navigate   navigate through the static dwells of a session, report navigation errors\n"
     "  calibrate  estimate the calibration coefficients of a session or a batch of sessions\n"
     "             (closed-form method or Kalman filter)\n"
-    "  compare    two results side by side, difference over its sigma\n";
+    "  compare    two results side by side, difference over its sigma\n"
+    "  plot-convergence\n"
+    "             estimates and sigmas over time from a Kalman monitor file, to PNG (gnuplot)\n";
 
 }  // namespace
 
@@ -770,6 +824,7 @@ int main(int argc, char** argv) {
     if (command == "navigate") return cmd_navigate(args);
     if (command == "calibrate") return cmd_calibrate(args);
     if (command == "compare") return cmd_compare(args);
+    if (command == "plot-convergence") return cmd_plot_convergence(args);
     std::cerr << "sinscal: unknown command '" << command << "'\n" << kUsage;
     return kUsageError;
   } catch (int code) {

@@ -333,16 +333,22 @@ ResultCoefficients coefficients_of(const std::vector<CoefficientEstimate>& est) 
 }
 
 // Every estimated coefficient with a target for its family has sigma at or below it.
-bool converged(const std::vector<CoefficientEstimate>& est,
-               const std::map<std::string, double>& targets) {
-  if (targets.empty()) return false;
+// Estimated coefficients whose sigma is above their family's target.
+std::vector<std::string> above_target(const std::vector<CoefficientEstimate>& est,
+                                      const std::map<std::string, double>& targets) {
+  std::vector<std::string> out;
   const auto& cat = coefficient_catalog();
   for (std::size_t i = 0; i < cat.size(); ++i) {
     if (est[i].status != CoefficientEstimate::Status::Estimated) continue;
     const auto t = targets.find(coefficient_family(cat[i].name));
-    if (t != targets.end() && est[i].sigma > t->second) return false;
+    if (t != targets.end() && est[i].sigma > t->second) out.push_back(cat[i].name);
   }
-  return true;
+  return out;
+}
+
+bool converged(const std::vector<CoefficientEstimate>& est,
+               const std::map<std::string, double>& targets) {
+  return !targets.empty() && above_target(est, targets).empty();
 }
 
 // Upper quantile of chi-square(n) at z standard deviations (Wilson-Hilferty).
@@ -382,6 +388,7 @@ KalmanReport run_kalman(const Session& session, const CalibratorOptions& options
     rec["t"] = t;
     rec["nis_per_dof"] = kf.nis_dof() > 0 ? kf.nis_sum() / kf.nis_dof() : 0.0;
     rec["converged"] = r.converged_at.has_value();
+    rec["body_frame"] = kf.layout().accel_triad_frame ? "accelerometer triad" : "table";
     nlohmann::ordered_json c = nlohmann::ordered_json::object();
     for (const auto& [name, e] : coefficients_of(est))
       if (!e.fixed_by_convention) c[name] = {e.value, *e.sigma};
@@ -449,6 +456,7 @@ KalmanReport run_kalman(const Session& session, const CalibratorOptions& options
   for (std::size_t i = 0; i < est.size(); ++i)
     if (est[i].status == CoefficientEstimate::Status::Estimated && !est[i].observed())
       r.unobservable.push_back(coefficient_catalog()[i].name);
+  r.above_target = above_target(est, run.sigma_targets);
   r.details["method"] = {
       {"name", "kf"},
       {"states", r.states},
@@ -464,6 +472,7 @@ KalmanReport run_kalman(const Session& session, const CalibratorOptions& options
   nlohmann::ordered_json conv = {{"targets", !run.sigma_targets.empty()},
                                  {"converged", r.converged_at.has_value()}};
   if (r.converged_at) conv["converged_at_t"] = *r.converged_at;
+  conv["above_target"] = r.above_target;
   conv["unobservable"] = r.unobservable;
   r.details["convergence"] = conv;
   if (r.skipped > 0)

@@ -161,6 +161,7 @@ struct KalmanReport {
   std::string diverged;  // empty, or the NIS alarm that stopped the run; estimates kept
   std::optional<double> converged_at;     // s: first update with every sigma below its target
   std::vector<std::string> unobservable;  // estimated, but the plan's data do not observe them
+  std::vector<std::string> above_target;  // at the end, sigma above the profile's target
   std::size_t skipped = 0;                // bad samples skipped
   static constexpr std::size_t kSkippedExamples = 20;
   std::vector<std::string> skipped_examples;  // the first few, "FILE:LINE: cause"

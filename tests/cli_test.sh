@@ -77,6 +77,13 @@ check "kf compares with truth" contains "$work/kf.txt" "err/sig"
 check "streaming exits 0" test $? -eq 0
 check "streaming equals batch" cmp -s <(grep -A1 '"time_delay"' "$work/r19/kf.json") <(grep -A1 '"time_delay"' "$work/r19/stream.json")
 check "monitor has a line per 100 s" test "$(wc -l < "$work/r19/mon.jsonl")" -eq 5
+# The monitor drawn to PNG with gnuplot, with the session's truth and targets.
+"$bin" plot-convergence --monitor "$work/r19/mon.jsonl" --session "$work/r19/session.ini" --out "$work/r19/conv.png" > "$work/plot.txt"
+check "plot-convergence exits 0" test $? -eq 0
+check "plot-convergence writes a PNG" cmp -s -n 4 "$work/r19/conv.png" <(printf '\x89PNG')
+check "plot-convergence keeps its gnuplot script" contains "$work/r19/conv.gp" "set multiplot"
+"$bin" plot-convergence --monitor "$work/r19/kf.json" --out "$work/x.png" 2> "$work/plot_bad.err"
+check "plot-convergence on a result file exits 2 naming file and line" contains "$work/plot_bad.err" "kf.json:1: not a monitor record"
 # A NaN in the stream: the run stops with a message naming the line, the estimates so far written.
 sed '30000s/^\([^,]*\),[^,]*/\1,nan/' "$work/r19/imu.csv" | "$bin" calibrate --session "$work/r19/session.ini" \
   --method kf --stream --out "$work/r19/bad.json" > /dev/null 2> "$work/stream_bad.err"
