@@ -289,8 +289,9 @@ void print_kalman_verdicts(const KalmanReport& kr, const SensorProfile& profile)
 
 // Options of `calibrate`, shared by every session of a run.
 struct CalibrateOptions {
-  std::string method, stage1, model, channels, attitude, on_bad_sample;
+  std::string method, stage1, model, channels, attitude, on_bad_sample, static_from;
   double table_sigma = 2.5, arw = 0.0, vrw = 0.0, min_dwell = 20.0, monitor_interval = 10.0;
+  double static_window = 1.0, static_min = 3.0, static_rate = 3.0;
   bool stream = false, no_position = false, no_motion_zero_velocity = false;
 };
 
@@ -317,6 +318,12 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const std::string& sessio
   ko.position = !o.no_position;
   ko.zero_velocity_in_motion = !o.no_motion_zero_velocity;
   ko.time_offset = session.time_offset;
+  if (o.static_from == "data") {
+    ko.static_from = CalibratorOptions::StaticFrom::Data;
+    ko.detector.window = o.static_window;
+    ko.detector.min_duration = o.static_min;
+    ko.detector.rate_threshold = o.static_rate * units::deg_per_s;
+  }
   KalmanRunOptions run;
   run.skip_bad_samples = o.on_bad_sample == "skip";
   run.sigma_targets = profile.sigma_targets;
@@ -611,6 +618,15 @@ int cmd_calibrate(const std::vector<std::string>& args) {
        "body frame = accelerometer triad). Default: every")
       ("no-position", "kf: no known-position updates")
       ("no-motion-zero-velocity", "kf: no zero-velocity updates while the table turns")
+      ("static-from", po::value(&o.static_from)->default_value("plan"),
+       "kf: where the static dwells are: plan (its timing, shifted by the session's time_offset) "
+       "| data (detected; the k-th static interval is the plan's k-th dwell)")
+      ("static-window", po::value(&o.static_window)->default_value(1.0),
+       "kf, --static-from data: trailing window of the detector [s]")
+      ("static-min", po::value(&o.static_min)->default_value(3.0),
+       "kf, --static-from data: shortest static interval taken for a dwell [s]")
+      ("static-rate-threshold", po::value(&o.static_rate)->default_value(3.0),
+       "kf, --static-from data: a mean rate above this is motion [deg/s]")
       ("on-bad-sample", po::value(&o.on_bad_sample)->default_value("stop"),
        "kf: stop | skip (NaN, saturated, time going backwards; each reported)");
   // clang-format on
@@ -650,6 +666,12 @@ int cmd_calibrate(const std::vector<std::string>& args) {
     throw UsageError("--attitude must be every, first or none");
   if (o.on_bad_sample != "stop" && o.on_bad_sample != "skip")
     throw UsageError("--on-bad-sample must be stop or skip");
+  if (o.static_from != "plan" && o.static_from != "data")
+    throw UsageError("--static-from must be plan or data");
+  if (!(o.static_window > 0.0) || !(o.static_min >= o.static_window) || !(o.static_rate > 0.0))
+    throw UsageError(
+        "--static-window must be positive, --static-min at least the window, "
+        "--static-rate-threshold positive");
   if (o.stream && o.method != "kf") throw UsageError("--stream needs --method kf");
 
   // One session.ini given as a file: a single run. Anything naming a folder of sessions, a

@@ -2,9 +2,15 @@
 
 #include <Eigen/Cholesky>
 #include <cmath>
+#include <cstdio>
+#include <deque>
+#include <memory>
+#include <sstream>
 
 #include "models/attitude.hpp"
 #include "models/units.hpp"
+#include "rig/log_io.hpp"
+#include "rig/plan.hpp"
 
 namespace sinscal {
 
@@ -92,6 +98,8 @@ Calibrator::Calibrator(std::vector<Dwell> dwells, const Site& site,
   Phi_nn_ = Eigen::MatrixXd::Identity(n_nav_, n_nav_);
   Phi_nc_ = Eigen::MatrixXd::Zero(n_nav_, m);
   Q_nn_ = Eigen::MatrixXd::Zero(n_nav_, n_nav_);
+  if (o_.static_from == CalibratorOptions::StaticFrom::Data)
+    detector_.emplace(o_.noise, o_.detector);
 }
 
 void Calibrator::push(const ImuSample& s) {
@@ -134,6 +142,16 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot,
     started_ = true;
   }
   const double dt = s.dt;
+  if (detector_) {
+    detector_->push(s);
+    if (detector_->dwell() > static_cast<int>(dwells_.size())) {
+      std::ostringstream m;
+      m << "static interval " << detector_->dwell()
+        << " found in the data at t = " << detector_->dwells().back().t_start
+        << " s, but the plan has " << dwells_.size() << " dwells: the plan does not match the data";
+      throw PlanDataMismatch(m.str());
+    }
+  }
   // Compensate with the current estimate (mean rates over the interval).
   const Eigen::Vector3d y_g = s.dtheta_b / dt, y_a = s.dv_b / dt;
   Eigen::Vector3d omega, f;
@@ -200,8 +218,13 @@ void Calibrator::propagate_covariance() {
 
 void Calibrator::update(double t_plan) {
   const Dwell* dwell = nullptr;
-  for (const auto& d : dwells_)
-    if (t_plan >= d.t_start + o_.static_margin && t_plan <= d.t_end - o_.static_margin) dwell = &d;
+  if (detector_) {
+    if (detector_->dwell() > 0) dwell = &dwells_[static_cast<std::size_t>(detector_->dwell() - 1)];
+  } else {
+    for (const auto& d : dwells_)
+      if (t_plan >= d.t_start + o_.static_margin && t_plan <= d.t_end - o_.static_margin)
+        dwell = &d;
+  }
   if (!dwell && !o_.zero_velocity_in_motion) return;
   const NavState& x = nav_.state();
   const NavError e =
@@ -300,18 +323,6 @@ std::vector<CoefficientEstimate> Calibrator::estimate() const {
     out[static_cast<std::size_t>(c)].status = CoefficientEstimate::Status::FixedByConvention;
   return out;
 }
-
-}  // namespace sinscal
-
-#include <cstdio>
-#include <deque>
-#include <memory>
-#include <sstream>
-
-#include "rig/log_io.hpp"
-#include "rig/plan.hpp"
-
-namespace sinscal {
 
 namespace {
 ResultCoefficients coefficients_of(const std::vector<CoefficientEstimate>& est) {
@@ -436,10 +447,25 @@ KalmanReport run_kalman(const Session& session, const CalibratorOptions& options
     }
   } catch (const LogError& e) {
     r.stopped = e.what();
+  } catch (const PlanDataMismatch& e) {
+    r.stopped = e.what();
+  } catch (const std::runtime_error& e) {
+    // The filter itself failed (estimates run away until the error model cannot be inverted,
+    // an innovation covariance not positive definite): a diverged filter.
+    r.diverged = "filter diverged at t = " + std::to_string(t_last) + " s: " + e.what();
+  }
+  const StaticDetector* detector = kf.detector();
+  const std::size_t plan_dwells = motion.dwells().size();
+  if (detector && r.stopped.empty() && r.diverged.empty() &&
+      detector->dwells().size() < plan_dwells) {
+    std::ostringstream m;
+    m << "the data have " << detector->dwells().size() << " static intervals, the plan "
+      << plan_dwells << " dwells: the plan does not match the data";
+    r.stopped = m.str();
   }
   // A log that ends before the plan does: the data do not match the plan. The estimates from the
   // data up to there are kept, and the run says so.
-  if (r.stopped.empty() && r.diverged.empty() &&
+  if (!detector && r.stopped.empty() && r.diverged.empty() &&
       (r.samples == 0 || t_last - options.time_offset < motion.duration() - 1.5 * s.dt)) {
     std::ostringstream m;
     m << (source == reader.get() ? session.log.file : std::string("the input"))
@@ -447,7 +473,13 @@ KalmanReport run_kalman(const Session& session, const CalibratorOptions& options
       << motion.duration() + options.time_offset << " s: the plan does not match the data";
     r.stopped = m.str();
   }
-  if (r.diverged.empty()) kf.finish();
+  if (r.diverged.empty()) try {
+      kf.finish();
+    } catch (const PlanDataMismatch& e) {
+      if (r.stopped.empty()) r.stopped = e.what();
+    } catch (const std::runtime_error& e) {
+      r.diverged = "filter diverged at the last sample: " + std::string(e.what());
+    }
   r.duration = t_last - t_first;
   r.states = kf.layout().size;
   r.nis_per_dof = kf.nis_dof() > 0 ? kf.nis_sum() / kf.nis_dof() : 0.0;
@@ -467,6 +499,7 @@ KalmanReport run_kalman(const Session& session, const CalibratorOptions& options
                    : options.attitude == CalibratorOptions::AttitudeUpdates::First ? "first dwell"
                                                                                    : "none"},
       {"body_frame", kf.layout().accel_triad_frame ? "accelerometer triad" : "table"},
+      {"static_from", detector ? "data" : "plan"},
       {"update_interval_s", options.update_interval}};
   r.details["consistency"] = {{"nis_per_dof", r.nis_per_dof}, {"samples", r.samples}};
   nlohmann::ordered_json conv = {{"targets", !run.sigma_targets.empty()},
@@ -475,6 +508,25 @@ KalmanReport run_kalman(const Session& session, const CalibratorOptions& options
   conv["above_target"] = r.above_target;
   conv["unobservable"] = r.unobservable;
   r.details["convergence"] = conv;
+  if (detector) {
+    // Where the data were static against where the plan says: the log's timing, measured.
+    nlohmann::ordered_json d = nlohmann::ordered_json::array();
+    for (const auto& f : detector->dwells()) {
+      const Dwell& p = motion.dwells()[static_cast<std::size_t>(f.index - 1)];
+      d.push_back({{"dwell", f.index},
+                   {"label", p.label},
+                   {"t_start", f.t_start},
+                   {"t_end", f.t_end},
+                   {"plan_t_start", p.t_start},
+                   {"plan_t_end", p.t_end}});
+    }
+    r.details["static_from_data"] = {
+        {"gyro_bound_deg_per_s", detector->gyro_bound() / units::deg_per_s},
+        {"accel_bound_ug", detector->accel_bound() / units::ug},
+        {"rate_threshold_deg_per_s", detector->rate_threshold() / units::deg_per_s},
+        {"window_s", options.detector.window},
+        {"dwells", d}};
+  }
   if (r.skipped > 0)
     r.details["skipped_samples"] = {{"count", r.skipped}, {"first", r.skipped_examples}};
   if (!r.diverged.empty()) r.details["diverged"] = {{"reason", r.diverged}, {"t", t_last}};

@@ -24,6 +24,7 @@
 
 #include "filter/ins_error_model.hpp"
 #include "filter/state_layout.hpp"
+#include "filter/static_detector.hpp"
 #include "filter/strapdown.hpp"
 #include "models/imu_error_model.hpp"
 #include "models/noise_model.hpp"
@@ -62,6 +63,19 @@ struct CalibratorOptions {
   /// ranges (the upper bound) or a generous default for the family.
   std::vector<double> initial_sigma;
   double time_offset = 0.0;  // s: log time at which the plan starts
+  /// Where the static dwells are: the plan's timing (shifted by time_offset), or detected in the
+  /// data (StaticDetector; the k-th static interval is the plan's k-th dwell, whose orientation
+  /// the attitude updates use; time_offset is then not needed).
+  enum class StaticFrom { Plan, Data };
+  StaticFrom static_from = StaticFrom::Plan;
+  StaticDetectorOptions detector;
+};
+
+/// The data do not match the plan (a log shorter than the plan, more or fewer static intervals
+/// than the plan's dwells).
+class PlanDataMismatch : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
 };
 
 /// Options from a sensor profile: noise, the extended blocks the profile declares present,
@@ -110,6 +124,8 @@ class Calibrator {
   int updates() const { return updates_; }
   double last_nis() const { return last_nis_; }
   int last_nis_dof() const { return last_nis_dof_; }
+  /// With static intervals from the data: the detector (its dwells found so far); else null.
+  const StaticDetector* detector() const { return detector_ ? &*detector_ : nullptr; }
 
  private:
   void process(const ImuSample& s, const Eigen::Vector3d& omega_dot, const Eigen::Vector3d& f_dot,
@@ -141,6 +157,7 @@ class Calibrator {
   // The last two samples pushed (held back for the central differences).
   std::vector<ImuSample> held_;
   int attitude_dwell_done_ = 0;
+  std::optional<StaticDetector> detector_;
   double nis_sum_ = 0.0;
   int nis_dof_ = 0;
   int updates_ = 0;

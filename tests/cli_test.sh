@@ -77,6 +77,19 @@ check "kf compares with truth" contains "$work/kf.txt" "err/sig"
 check "streaming exits 0" test $? -eq 0
 check "streaming equals batch" cmp -s <(grep -A1 '"time_delay"' "$work/r19/kf.json") <(grep -A1 '"time_delay"' "$work/r19/stream.json")
 check "monitor has a line per 100 s" test "$(wc -l < "$work/r19/mon.jsonl")" -eq 5
+# A session whose time offset is wrong by 5 s: with the plan's timing the log ends before the
+# plan (exit 2, named); with the static intervals detected in the data, the run is whole.
+mkdir -p "$work/off"; cp "$work/r19/"{plan.ini,sensor.ini,truth.json} "$work/off/"; ln -s "$work/r19/imu.csv" "$work/off/imu.csv"
+sed 's/^rate = 100 Hz/rate = 100 Hz\ntime_offset = 5 s/' "$work/r19/session.ini" > "$work/off/session.ini"
+"$bin" calibrate --method kf --session "$work/off/session.ini" --out "$work/off/plan.json" > /dev/null 2> "$work/off_plan.err"
+check "wrong time offset exits 2" test $? -eq 2
+check "wrong time offset names the mismatch" contains "$work/off_plan.err" "the plan runs until 597 s: the plan does not match the data"
+"$bin" calibrate --method kf --session "$work/off/session.ini" --static-from data --out "$work/off/data.json" > /dev/null
+check "static intervals from the data: exits 0" test $? -eq 0
+check "static intervals from the data: reported" contains "$work/off/data.json" '"static_from_data"'
+"$bin" calibrate --method kf --session "$work/off/session.ini" --static-from guess --out "$work/x.json" 2> /dev/null
+check "bad --static-from is a usage error" test $? -eq 1
+
 # The monitor drawn to PNG with gnuplot, with the session's truth and targets.
 "$bin" plot-convergence --monitor "$work/r19/mon.jsonl" --session "$work/r19/session.ini" --out "$work/r19/conv.png" > "$work/plot.txt"
 check "plot-convergence exits 0" test $? -eq 0
