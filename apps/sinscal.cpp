@@ -72,6 +72,7 @@ int cmd_simulate(const std::vector<std::string>& args) {
       "rate", po::value(&rate)->default_value(100.0), "IMU output rate [Hz]")(
       "seed", po::value(&seed)->default_value(1), "seed of all random draws")(
       "no-noise", "no sensor noise (coefficients still drawn)")(
+      "table-angles", "log the table's outer and inner axis angles (plans of table moves)")(
       "perfect", "no sensor errors at all (zero coefficients, no noise)")(
       "table-angle-sigma", po::value(&angle_sigma_arcsec)->default_value(0.0),
       "table angle error per commanded angle, 1-sigma [arcsec]")(
@@ -89,6 +90,7 @@ int cmd_simulate(const std::vector<std::string>& args) {
   spec.seed = seed;
   spec.perfect = vm.count("perfect") > 0;
   spec.noise = !vm.count("no-noise");
+  spec.table_angles = vm.count("table-angles") > 0;
   spec.table.angle_sigma = angle_sigma_arcsec * units::arcsec;
   spec.table.non_orthogonality = non_orth_arcsec * units::arcsec;
   spec.table.seed = derive_seed(seed, 3);
@@ -292,6 +294,7 @@ struct CalibrateOptions {
   std::string method, stage1, model, channels, attitude, on_bad_sample, static_from;
   double table_sigma = 2.5, arw = 0.0, vrw = 0.0, min_dwell = 20.0, monitor_interval = 10.0;
   double static_window = 1.0, static_min = 3.0, static_rate = 3.0;
+  bool no_table_angles = false;
   bool stream = false, no_position = false, no_motion_zero_velocity = false;
 };
 
@@ -318,6 +321,7 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const std::string& sessio
   ko.position = !o.no_position;
   ko.zero_velocity_in_motion = !o.no_motion_zero_velocity;
   ko.time_offset = session.time_offset;
+  ko.use_table_angles = !o.no_table_angles;
   if (o.static_from == "data") {
     ko.static_from = CalibratorOptions::StaticFrom::Data;
     ko.detector.window = o.static_window;
@@ -618,6 +622,7 @@ int cmd_calibrate(const std::vector<std::string>& args) {
        "body frame = accelerometer triad). Default: every")
       ("no-position", "kf: no known-position updates")
       ("no-motion-zero-velocity", "kf: no zero-velocity updates while the table turns")
+      ("no-table-angles", "kf: ignore the log's table-angle columns (attitude from the plan)")
       ("static-from", po::value(&o.static_from)->default_value("plan"),
        "kf: where the static dwells are: plan (its timing, shifted by the session's time_offset) "
        "| data (detected; the k-th static interval is the plan's k-th dwell)")
@@ -645,6 +650,7 @@ int cmd_calibrate(const std::vector<std::string>& args) {
   o.stream = vm.count("stream") > 0;
   o.no_position = vm.count("no-position") > 0;
   o.no_motion_zero_velocity = vm.count("no-motion-zero-velocity") > 0;
+  o.no_table_angles = vm.count("no-table-angles") > 0;
   if (o.method != "kf" && o.method != "closed-form")
     throw UsageError("--method must be closed-form or kf");
   if (o.stage1 != "fit" && o.stage1 != "point") throw UsageError("--stage1 must be fit or point");

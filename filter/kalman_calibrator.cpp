@@ -63,7 +63,8 @@ Calibrator::Calibrator(std::vector<Dwell> dwells, const Site& site,
     : dwells_(std::move(dwells)),
       site_(site),
       o_(options),
-      layout_(StateLayout::make(effective_layout(options))) {
+      layout_(StateLayout::make(effective_layout(options))),
+      table_(options.table_geometry) {
   if (dwells_.empty()) throw std::invalid_argument("the Kalman calibrator needs the plan's dwells");
   site_terms_ = InsSiteTerms::at(site);
   n_nav_ = layout_.position.index + layout_.position.size;
@@ -137,8 +138,12 @@ void Calibrator::finish() {
 
 void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot,
                          const Eigen::Vector3d& f_dot, const Eigen::Vector3d& f_ddot) {
+  current_ = s;
   if (!started_) {
-    nav_.reset(NavState::at_rest(dwells_.front().C_b_n_known, site_));
+    nav_.reset(NavState::at_rest(s.has_table && o_.use_table_angles
+                                     ? table_.C_b_n({s.table_outer, s.table_inner})
+                                     : dwells_.front().C_b_n_known,
+                                 site_));
     started_ = true;
   }
   const double dt = s.dt;
@@ -253,8 +258,24 @@ void Calibrator::update(double t_plan) {
       o_.attitude == CalibratorOptions::AttitudeUpdates::Every ||
       (o_.attitude == CalibratorOptions::AttitudeUpdates::First && dwell->index == 1);
   if (attitude_wanted && dwell->index > attitude_dwell_done_) {
+    Eigen::Vector3d phi = e.phi_n;
+    if (current_.has_table && o_.use_table_angles) {
+      // The attitude the table's angles give, checked against the plan's orientation.
+      const Eigen::Matrix3d C_table = table_.C_b_n({current_.table_outer, current_.table_inner});
+      const double apart = rotvec_from_dcm(C_table * dwell->C_b_n_known.transpose()).norm();
+      if (apart > o_.table_plan_tolerance) {
+        std::ostringstream m;
+        m << "dwell " << dwell->index << " (" << dwell->label << ") at t = " << current_.t
+          << " s: the table's angles (outer " << current_.table_outer / units::deg << " deg, inner "
+          << current_.table_inner / units::deg << " deg) put the IMU " << apart / units::deg
+          << " deg from the plan's orientation: the plan does not match the data";
+        throw PlanDataMismatch(m.str());
+      }
+      phi = nav_error(x, C_table, Eigen::Vector3d::Zero(), site_).phi_n;
+      ++table_updates_;
+    }
     for (int i = 0; i < 3; ++i) {
-      rows.emplace_back(layout_.attitude.index + i, e.phi_n(i));
+      rows.emplace_back(layout_.attitude.index + i, phi(i));
       sig.push_back(o_.attitude_sigma);
     }
     attitude_dwell_done_ = dwell->index;
@@ -372,7 +393,9 @@ double chi2_upper(double n, double z) {
 KalmanReport run_kalman(const Session& session, const CalibratorOptions& options,
                         SampleSource* source, const KalmanRunOptions& run) {
   const Motion motion = build_motion(session.plan, session.site);
-  Calibrator kf(motion.dwells(), session.site, options);
+  CalibratorOptions o = options;
+  o.table_geometry = session.plan.table;  // the table whose angles a log may carry
+  Calibrator kf(motion.dwells(), session.site, o);
   std::unique_ptr<LogReader> reader;
   if (!source) {
     reader = std::make_unique<LogReader>(session.log);
@@ -500,6 +523,7 @@ KalmanReport run_kalman(const Session& session, const CalibratorOptions& options
                                                                                    : "none"},
       {"body_frame", kf.layout().accel_triad_frame ? "accelerometer triad" : "table"},
       {"static_from", detector ? "data" : "plan"},
+      {"attitude_from", kf.table_attitude_updates() > 0 ? "table angles" : "plan"},
       {"update_interval_s", options.update_interval}};
   r.details["consistency"] = {{"nis_per_dof", r.nis_per_dof}, {"samples", r.samples}};
   nlohmann::ordered_json conv = {{"targets", !run.sigma_targets.empty()},

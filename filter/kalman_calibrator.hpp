@@ -32,6 +32,7 @@
 #include "rig/imu_sample.hpp"
 #include "rig/motion.hpp"
 #include "rig/session.hpp"
+#include "rig/table.hpp"
 
 namespace sinscal {
 
@@ -69,6 +70,13 @@ struct CalibratorOptions {
   enum class StaticFrom { Plan, Data };
   StaticFrom static_from = StaticFrom::Plan;
   StaticDetectorOptions detector;
+  /// Samples carrying the table's axis angles (a table-angle column in the log): the attitude
+  /// updates use the attitude the angles give through this geometry (the plan's table) instead
+  /// of the plan's orientation; a dwell where the two differ by more than
+  /// `table_plan_tolerance` is a plan mismatch.
+  bool use_table_angles = true;
+  TableGeometry table_geometry;
+  double table_plan_tolerance = 1.0 * 0.017453292519943295;  // rad (1 deg)
 };
 
 /// The data do not match the plan (a log shorter than the plan, more or fewer static intervals
@@ -124,6 +132,8 @@ class Calibrator {
   int updates() const { return updates_; }
   double last_nis() const { return last_nis_; }
   int last_nis_dof() const { return last_nis_dof_; }
+  /// Attitude updates that took the attitude from the table's angles.
+  int table_attitude_updates() const { return table_updates_; }
   /// With static intervals from the data: the detector (its dwells found so far); else null.
   const StaticDetector* detector() const { return detector_ ? &*detector_ : nullptr; }
 
@@ -158,6 +168,9 @@ class Calibrator {
   std::vector<ImuSample> held_;
   int attitude_dwell_done_ = 0;
   std::optional<StaticDetector> detector_;
+  Table table_;
+  ImuSample current_;  // the sample being processed (its table angles)
+  int table_updates_ = 0;
   double nis_sum_ = 0.0;
   int nis_dof_ = 0;
   int updates_ = 0;

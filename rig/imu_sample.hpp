@@ -11,6 +11,10 @@ struct ImuSample {
   double dt = 0.0;                                     // s, length of the interval
   Eigen::Vector3d dtheta_b = Eigen::Vector3d::Zero();  // rad
   Eigen::Vector3d dv_b = Eigen::Vector3d::Zero();      // m/s
+  /// Table axis angles read at t, when the log has them (rig/table.hpp: outer, inner).
+  bool has_table = false;
+  double table_outer = 0.0;  // rad
+  double table_inner = 0.0;  // rad
 };
 
 /// Anything that yields IMU samples in time order (simulator, log reader).

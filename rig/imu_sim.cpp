@@ -23,6 +23,12 @@ ImuSimulator::ImuSimulator(const Motion& motion, const ImuErrorModel& errors,
   if (!(options.rate_hz > 0.0)) throw std::invalid_argument("sample rate must be positive");
   // Cover the whole motion: a last partial interval is completed at rest.
   total_ = static_cast<std::size_t>(std::ceil(motion.duration() * options.rate_hz - 1e-9));
+  if (options.table_angles)
+    for (const auto& seg : motion.segments())
+      if (!seg.has_table)
+        throw std::invalid_argument(
+            "no table angles for this motion: its rotations are about body axes, not the "
+            "table's (plan steps +outer/-inner give table angles)");
 }
 
 Eigen::Vector3d ImuSimulator::integrate(double a, double b, double shift, bool gyro) const {
@@ -71,6 +77,8 @@ bool ImuSimulator::next(ImuSample& s) {
   clip(s.dtheta_b, options_.gyro_range);
   clip(s.dv_b, options_.accel_range);
   if (clipped) ++saturated_;
+  s.has_table = options_.table_angles;
+  if (s.has_table) motion_.table_angles(s.t, s.table_outer, s.table_inner);
   return true;
 }
 

@@ -17,8 +17,9 @@ struct SimulatorOptions {
   double rate_hz = 100.0;
   bool noise = true;
   std::uint64_t noise_seed = 1;
-  double gyro_range = 0.0;   // rad/s; outputs beyond it are clipped (0: no limit)
-  double accel_range = 0.0;  // m/s^2
+  double gyro_range = 0.0;    // rad/s; outputs beyond it are clipped (0: no limit)
+  double accel_range = 0.0;   // m/s^2
+  bool table_angles = false;  // fill the table's axis angles (the motion must be table moves)
 };
 
 class ImuSimulator : public SampleSource {

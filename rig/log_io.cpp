@@ -13,6 +13,7 @@ namespace {
 
 const char* kNativeHeader =
     "t [s],dtheta_x [rad],dtheta_y [rad],dtheta_z [rad],dv_x [m/s],dv_y [m/s],dv_z [m/s]";
+const char* kNativeTableColumns = ",outer [deg],inner [deg]";
 
 std::string format_number(double v) {
   char buf[64];
@@ -94,7 +95,7 @@ LogFormat LogFormat::from_ini(const IniFile& ini, const std::string& base_dir, d
   const std::string file = join_path(base_dir, ini.get_string("log.file"));
   const std::string format = ini.get_string("log.format", "sinscal");
   if (format == "sinscal") {
-    ini.check_keys("log", {"file", "format", "max_gap"});
+    ini.check_keys("log", {"file", "format", "max_gap"});  // table angles: from the header
     LogFormat f = native_format(file, rate_hz);
     f.max_gap = ini.get_double("log.max_gap", f.max_gap);
     return f;
@@ -102,10 +103,26 @@ LogFormat LogFormat::from_ini(const IniFile& ini, const std::string& base_dir, d
   if (format != "custom")
     throw ConfigError(ini.where("log.format") + "expected 'sinscal' or 'custom', got '" + format +
                       "'");
-  ini.check_keys("log", {"file", "format", "delimiter", "header_lines", "columns", "time_unit",
-                         "max_gap", "gyro", "gyro_unit", "gyro_scale", "gyro_offset", "gyro_axes",
-                         "gyro_saturation", "accel", "accel_unit", "accel_scale", "accel_offset",
-                         "accel_axes", "accel_saturation"});
+  ini.check_keys("log", {"file",
+                         "format",
+                         "delimiter",
+                         "header_lines",
+                         "columns",
+                         "time_unit",
+                         "max_gap",
+                         "gyro",
+                         "gyro_unit",
+                         "gyro_scale",
+                         "gyro_offset",
+                         "gyro_axes",
+                         "gyro_saturation",
+                         "accel",
+                         "accel_unit",
+                         "accel_scale",
+                         "accel_offset",
+                         "accel_axes",
+                         "accel_saturation",
+                         "table_unit"});
   LogFormat f;
   f.file = file;
   f.native = false;
@@ -124,26 +141,33 @@ LogFormat LogFormat::from_ini(const IniFile& ini, const std::string& base_dir, d
   f.header_lines = ini.get_int("log.header_lines", 0);
   std::istringstream cols(ini.get_string("log.columns"));
   for (std::string c; cols >> c;) {
-    static const std::vector<std::string> known = {"t", "gx", "gy", "gz", "ax", "ay", "az", "-"};
+    static const std::vector<std::string> known = {"t",  "gx", "gy",    "gz",    "ax",
+                                                   "ay", "az", "outer", "inner", "-"};
     if (std::find(known.begin(), known.end(), c) == known.end())
       throw ConfigError(ini.where("log.columns") + "unknown column '" + c +
-                        "' (known: t gx gy gz ax ay az, - to skip)");
+                        "' (known: t gx gy gz ax ay az outer inner, - to skip)");
     if (c != "-" && std::count(f.columns.begin(), f.columns.end(), c))
       throw ConfigError(ini.where("log.columns") + "column '" + c + "' given twice");
     f.columns.push_back(c);
   }
   f.time_scale = unit_factor(ini.get_string("log.time_unit", "s"), QuantityKind::Time);
+  const bool outer = std::count(f.columns.begin(), f.columns.end(), "outer") > 0;
+  if (outer != (std::count(f.columns.begin(), f.columns.end(), "inner") > 0))
+    throw ConfigError(ini.where("log.columns") + "give both table-angle columns, outer and inner");
+  if (outer)
+    f.table_scale = unit_factor(ini.get_string("log.table_unit", "deg"), QuantityKind::Angle);
   f.max_gap = ini.get_double("log.max_gap", f.max_gap);
   f.gyro = read_triad(ini, "gyro", true);
   f.accel = read_triad(ini, "accel", false);
   return f;
 }
 
-LogWriter::LogWriter(const std::string& path, double rate_hz) : path_(path), out_(path) {
+LogWriter::LogWriter(const std::string& path, double rate_hz, bool table_angles)
+    : path_(path), out_(path), table_(table_angles) {
   if (!out_) throw std::runtime_error(path + ": cannot create log file");
   out_ << "# sinscal IMU log, format 1: increments over (t - dt, t], body axes\n"
        << "# rate_hz = " << format_number(rate_hz) << "\n"
-       << kNativeHeader << "\n";
+       << kNativeHeader << (table_ ? kNativeTableColumns : "") << "\n";
   buffer_.reserve(1 << 16);
 }
 
@@ -151,6 +175,12 @@ void LogWriter::write(const ImuSample& s) {
   buffer_ += format_number(s.t);
   for (int i = 0; i < 3; ++i) (buffer_ += ',') += format_number(s.dtheta_b(i));
   for (int i = 0; i < 3; ++i) (buffer_ += ',') += format_number(s.dv_b(i));
+  if (table_) {
+    if (!s.has_table)
+      throw std::invalid_argument(path_ + ": a sample without the table angles the log declares");
+    (buffer_ += ',') += format_number(s.table_outer / units::deg);
+    (buffer_ += ',') += format_number(s.table_inner / units::deg);
+  }
   buffer_ += '\n';
   if (buffer_.size() > (1 << 16) - 256) {
     out_ << buffer_;
@@ -180,6 +210,8 @@ void LogReader::start() {
     if (c == "t") col_t_ = i;
     if (c.size() == 2 && c[0] == 'g') col_g_[c[1] - 'x'] = i;
     if (c.size() == 2 && c[0] == 'a') col_a_[c[1] - 'x'] = i;
+    if (c == "outer") col_outer_ = i;
+    if (c == "inner") col_inner_ = i;
   }
   for (int i = 0; i < 3; ++i)
     if (col_g_[i] < 0 || col_a_[i] < 0)
@@ -193,8 +225,16 @@ void LogReader::start() {
     do {
       if (!read_line(line, nl)) fail("file ends before the column header");
     } while (!line.empty() && line[0] == '#');
-    if (line != kNativeHeader)
-      fail("not a sinscal log: expected the column header '" + std::string(kNativeHeader) + "'");
+    if (line == std::string(kNativeHeader) + kNativeTableColumns) {
+      f_.columns.push_back("outer");
+      f_.columns.push_back("inner");
+      col_outer_ = static_cast<int>(f_.columns.size()) - 2;
+      col_inner_ = col_outer_ + 1;
+      f_.table_scale = units::deg;
+    } else if (line != kNativeHeader) {
+      fail("not a sinscal log: expected the column header '" + std::string(kNativeHeader) +
+           "' (optionally followed by '" + kNativeTableColumns + "')");
+    }
   }
 }
 
@@ -321,6 +361,11 @@ bool LogReader::parse(const std::string& line, bool had_newline, ImuSample& s) {
   };
   s.dtheta_b = triad(f_.gyro, col_g_, "gyro");
   s.dv_b = triad(f_.accel, col_a_, "accel");
+  s.has_table = col_outer_ >= 0;
+  if (s.has_table) {
+    s.table_outer = fields_[col_outer_] * f_.table_scale;
+    s.table_inner = fields_[col_inner_] * f_.table_scale;
+  }
   s.t = t;
   s.dt = dt;
   t_prev_ = t;

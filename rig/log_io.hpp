@@ -56,7 +56,8 @@ struct LogFormat {
   bool native = true;                // the sinscal CSV (the header is checked)
   char delimiter = ',';              // ' ' means any run of spaces or tabs
   int header_lines = 1;              // lines skipped before the data (after them, '#' lines too)
-  std::vector<std::string> columns;  // t gx gy gz ax ay az, "-" for a column to skip
+  std::vector<std::string> columns;  // t gx gy gz ax ay az [outer inner], "-" to skip
+  double table_scale = 0.0;          // rad per table-angle unit (outer/inner columns)
   double time_scale = 1.0;           // s per time unit
   double rate_hz = 0.0;              // nominal rate; needed when there is no time column
   double max_gap = 1.5;              // a step in time above max_gap / rate_hz is a gap (error)
@@ -71,7 +72,8 @@ struct LogFormat {
 /// Writes the native CSV format.
 class LogWriter {
  public:
-  LogWriter(const std::string& path, double rate_hz);
+  /// With `table_angles`, two more columns: the table's outer and inner axis angles [deg].
+  LogWriter(const std::string& path, double rate_hz, bool table_angles = false);
   void write(const ImuSample& s);
   void close();
 
@@ -79,6 +81,7 @@ class LogWriter {
   std::string path_;
   std::ofstream out_;
   std::string buffer_;
+  bool table_ = false;
 };
 
 /// Reads a log sample by sample in constant memory; every problem throws LogError with the line.
@@ -111,6 +114,7 @@ class LogReader : public SampleSource {
   std::size_t line_ = 0, count_ = 0;
   int col_t_ = -1;
   std::array<int, 3> col_g_{-1, -1, -1}, col_a_{-1, -1, -1};
+  int col_outer_ = -1, col_inner_ = -1;
   double t_prev_ = 0.0;
   std::vector<double> fields_;
   std::function<void(const BadSampleError&)> on_skip_;

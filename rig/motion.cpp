@@ -109,6 +109,17 @@ bool Motion::static_between(double a, double b) const {
   return segments_[i].is_static();
 }
 
+bool Motion::table_angles(double t, double& outer, double& inner) const {
+  const MotionSegment& s = segments_[segment_index(t)];
+  if (!s.has_table) return false;
+  double al, al_d, al_dd, be, be_d, be_dd;
+  s.alpha.eval(t - s.t0, al, al_d, al_dd);
+  s.beta.eval(t - s.t0, be, be_d, be_dd);
+  outer = s.outer0 + s.outer_sign * al;
+  inner = s.inner0 + s.inner_sign * be;
+  return true;
+}
+
 KinematicState Motion::at(double t) const {
   const MotionSegment& s = segments_[segment_index(t)];
   const double tau = t - s.t0;

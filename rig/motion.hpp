@@ -48,6 +48,11 @@ struct MotionSegment {
   TrapezoidProfile beta;
   bool is_static() const { return alpha.angle() == 0.0 && beta.angle() == 0.0; }
   Eigen::Matrix3d C_b_n_end() const;
+  /// Table axis angles, when the piece is a table move (alpha about the outer axis, beta about
+  /// the inner one): outer = outer0 + outer_sign * alpha(t), inner likewise.
+  bool has_table = false;
+  double outer0 = 0.0, inner0 = 0.0;  // rad
+  double outer_sign = 1.0, inner_sign = 1.0;
 };
 
 /// A static interval of the plan: the attitude the plan says (known) and the one the simulation
@@ -79,6 +84,9 @@ class Motion {
   const std::vector<MotionSegment>& segments() const { return segments_; }
   /// Sorted times where the motion is not smooth (segment ends, profile knots).
   const std::vector<double>& knots() const { return knots_; }
+  /// The table's axis angles at time t (rad), the truth an encoder reads; false if the motion is
+  /// not made of table moves (rotations about body axes).
+  bool table_angles(double t, double& outer, double& inner) const;
   /// True if [a, b] lies in one static segment (or outside the motion, where it rests).
   bool static_between(double a, double b) const;
 

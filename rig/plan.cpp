@@ -219,12 +219,19 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
   std::vector<MotionSegment> segments;
   std::vector<Dwell> dwells;
   double t = 0.0;
+  // The table's axis angles along the motion (true, as its encoders read them), while the motion
+  // is made of table moves.
+  bool table_known = false;
+  TableAngles table_now{};
   auto add_dwell = [&](const std::string& label, const Eigen::Matrix3d& known,
                        const Eigen::Matrix3d& actual, double duration) {
     MotionSegment s;
     s.t0 = t;
     s.t1 = t + duration;
     s.C_b_n_start = actual;
+    s.has_table = table_known;
+    s.outer0 = table_now.outer;
+    s.inner0 = table_now.inner;
     segments.push_back(s);
     Dwell d;
     d.index = static_cast<int>(dwells.size()) + 1;
@@ -258,6 +265,9 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
         m.beta = TrapezoidProfile::by_rate(wrap(cmd.inner - prev.inner), plan.move_rate,
                                            plan.move_accel);
         m.t1 = t + std::max(m.alpha.duration(), m.beta.duration());
+        m.has_table = true;
+        m.outer0 = prev.outer;
+        m.inner0 = prev.inner;
         if (m.t1 > t) {
           segments.push_back(m);
           t = m.t1;
@@ -266,6 +276,8 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
         cmd.outer = prev.outer + m.alpha.angle();
         cmd.inner = prev.inner + m.beta.angle();
       }
+      table_known = true;
+      table_now = cmd;
       add_dwell(o.label, known, truth.C_b_n(cmd), o.dwell);
       prev = cmd;
     }
@@ -276,6 +288,12 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
     for (int k = 0; k < 3; ++k)
       start_error(k) = start_sigma > 0.0 ? start_sigma * normal(rng) : 0.0;
     Eigen::Matrix3d actual = dcm_from_rotvec(start_error) * known;
+    try {  // table angles while the steps are table-axis turns from a reachable start
+      table_now = truth.angles_for(actual);
+      table_known = true;
+    } catch (const UnreachableOrientation&) {
+      table_known = false;
+    }
     add_dwell("start", known, actual, plan.start_dwell);
     for (std::size_t i = 0; i < plan.steps.size(); ++i) {
       const RotationStep& st = plan.steps[i];
@@ -286,13 +304,21 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
       const TrapezoidProfile profile =
           st.duration > 0.0 ? TrapezoidProfile::by_duration(realized, st.duration, plan.move_accel)
                             : TrapezoidProfile::by_rate(realized, st.rate, plan.move_accel);
+      if (st.kind == RotationStep::Axis::Body) table_known = false;
+      m.has_table = table_known;
+      m.outer0 = table_now.outer;
+      m.inner0 = table_now.inner;
       if (st.kind == RotationStep::Axis::Outer) {
         m.axis_n = st.sign * truth.geometry().outer_axis_n;
         m.alpha = profile;
+        m.outer_sign = st.sign;
+        table_now.outer += st.sign * realized;
         known = rotation(st.sign * nominal.geometry().outer_axis_n, st.angle) * known;
       } else {
         m.axis_b = st.kind == RotationStep::Axis::Body ? st.axis_b : st.sign * truth.inner_axis_b();
         m.beta = profile;
+        m.inner_sign = st.sign;
+        if (st.kind == RotationStep::Axis::Inner) table_now.inner += st.sign * realized;
         const Eigen::Vector3d nominal_axis =
             st.kind == RotationStep::Axis::Body ? st.axis_b : st.sign * nominal.inner_axis_b();
         known = known * rotation(nominal_axis, st.angle);

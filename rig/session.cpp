@@ -68,10 +68,11 @@ SimulatedSession simulate_session(const std::string& out_dir, const SessionSimul
   so.noise_seed = derive_seed(spec.seed, 2);
   so.gyro_range = r.profile.gyro_range;
   so.accel_range = r.profile.accel_range;
+  so.table_angles = spec.table_angles;
   ImuSimulator sim(motion, r.truth, r.profile.noise, so);
 
   std::filesystem::create_directories(out_dir);
-  LogWriter log(out_dir + "/imu.csv", spec.rate_hz);
+  LogWriter log(out_dir + "/imu.csv", spec.rate_hz, spec.table_angles);
   ImuSample sample;
   while (sim.next(sample)) log.write(sample);
   log.close();

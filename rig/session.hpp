@@ -41,8 +41,9 @@ struct SessionSimulation {
   std::string name;                // session name (empty: the plan's name)
   double rate_hz = 100.0;
   std::uint64_t seed = 1;
-  bool noise = true;     // false: no sensor noise (coefficients still drawn)
-  bool perfect = false;  // no sensor errors at all
+  bool noise = true;          // false: no sensor noise (coefficients still drawn)
+  bool perfect = false;       // no sensor errors at all
+  bool table_angles = false;  // the log gets the table's axis-angle columns
   TableErrors table;
 };
 

@@ -90,6 +90,17 @@ check "static intervals from the data: reported" contains "$work/off/data.json" 
 "$bin" calibrate --method kf --session "$work/off/session.ini" --static-from guess --out "$work/x.json" 2> /dev/null
 check "bad --static-from is a usage error" test $? -eq 1
 
+# A table-angle column: the attitude updates take the attitude the table reports.
+"$bin" simulate --plan "$src/config/plans/seed8.ini" --sensor "$src/config/sensors/nav-fog.ini" \
+  --out "$work/s8t" --seed 5 --table-angles --table-angle-sigma 30 > /dev/null
+check "simulate --table-angles writes the columns" contains "$work/s8t/imu.csv" "outer \[deg\],inner \[deg\]"
+"$bin" calibrate --method kf --session "$work/s8t/session.ini" --out "$work/s8t/kf.json" > /dev/null
+check "kf with table angles exits 0" test $? -eq 0
+check "kf says the attitude came from the table angles" contains "$work/s8t/kf.json" '"attitude_from": "table angles"'
+"$bin" simulate --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog.ini" \
+  --out "$work/x" --table-angles > /dev/null 2> "$work/rot_table.err"
+check "table angles of body-axis turns are refused" contains "$work/rot_table.err" "rotations are about body axes"
+
 # The monitor drawn to PNG with gnuplot, with the session's truth and targets.
 "$bin" plot-convergence --monitor "$work/r19/mon.jsonl" --session "$work/r19/session.ini" --out "$work/r19/conv.png" > "$work/plot.txt"
 check "plot-convergence exits 0" test $? -eq 0

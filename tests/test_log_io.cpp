@@ -112,6 +112,46 @@ TEST_CASE("Log: each kind of bad line is an error naming file, line and cause", 
   CHECK(read_error(dir + "/good.csv").empty());
 }
 
+TEST_CASE("Log: table-angle columns, native and foreign", "[log][table]") {
+  const std::string dir = test::temp_dir("log_table");
+  auto in = some_samples(50);
+  for (auto& s : in) {
+    s.has_table = true;
+    s.table_outer = 0.37 * s.t;
+    s.table_inner = -1.1 + s.t;
+  }
+  LogWriter w(dir + "/imu.csv", 100.0, true);
+  for (const auto& s : in) w.write(s);
+  w.close();
+  LogReader r(LogFormat::native_format(dir + "/imu.csv", 100.0));
+  std::size_t k = 0;
+  for (ImuSample s; r.next(s); ++k) {
+    REQUIRE(s.has_table);
+    // Written in degrees, shortest round trip: back to the radian value within rounding.
+    CHECK(s.table_outer == Approx(in[k].table_outer).epsilon(1e-15));
+    CHECK(s.table_inner == Approx(in[k].table_inner).epsilon(1e-15));
+  }
+  CHECK(k == in.size());
+  // A writer that declares the columns refuses a sample without them (no silent zeros).
+  LogWriter w2(dir + "/imu2.csv", 100.0, true);
+  CHECK_THROWS_AS(w2.write(some_samples(1).front()), std::invalid_argument);
+  // Foreign: angles in arcsec, in any column order; one of the pair alone is an error.
+  test::write_file(dir + "/f.txt", "0.01,3600,0,0,0,0,0,0,-7200\n");
+  test::write_file(dir + "/s.ini",
+                   "[log]\nfile = f.txt\nformat = custom\ncolumns = t outer gx gy gz ax ay az "
+                   "inner\ntable_unit = arcsec\n");
+  LogReader f(LogFormat::from_ini(IniFile(dir + "/s.ini"), dir, 100.0));
+  ImuSample s;
+  REQUIRE(f.next(s));
+  CHECK(s.has_table);
+  CHECK(s.table_outer == Approx(1.0 * units::deg));
+  CHECK(s.table_inner == Approx(-2.0 * units::deg));
+  test::write_file(dir + "/one.ini",
+                   "[log]\nfile = f.txt\nformat = custom\ncolumns = t outer gx gy gz ax ay az\n");
+  CHECK_THROWS_WITH(LogFormat::from_ini(IniFile(dir + "/one.ini"), dir, 100.0),
+                    Catch::Contains("both table-angle columns"));
+}
+
 TEST_CASE("Log: foreign formats (counts, rates, delimiters, axis mapping)", "[log]") {
   const std::string dir = test::temp_dir("log_foreign");
   // Whitespace separated, time in ms, gyro rates in raw counts about an offset, accelerometer

@@ -7,6 +7,7 @@
 #include "filter/static_detector.hpp"
 #include "helpers.hpp"
 #include "models/units.hpp"
+#include "rig/imu_sim.hpp"
 
 using namespace sinscal;
 
@@ -123,4 +124,76 @@ TEST_CASE("Kalman filter with dwells from the data: more static intervals than t
           Catch::Contains("the plan has 16 dwells"));
   // What was estimated before stays available.
   CHECK(kf.estimate()[0].status == CoefficientEstimate::Status::Estimated);
+}
+
+TEST_CASE("Kalman filter with a table-angle column: the attitude the table really reached",
+          "[kalman][table]") {
+  // The table misses each commanded orientation by 30 arcsec per axis (1-sigma); its encoders
+  // read where it went. With the plan's orientations (taken as known to 2.5 arcsec) the attitude
+  // updates are wrong by far more than their sigma; with the logged angles they are right.
+  const Plan plan = test::load_plan("seed8.ini");
+  const SensorProfile prof = SensorProfile::load(test::source_path("config/sensors/nav-fog.ini"));
+  TableErrors table;
+  table.angle_sigma = 30.0 * units::arcsec;
+  table.seed = 21;
+  const Motion truth_motion = build_motion(plan, plan.site, table);
+  const ImuErrorModel truth = prof.draw(derive_seed(22, 1));
+  SimulatorOptions so;
+  so.noise_seed = derive_seed(22, 2);
+  so.table_angles = true;
+  ImuSimulator sim(truth_motion, truth, prof.noise, so);
+  std::vector<ImuSample> samples;
+  for (ImuSample s; sim.next(s);) samples.push_back(s);
+  REQUIRE(samples.front().has_table);
+
+  const Motion m = build_motion(plan, plan.site);
+  auto worst_z = [&](bool use_angles) {
+    CalibratorOptions o = calibrator_options_from_profile(prof);
+    o.table_geometry = plan.table;
+    o.use_table_angles = use_angles;
+    Calibrator kf(m.dwells(), plan.site, o);
+    for (const auto& s : samples) kf.push(s);
+    kf.finish();
+    CHECK(kf.table_attitude_updates() == (use_angles ? 8 : 0));
+    double worst = 0.0;
+    const auto est = kf.estimate();
+    const auto t = truth.coefficients();
+    const auto& cat = coefficient_catalog();
+    for (std::size_t i = 0; i < cat.size(); ++i) {
+      if (est[i].status != CoefficientEstimate::Status::Estimated) continue;
+      const double e = est[i].value / cat[i].si_per_unit - t.at(cat[i].name);
+      worst = std::max(worst, std::abs(e) / (est[i].sigma / cat[i].si_per_unit));
+    }
+    return worst;
+  };
+  CHECK(worst_z(true) < 4.0);
+  CHECK(worst_z(false) > 6.0);
+}
+
+TEST_CASE("Table-angle column far from the plan's orientation: a plan mismatch",
+          "[kalman][table]") {
+  // The log's angles belong to seed8's orientations in another order (2 and 3 swapped).
+  const Plan plan = test::load_plan("seed8.ini");
+  std::string text = plan.text;
+  const auto a = text.find("[orientation.2]"), b = text.find("[orientation.3]");
+  REQUIRE((a != std::string::npos && b != std::string::npos));
+  text.replace(b, 15, "[orientation.X]");
+  text.replace(a, 15, "[orientation.3]");
+  text.replace(text.find("[orientation.X]"), 15, "[orientation.2]");
+  const Plan swapped = Plan::parse("seed8-swapped", text);
+  const SensorProfile prof = SensorProfile::load(test::source_path("config/sensors/nav-fog.ini"));
+  const Motion data_motion = build_motion(swapped, swapped.site);
+  SimulatorOptions so;
+  so.noise = false;
+  so.table_angles = true;
+  ImuSimulator sim(data_motion, prof.draw(1), prof.noise, so);
+  const Motion m = build_motion(plan, plan.site);
+  CalibratorOptions o = calibrator_options_from_profile(prof);
+  o.table_geometry = plan.table;
+  Calibrator kf(m.dwells(), plan.site, o);
+  CHECK_THROWS_WITH(
+      [&] {
+        for (ImuSample s; sim.next(s);) kf.push(s);
+      }(),
+      Catch::Contains("dwell 2 (2)") && Catch::Contains("from the plan's orientation"));
 }
