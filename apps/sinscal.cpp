@@ -295,6 +295,7 @@ struct CalibrateOptions {
   double table_sigma = 2.5, arw = 0.0, vrw = 0.0, min_dwell = 20.0, monitor_interval = 10.0;
   double static_window = 1.0, static_min = 3.0, static_rate = 3.0;
   bool no_table_angles = false;
+  int passes = 1;
   bool stream = false, no_position = false, no_motion_zero_velocity = false;
 };
 
@@ -330,6 +331,7 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const std::string& sessio
   }
   KalmanRunOptions run;
   run.skip_bad_samples = o.on_bad_sample == "skip";
+  run.passes = o.passes;
   run.sigma_targets = profile.sigma_targets;
   std::ofstream monitor;
   if (!monitor_path.empty()) {
@@ -623,6 +625,8 @@ int cmd_calibrate(const std::vector<std::string>& args) {
       ("no-position", "kf: no known-position updates")
       ("no-motion-zero-velocity", "kf: no zero-velocity updates while the table turns")
       ("no-table-angles", "kf: ignore the log's table-angle columns (attitude from the plan)")
+      ("passes", po::value(&o.passes)->default_value(1),
+       "kf: passes over the log, each from the previous pass's coefficients (large errors: MEMS)")
       ("static-from", po::value(&o.static_from)->default_value("plan"),
        "kf: where the static dwells are: plan (its timing, shifted by the session's time_offset) "
        "| data (detected; the k-th static interval is the plan's k-th dwell)")
@@ -679,6 +683,8 @@ int cmd_calibrate(const std::vector<std::string>& args) {
         "--static-window must be positive, --static-min at least the window, "
         "--static-rate-threshold positive");
   if (o.stream && o.method != "kf") throw UsageError("--stream needs --method kf");
+  if (o.passes < 1 || o.passes > 20) throw UsageError("--passes must be 1 to 20");
+  if (o.passes > 1 && o.stream) throw UsageError("--passes reads the log again: not with --stream");
 
   // One session.ini given as a file: a single run. Anything naming a folder of sessions, a
   // list, or several sessions: a batch.

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <deque>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -99,6 +100,7 @@ Calibrator::Calibrator(std::vector<Dwell> dwells, const Site& site,
   Phi_nn_ = Eigen::MatrixXd::Identity(n_nav_, n_nav_);
   Phi_nc_ = Eigen::MatrixXd::Zero(n_nav_, m);
   Q_nn_ = Eigen::MatrixXd::Zero(n_nav_, n_nav_);
+  if (o_.initial_model) model_ = *o_.initial_model;
   if (o_.static_from == CalibratorOptions::StaticFrom::Data)
     detector_.emplace(o_.noise, o_.detector);
 }
@@ -214,6 +216,19 @@ void Calibrator::propagate_covariance() {
   Eigen::MatrixXd Pn = T;
   Pn.leftCols(n) = T.leftCols(n) * Phi_nn_.transpose() + T.rightCols(m) * Phi_nc_.transpose();
   Pn.topLeftCorner(n, n) += Q_nn_;
+  // Biases that wander (bias instability: a Gauss-Markov process of sigma b and correlation time
+  // tau, driven by white noise of density 2 b^2 / tau; rate / acceleration random walk): random
+  // walk on the bias states. Without the decay this is conservative over runs longer than tau.
+  auto wander = [&](const Block& block, const TriadNoise& tn) {
+    if (block.size == 0) return;
+    const double q = (tn.correlation_time > 0.0
+                          ? 2.0 * tn.bias_instability * tn.bias_instability / tn.correlation_time
+                          : 0.0) +
+                     tn.random_walk * tn.random_walk;
+    for (int i = 0; i < block.size; ++i) Pn(block.index + i, block.index + i) += q * accumulated_;
+  };
+  wander(layout_.gyro_bias, o_.noise.gyro);
+  wander(layout_.accel_bias, o_.noise.accel);
   P_ = 0.5 * (Pn + Pn.transpose());
   Phi_nn_.setIdentity();
   Phi_nc_.setZero();
@@ -390,8 +405,9 @@ double chi2_upper(double n, double z) {
 }
 }  // namespace
 
-KalmanReport run_kalman(const Session& session, const CalibratorOptions& options,
-                        SampleSource* source, const KalmanRunOptions& run) {
+namespace {
+KalmanReport run_kalman_pass(const Session& session, const CalibratorOptions& options,
+                             SampleSource* source, const KalmanRunOptions& run) {
   const Motion motion = build_motion(session.plan, session.site);
   CalibratorOptions o = options;
   o.table_geometry = session.plan.table;  // the table whose angles a log may carry
@@ -555,7 +571,48 @@ KalmanReport run_kalman(const Session& session, const CalibratorOptions& options
     r.details["skipped_samples"] = {{"count", r.skipped}, {"first", r.skipped_examples}};
   if (!r.diverged.empty()) r.details["diverged"] = {{"reason", r.diverged}, {"t", t_last}};
   if (!r.stopped.empty()) r.details["stopped"] = {{"reason", r.stopped}, {"last_good_t", t_last}};
+  r.model = kf.model();
   return r;
+}
+}  // namespace
+
+KalmanReport run_kalman(const Session& session, const CalibratorOptions& options,
+                        SampleSource* source, const KalmanRunOptions& run) {
+  if (run.passes <= 1) return run_kalman_pass(session, options, source, run);
+  if (source) throw std::invalid_argument("several passes need the session's log, not a stream");
+  // Earlier passes: quiet, no alarm (their linearization is what the later passes improve).
+  KalmanRunOptions quiet = run;
+  quiet.monitor = nullptr;
+  quiet.monitor_interval = 0.0;
+  quiet.nis_alarm_z = std::numeric_limits<double>::infinity();
+  CalibratorOptions o = options;
+  nlohmann::ordered_json passes = nlohmann::ordered_json::array();
+  KalmanReport previous;
+  for (int pass = 1; pass <= run.passes; ++pass) {
+    const bool last = pass == run.passes;
+    KalmanReport r = run_kalman_pass(session, o, nullptr, last ? run : quiet);
+    nlohmann::ordered_json p = {{"pass", pass}, {"nis_per_dof", r.nis_per_dof}};
+    if (pass > 1) {
+      // How far this pass moved the estimates, in this pass's sigmas.
+      double moved = 0.0;
+      for (const auto& [name, c] : r.coefficients) {
+        const auto prev = previous.coefficients.find(name);
+        if (prev == previous.coefficients.end() || !c.sigma || !(*c.sigma > 0.0)) continue;
+        if (!c.observable || !prev->second.observable || c.fixed_by_convention) continue;
+        moved = std::max(moved, std::abs(c.value - prev->second.value) / *c.sigma);
+      }
+      p["largest_change_over_sigma"] = moved;
+    }
+    passes.push_back(p);
+    if (last || !r.stopped.empty() || !r.diverged.empty()) {  // bad input stops every pass alike
+      r.details["method"]["passes"] = run.passes;
+      r.details["passes"] = passes;
+      return r;
+    }
+    o.initial_model = r.model;
+    previous = std::move(r);
+  }
+  return previous;  // not reached
 }
 
 }  // namespace sinscal

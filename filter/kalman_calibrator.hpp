@@ -64,6 +64,9 @@ struct CalibratorOptions {
   /// ranges (the upper bound) or a generous default for the family.
   std::vector<double> initial_sigma;
   double time_offset = 0.0;  // s: log time at which the plan starts
+  /// Coefficients to start from (the linearization point; the prior sigmas stay those above).
+  /// Multi-pass runs start each pass from the previous pass's estimate.
+  std::optional<ImuErrorModel> initial_model;
   /// Where the static dwells are: the plan's timing (shifted by time_offset), or detected in the
   /// data (StaticDetector; the k-th static interval is the plan's k-th dwell, whose orientation
   /// the attitude updates use; time_offset is then not needed).
@@ -193,6 +196,7 @@ struct KalmanReport {
   std::vector<std::string> unobservable;  // estimated, but the plan's data do not observe them
   std::vector<std::string> above_target;  // at the end, sigma above the profile's target
   std::size_t skipped = 0;                // bad samples skipped
+  ImuErrorModel model;                    // the final estimate as a model (SI)
   static constexpr std::size_t kSkippedExamples = 20;
   std::vector<std::string> skipped_examples;  // the first few, "FILE:LINE: cause"
 };
@@ -210,10 +214,15 @@ struct KalmanRunOptions {
   /// quantile `nis_alarm_z` standard deviations up stops the run (estimates kept).
   int nis_window = 30;
   double nis_alarm_z = 6.0;
+  /// Passes over the log (batch only): each starts from the previous pass's coefficients, with
+  /// the profile's prior sigmas, so the last is linearized about a close estimate (large errors:
+  /// MEMS). The monitor, the divergence alarm and the verdicts are those of the last pass.
+  int passes = 1;
 };
 
-/// Runs the filter over `source` (the session's log when null). A bad sample (LogError) stops the
-/// run: the report keeps the estimates so far and says where and why in `stopped`.
+/// Runs the filter over `source` (the session's log when null; several passes need the log). A bad
+/// sample (LogError) stops the run: the report keeps the estimates so far and says where and why in
+/// `stopped`.
 KalmanReport run_kalman(const Session& session, const CalibratorOptions& options,
                         SampleSource* source = nullptr, const KalmanRunOptions& run = {});
 
