@@ -118,24 +118,61 @@ void visit_coefficients(ImuErrorModel& m, Visit&& visit) {
 }
 }  // namespace
 
+namespace {
+// Where each coefficient lives in an ImuErrorModel (byte offset, catalog order) and which output
+// it enters: found once, so the per-sample Jacobian builds no names.
+struct CoefficientSlot {
+  std::ptrdiff_t offset;
+  enum class Output { Gyro, Accel, Delay } output;
+};
+const std::vector<CoefficientSlot>& coefficient_slots() {
+  static const std::vector<CoefficientSlot> slots = [] {
+    ImuErrorModel m;
+    std::vector<CoefficientSlot> out;
+    const char* base = reinterpret_cast<const char*>(&m);
+    for (const auto& [info, ptr] : m.coefficient_refs()) {
+      const auto output = info.name == "time_delay"          ? CoefficientSlot::Output::Delay
+                          : info.name.rfind("gyro.", 0) == 0 ? CoefficientSlot::Output::Gyro
+                                                             : CoefficientSlot::Output::Accel;
+      out.push_back({reinterpret_cast<const char*>(ptr) - base, output});
+    }
+    return out;
+  }();
+  return slots;
+}
+}  // namespace
+
 Eigen::Matrix<double, 6, Eigen::Dynamic> ImuErrorModel::jacobian(
     const KinematicSample& s, const Eigen::Vector3d& f_dot) const {
   // Each coefficient's column: its unit perturbation applied through the same formula, taking
   // the difference to the model without it. Exact (linear) and written once: the formula lives
-  // only in TriadErrors::apply, size_effect and the g-sensitivity product.
+  // only in TriadErrors::apply, size_effect and the g-sensitivity product. A gyro coefficient
+  // enters only the gyro outputs, an accelerometer one only the accelerometer outputs (the
+  // finite-difference test of the Jacobian checks this too).
   ImuErrorModel zero;
-  const auto refs = zero.coefficient_refs();
-  Eigen::Matrix<double, 6, Eigen::Dynamic> J(6, static_cast<Eigen::Index>(refs.size()));
+  const auto& slots = coefficient_slots();
+  Eigen::Matrix<double, 6, Eigen::Dynamic> J =
+      Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, static_cast<Eigen::Index>(slots.size()));
   const Eigen::Vector3d g0 = zero.gyro_output(s), a0 = zero.accel_output(s);
-  for (std::size_t k = 0; k < refs.size(); ++k) {
+  char* base = reinterpret_cast<char*>(&zero);
+  for (std::size_t k = 0; k < slots.size(); ++k) {
     const auto col = static_cast<Eigen::Index>(k);
-    if (refs[k].first.name == "time_delay") {
-      J.col(col) << Eigen::Vector3d::Zero(), -f_dot;
-      continue;
+    double* value = reinterpret_cast<double*>(base + slots[k].offset);
+    switch (slots[k].output) {
+      case CoefficientSlot::Output::Delay:
+        J.col(col).tail<3>() = -f_dot;
+        break;
+      case CoefficientSlot::Output::Gyro:
+        *value = 1.0;
+        J.col(col).head<3>() = zero.gyro_output(s) - g0;
+        *value = 0.0;
+        break;
+      case CoefficientSlot::Output::Accel:
+        *value = 1.0;
+        J.col(col).tail<3>() = zero.accel_output(s) - a0;
+        *value = 0.0;
+        break;
     }
-    *refs[k].second = 1.0;
-    J.col(col) << zero.gyro_output(s) - g0, zero.accel_output(s) - a0;
-    *refs[k].second = 0.0;
   }
   return J;
 }
