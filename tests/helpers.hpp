@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "filter/kalman_calibrator.hpp"
 #include "models/sensor_profile.hpp"
 #include "rig/imu_sim.hpp"
 #include "rig/plan.hpp"
@@ -49,6 +50,14 @@ inline void write_file(const std::string& path, const std::string& text) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   std::fputs(text.c_str(), f);
   std::fclose(f);
+}
+
+/// Pushes every sample through the filter, finishes, returns the estimate.
+inline std::vector<CoefficientEstimate> run_filter(Calibrator& kf,
+                                                   const std::vector<ImuSample>& samples) {
+  for (const auto& s : samples) kf.push(s);
+  kf.finish();
+  return kf.estimate();
 }
 
 }  // namespace sinscal::test

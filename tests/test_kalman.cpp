@@ -92,9 +92,7 @@ TEST_CASE("Kalman calibrator Monte Carlo: NEES of every coefficient block in the
     CalibratorOptions o = calibrator_options_from_profile(prof);
     o.attitude = CalibratorOptions::AttitudeUpdates::First;
     Calibrator kf(mt.dwells(), p.site, o);
-    for (const auto& s : samples) kf.push(s);
-    kf.finish();
-    const auto est = kf.estimate();
+    const auto est = test::run_filter(kf, samples);
     const Eigen::VectorXd theta = truth.vector();
     for (const auto& cb : kf.layout().coefficient_blocks()) {
       Eigen::VectorXd e(cb.block.size);

@@ -80,9 +80,7 @@ TEST_CASE("Kalman filter: a coefficient the plan cannot observe is named", "[kal
   CalibratorOptions o = calibrator_options_from_profile(prof);
   o.attitude = CalibratorOptions::AttitudeUpdates::None;
   Calibrator kf(m.dwells(), p.site, o);
-  for (const auto& s : samples) kf.push(s);
-  kf.finish();
-  const auto est = kf.estimate();
+  const auto est = test::run_filter(kf, samples);
   auto observed = [&](const std::string& name) {
     const auto& cat = coefficient_catalog();
     for (std::size_t i = 0; i < cat.size(); ++i)

@@ -12,6 +12,20 @@
 using namespace sinscal;
 
 namespace {
+// Largest |estimate - truth| / sigma over the estimated coefficients.
+double max_error_over_sigma(const std::vector<CoefficientEstimate>& est,
+                            const ImuErrorModel& truth) {
+  double worst = 0.0;
+  const auto t = truth.coefficients();
+  const auto& cat = coefficient_catalog();
+  for (std::size_t i = 0; i < cat.size(); ++i) {
+    if (est[i].status != CoefficientEstimate::Status::Estimated) continue;
+    const double e = est[i].value / cat[i].si_per_unit - t.at(cat[i].name);
+    worst = std::max(worst, std::abs(e) / (est[i].sigma / cat[i].si_per_unit));
+  }
+  return worst;
+}
+
 Plan rot19_with(const std::string& from, const std::string& to) {
   const Plan base = test::load_plan("rot19.ini");
   std::string text = base.text;
@@ -69,15 +83,7 @@ TEST_CASE("Kalman filter with dwells from the data: a log whose timing is off th
     Calibrator kf(m.dwells(), plan.site, o);
     for (const auto& s : samples) kf.push(s);
     kf.finish();
-    double worst = 0.0;
-    const auto est = kf.estimate();
-    const auto t = truth.coefficients();
-    const auto& cat = coefficient_catalog();
-    for (std::size_t i = 0; i < cat.size(); ++i) {
-      if (est[i].status != CoefficientEstimate::Status::Estimated) continue;
-      const double e = est[i].value / cat[i].si_per_unit - t.at(cat[i].name);
-      worst = std::max(worst, std::abs(e) / (est[i].sigma / cat[i].si_per_unit));
-    }
+    const double worst = max_error_over_sigma(kf.estimate(), truth);
     if (from == CalibratorOptions::StaticFrom::Data) {
       REQUIRE(kf.detector() != nullptr);
       CHECK(kf.detector()->dwells().size() == m.dwells().size());
@@ -155,15 +161,7 @@ TEST_CASE("Kalman filter with a table-angle column: the attitude the table reall
     for (const auto& s : samples) kf.push(s);
     kf.finish();
     CHECK(kf.table_attitude_updates() == (use_angles ? 8 : 0));
-    double worst = 0.0;
-    const auto est = kf.estimate();
-    const auto t = truth.coefficients();
-    const auto& cat = coefficient_catalog();
-    for (std::size_t i = 0; i < cat.size(); ++i) {
-      if (est[i].status != CoefficientEstimate::Status::Estimated) continue;
-      const double e = est[i].value / cat[i].si_per_unit - t.at(cat[i].name);
-      worst = std::max(worst, std::abs(e) / (est[i].sigma / cat[i].si_per_unit));
-    }
+    const double worst = max_error_over_sigma(kf.estimate(), truth);
     return worst;
   };
   CHECK(worst_z(true) < 4.0);
