@@ -1,4 +1,5 @@
 // sinscal command-line tool: parses options, calls the library, prints. No algorithms here.
+#include <signal.h>  // sigaction: Ctrl-C ends a streaming run with its results written
 #include <unistd.h>  // isatty: the live table only on a terminal
 
 #include <algorithm>
@@ -36,7 +37,20 @@ namespace {
 
 constexpr int kUsageError = 1;
 constexpr int kDataError = 2;
-constexpr int kDisagree = 3;  // compare: the results differ beyond the given tolerance
+constexpr int kDisagree = 3;       // compare: the results differ beyond the given tolerance
+constexpr int kInterrupted = 130;  // SIGINT / SIGTERM: stopped, what was computed written
+
+// Set by SIGINT / SIGTERM: a calibration stops reading, finishes and writes its results.
+std::atomic<bool> g_stop{false};
+extern "C" void on_stop_signal(int) { g_stop.store(true); }
+void install_stop_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;  // no SA_RESTART: a read blocked on standard input returns
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -332,6 +346,7 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const std::string& sessio
   KalmanRunOptions run;
   run.skip_bad_samples = o.on_bad_sample == "skip";
   run.passes = o.passes;
+  run.stop = &g_stop;
   run.sigma_targets = profile.sigma_targets;
   std::ofstream monitor;
   if (!monitor_path.empty()) {
@@ -370,7 +385,10 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const std::string& sessio
   row.max_error_over_sigma =
       max_error_over_sigma(kr.coefficients, load_truth(session, accel_frame));
   row.status = "ok";
-  if (!kr.stopped.empty()) {
+  if (kr.interrupted) {
+    row.status = "interrupted";
+    row.message = kr.stopped;
+  } else if (!kr.stopped.empty()) {
     row.status = "stopped";
     row.message = "input stopped: " + kr.stopped;
   } else if (!kr.diverged.empty()) {
@@ -532,6 +550,12 @@ int calibrate_batch(const CalibrateOptions& o, const std::vector<std::string>& s
     for (std::size_t i; (i = next++) < sessions.size();) {
       const std::string result = out_dir + "/" + stems[i] + ".json";
       SessionSummary& row = rows[i];
+      if (g_stop) {
+        row.session = sessions[i];
+        row.status = "interrupted";
+        row.message = "not started: interrupted";
+        continue;
+      }
       try {
         row = o.method == "kf"
                   ? calibrate_kf(o, sessions[i], result,
@@ -577,7 +601,7 @@ int calibrate_batch(const CalibrateOptions& o, const std::vector<std::string>& s
   if (bad > 0) {
     std::fprintf(stderr, "sinscal calibrate: error: %d of %zu sessions not ok (see %s)\n", bad,
                  sessions.size(), summary.c_str());
-    return kDataError;
+    return g_stop ? kInterrupted : kDataError;
   }
   return 0;
 }
@@ -685,6 +709,7 @@ int cmd_calibrate(const std::vector<std::string>& args) {
   if (o.stream && o.method != "kf") throw UsageError("--stream needs --method kf");
   if (o.passes < 1 || o.passes > 20) throw UsageError("--passes must be 1 to 20");
   if (o.passes > 1 && o.stream) throw UsageError("--passes reads the log again: not with --stream");
+  if (o.method == "kf") install_stop_handlers();  // Ctrl-C: stop, finish, write
 
   // One session.ini given as a file: a single run. Anything naming a folder of sessions, a
   // list, or several sessions: a batch.
@@ -714,6 +739,11 @@ int cmd_calibrate(const std::vector<std::string>& args) {
                                  ? calibrate_kf(o, sessions.front(), out_path, monitor_path, true,
                                                 isatty(fileno(stderr)) != 0)
                                  : calibrate_closed_form(o, sessions.front(), out_path, true);
+  if (row.status == "interrupted") {
+    std::fprintf(stderr, "sinscal calibrate: %s (the estimates up to there are written)\n",
+                 row.message.c_str());
+    return kInterrupted;
+  }
   if (row.status != "ok") {
     std::fprintf(stderr, "sinscal calibrate: error: %s (the estimates up to there are written)\n",
                  row.message.c_str());

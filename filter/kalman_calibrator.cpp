@@ -445,8 +445,9 @@ KalmanReport run_kalman_pass(const Session& session, const CalibratorOptions& op
     rec["coefficients"] = c;
     return rec;
   };
+  auto stop_requested = [&] { return run.stop && run.stop->load(std::memory_order_relaxed); };
   try {
-    while (source->next(s)) {
+    while (!stop_requested() && source->next(s)) {
       if (r.samples == 0) {
         t_first = s.t - s.dt;
         next_monitor = t_first + run.monitor_interval;
@@ -492,6 +493,14 @@ KalmanReport run_kalman_pass(const Session& session, const CalibratorOptions& op
     // The filter itself failed (estimates run away until the error model cannot be inverted,
     // an innovation covariance not positive definite): a diverged filter.
     r.diverged = "filter diverged at t = " + std::to_string(t_last) + " s: " + e.what();
+  }
+  if (stop_requested()) {
+    // Stopped by the user (a signal; a read it interrupted may have failed): what was read is
+    // the run.
+    std::ostringstream m;
+    m << "interrupted at t = " << t_last << " s";
+    r.stopped = m.str();
+    r.interrupted = true;
   }
   const StaticDetector* detector = kf.detector();
   const std::size_t plan_dwells = motion.dwells().size();
@@ -570,7 +579,9 @@ KalmanReport run_kalman_pass(const Session& session, const CalibratorOptions& op
   if (r.skipped > 0)
     r.details["skipped_samples"] = {{"count", r.skipped}, {"first", r.skipped_examples}};
   if (!r.diverged.empty()) r.details["diverged"] = {{"reason", r.diverged}, {"t", t_last}};
-  if (!r.stopped.empty()) r.details["stopped"] = {{"reason", r.stopped}, {"last_good_t", t_last}};
+  if (!r.stopped.empty())
+    r.details["stopped"] = {
+        {"reason", r.stopped}, {"last_good_t", t_last}, {"interrupted", r.interrupted}};
   r.model = kf.model();
   return r;
 }
@@ -604,7 +615,7 @@ KalmanReport run_kalman(const Session& session, const CalibratorOptions& options
       p["largest_change_over_sigma"] = moved;
     }
     passes.push_back(p);
-    if (last || !r.stopped.empty() || !r.diverged.empty()) {  // bad input stops every pass alike
+    if (last || !r.stopped.empty() || !r.diverged.empty()) {  // bad input, an interruption
       r.details["method"]["passes"] = run.passes;
       r.details["passes"] = passes;
       return r;

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <atomic>
 #include <functional>
 #include <map>
 #include <optional>
@@ -190,8 +191,9 @@ struct KalmanReport {
   std::size_t samples = 0;
   double duration = 0.0;  // s of data
   double nis_per_dof = 0.0;
-  std::string stopped;   // empty, or why the input stopped early (bad sample); estimates kept
-  std::string diverged;  // empty, or the NIS alarm that stopped the run; estimates kept
+  std::string stopped;       // empty, or why the input stopped early (bad sample); estimates kept
+  bool interrupted = false;  // stopped on request (KalmanRunOptions::stop)
+  std::string diverged;      // empty, or the NIS alarm that stopped the run; estimates kept
   std::optional<double> converged_at;     // s: first update with every sigma below its target
   std::vector<std::string> unobservable;  // estimated, but the plan's data do not observe them
   std::vector<std::string> above_target;  // at the end, sigma above the profile's target
@@ -218,6 +220,9 @@ struct KalmanRunOptions {
   /// the profile's prior sigmas, so the last is linearized about a close estimate (large errors:
   /// MEMS). The monitor, the divergence alarm and the verdicts are those of the last pass.
   int passes = 1;
+  /// Set (e.g. from a signal handler) to stop reading: the run ends as if the log ended there,
+  /// with `interrupted` and the estimates so far.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 /// Runs the filter over `source` (the session's log when null; several passes need the log). A bad

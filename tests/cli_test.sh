@@ -108,6 +108,23 @@ check "plot-convergence writes a PNG" cmp -s -n 4 "$work/r19/conv.png" <(printf 
 check "plot-convergence keeps its gnuplot script" contains "$work/r19/conv.gp" "set multiplot"
 "$bin" plot-convergence --monitor "$work/r19/kf.json" --out "$work/x.png" 2> "$work/plot_bad.err"
 check "plot-convergence on a result file exits 2 naming file and line" contains "$work/plot_bad.err" "kf.json:1: not a monitor record"
+# Ctrl-C while streaming from a table that is still turning (a pipe that stays open): the run
+# stops, writes the estimates so far with the reason, and exits 130.
+rm -f "$work/fifo"; mkfifo "$work/fifo"
+"$bin" calibrate --session "$work/r19/session.ini" --method kf --stream --monitor "$work/int.jsonl" \
+  --monitor-interval 10 --out "$work/int.json" < "$work/fifo" > /dev/null 2> "$work/int.err" &
+pid=$!
+exec 3> "$work/fifo"
+head -n 20000 "$work/r19/imu.csv" >&3
+for i in $(seq 100); do
+  [ -s "$work/int.jsonl" ] && [ "$(wc -l < "$work/int.jsonl")" -ge 19 ] && break; sleep 0.1
+done
+kill -INT "$pid"; wait "$pid"; rc=$?; exec 3>&-
+check "interrupted stream exits 130" test "$rc" -eq 130
+check "interrupted stream says where" contains "$work/int.err" "interrupted at t = 199.97 s"
+check "interrupted stream writes its estimates" grep -q '"interrupted": true' "$work/int.json"
+check "interrupted stream's estimates are there" grep -q '"gyro.bias.x"' "$work/int.json"
+
 # A NaN in the stream: the run stops with a message naming the line, the estimates so far written.
 sed '30000s/^\([^,]*\),[^,]*/\1,nan/' "$work/r19/imu.csv" | "$bin" calibrate --session "$work/r19/session.ini" \
   --method kf --stream --out "$work/r19/bad.json" > /dev/null 2> "$work/stream_bad.err"
