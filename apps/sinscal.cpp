@@ -308,8 +308,9 @@ struct CalibrateOptions {
   std::string method, stage1, model, channels, attitude, on_bad_sample, static_from;
   double table_sigma = 2.5, arw = 0.0, vrw = 0.0, min_dwell = 20.0, monitor_interval = 10.0;
   double static_window = 1.0, static_min = 3.0, static_rate = 3.0;
-  bool no_table_angles = false;
+  bool no_table_angles = false, no_zero_velocity = false;
   int passes = 1;
+  std::string terms;
   bool stream = false, no_position = false, no_motion_zero_velocity = false;
 };
 
@@ -337,6 +338,12 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const std::string& sessio
   ko.zero_velocity_in_motion = !o.no_motion_zero_velocity;
   ko.time_offset = session.time_offset;
   ko.use_table_angles = !o.no_table_angles;
+  ko.zero_velocity = !o.no_zero_velocity;
+  try {
+    apply_terms(ko.layout, o.terms);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--terms: ") + e.what());
+  }
   if (o.static_from == "data") {
     ko.static_from = CalibratorOptions::StaticFrom::Data;
     ko.detector.window = o.static_window;
@@ -647,6 +654,10 @@ int cmd_calibrate(const std::vector<std::string>& args) {
        "kf: table-attitude updates: every (dwell) | first (dwell) | none (zero velocity only; "
        "body frame = accelerometer triad). Default: every")
       ("no-position", "kf: no known-position updates")
+      ("no-zero-velocity", "kf: no zero-velocity updates at rest")
+      ("terms", po::value(&o.terms),
+       "kf: extended blocks on or off beyond the sensor profile's, e.g. k2,-lever_arm (k2, "
+       "lever_arm, time_delay, g_sensitivity, scale_asym, vertical_velocity)")
       ("no-motion-zero-velocity", "kf: no zero-velocity updates while the table turns")
       ("no-table-angles", "kf: ignore the log's table-angle columns (attitude from the plan)")
       ("passes", po::value(&o.passes)->default_value(1),
@@ -679,6 +690,15 @@ int cmd_calibrate(const std::vector<std::string>& args) {
   o.no_position = vm.count("no-position") > 0;
   o.no_motion_zero_velocity = vm.count("no-motion-zero-velocity") > 0;
   o.no_table_angles = vm.count("no-table-angles") > 0;
+  o.no_zero_velocity = vm.count("no-zero-velocity") > 0;
+  if (!o.terms.empty()) {  // checked before any session runs
+    StateLayoutOptions check;
+    try {
+      apply_terms(check, o.terms);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--terms: ") + e.what());
+    }
+  }
   if (o.method != "kf" && o.method != "closed-form")
     throw UsageError("--method must be closed-form or kf");
   if (o.stage1 != "fit" && o.stage1 != "point") throw UsageError("--stage1 must be fit or point");

@@ -1,6 +1,7 @@
 #include "filter/state_layout.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 
 #include "models/imu_error_model.hpp"
 #include "models/sensor_profile.hpp"
@@ -77,6 +78,36 @@ std::vector<int> StateLayout::fixed_by_convention() const {
     for (int i = 0; i < static_cast<int>(cat.size()); ++i)
       if (cat[i].name == name) out.push_back(i);
   return out;
+}
+
+void apply_terms(StateLayoutOptions& o, const std::string& terms) {
+  const std::pair<const char*, bool*> known[] = {
+      {"k2", &o.accel_k2},           {"lever_arm", &o.lever_arm},
+      {"time_delay", &o.time_delay}, {"g_sensitivity", &o.g_sensitivity},
+      {"scale_asym", &o.scale_asym}, {"vertical_velocity", &o.vertical_velocity}};
+  std::size_t pos = 0;
+  while (pos <= terms.size()) {
+    std::size_t end = terms.find(',', pos);
+    if (end == std::string::npos) end = terms.size();
+    std::string term = terms.substr(pos, end - pos);
+    pos = end + 1;
+    if (term.empty()) continue;
+    bool on = true;
+    if (term[0] == '-' || term[0] == '+') {
+      on = term[0] == '+';
+      term.erase(0, 1);
+    }
+    bool found = false;
+    for (const auto& [name, flag] : known)
+      if (term == name) {
+        *flag = on;
+        found = true;
+      }
+    if (!found)
+      throw std::invalid_argument("unknown term '" + term +
+                                  "' (known: k2, lever_arm, time_delay, g_sensitivity, "
+                                  "scale_asym, vertical_velocity)");
+  }
 }
 
 }  // namespace sinscal

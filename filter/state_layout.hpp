@@ -27,6 +27,12 @@ struct StateLayoutOptions {
   bool accel_triad_frame = false;
 };
 
+/// Switches extended blocks on or off from a comma-separated list, e.g.
+/// "k2,-lever_arm,+g_sensitivity": names k2, lever_arm, time_delay, g_sensitivity, scale_asym,
+/// vertical_velocity; a leading '-' switches off, none or '+' on. Throws std::invalid_argument
+/// naming an unknown term.
+void apply_terms(StateLayoutOptions& options, const std::string& terms);
+
 struct StateLayout {
   // Navigation errors.
   Block attitude{-1, 0};

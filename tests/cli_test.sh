@@ -71,6 +71,19 @@ check "kf exits 0" test $? -eq 0
 check "kf estimates the time delay" grep -q '"time_delay"' "$work/r19/kf.json"
 check "kf compares with truth" contains "$work/kf.txt" "err/sig"
 
+# Extended blocks switched from the command line. Without the delay block, on data with a 5 ms
+# delay, the filter cannot fit the turns: the divergence alarm stops it.
+"$bin" calibrate --session "$work/r19/session.ini" --method kf --terms g_sensitivity --out "$work/r19/terms.json" > /dev/null
+check "kf --terms exits 0" test $? -eq 0
+check "--terms g_sensitivity adds g-sensitivity" grep -q '"gyro.g_sensitivity.xy"' "$work/r19/terms.json"
+"$bin" calibrate --session "$work/r19/session.ini" --method kf --terms -time_delay --out "$work/r19/nodelay.json" > /dev/null 2> "$work/nodelay.err"
+check "--terms -time_delay on delayed data: alarm, exit 2" test $? -eq 2
+check "--terms -time_delay: the alarm is named" contains "$work/nodelay.err" "filter diverging"
+check "--terms -time_delay drops the delay" test "$(grep -c '"time_delay"' "$work/r19/nodelay.json")" -eq 0
+"$bin" calibrate --session "$work/r19/session.ini" --method kf --terms lever --out "$work/x.json" 2> "$work/terms.err"
+check "unknown --terms is a usage error" test $? -eq 1
+check "unknown --terms is named" contains "$work/terms.err" "unknown term 'lever'"
+
 # Streaming from standard input: the same result as the batch run; a monitor line per interval.
 "$bin" calibrate --session "$work/r19/session.ini" --method kf --stream --monitor "$work/r19/mon.jsonl" \
   --monitor-interval 100 --out "$work/r19/stream.json" < "$work/r19/imu.csv" > /dev/null

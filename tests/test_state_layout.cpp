@@ -53,3 +53,20 @@ TEST_CASE("State layout: accelerometer-triad body frame drops the three fixed mi
                n == "accel.misalignment.zy"));
       }
 }
+
+TEST_CASE("State layout: extended blocks switched by a terms list", "[layout]") {
+  StateLayoutOptions o;
+  o.lever_arm = true;
+  apply_terms(o, "k2,-lever_arm,+time_delay,-vertical_velocity");
+  CHECK(o.accel_k2);
+  CHECK_FALSE(o.lever_arm);
+  CHECK(o.time_delay);
+  CHECK_FALSE(o.vertical_velocity);
+  CHECK_FALSE(o.g_sensitivity);
+  const StateLayout l = StateLayout::make(o);
+  CHECK(l.velocity.size == 2);
+  CHECK(l.accel_k2.size == 3);
+  CHECK(l.accel_lever_arm.size == 0);
+  CHECK(l.time_delay.size == 1);
+  CHECK_THROWS_WITH(apply_terms(o, "k2,lever"), Catch::Contains("unknown term 'lever'"));
+}
