@@ -129,12 +129,15 @@ rm -f "$work/fifo"; mkfifo "$work/fifo"
 pid=$!
 exec 3> "$work/fifo"
 head -n 20000 "$work/r19/imu.csv" >&3
-for i in $(seq 100); do
+for i in $(seq 600); do  # up to 60 s (sanitizer builds are slow)
   [ -s "$work/int.jsonl" ] && [ "$(wc -l < "$work/int.jsonl")" -ge 19 ] && break; sleep 0.1
 done
+sleep 0.5
 kill -INT "$pid"; wait "$pid"; rc=$?; exec 3>&-
 check "interrupted stream exits 130" test "$rc" -eq 130
-check "interrupted stream says where" contains "$work/int.err" "interrupted at t = 199.97 s"
+# Where it stopped depends on how far the filter got behind the reader: at or after the 19th
+# monitor record (t = 190 s), at most the last sample sent (199.97 s).
+check "interrupted stream says where" grep -qE "interrupted at t = (19[0-9](\.[0-9]+)?) s" "$work/int.err"
 check "interrupted stream writes its estimates" grep -q '"interrupted": true' "$work/int.json"
 check "interrupted stream's estimates are there" grep -q '"gyro.bias.x"' "$work/int.json"
 
