@@ -303,6 +303,27 @@ void print_kalman_verdicts(const KalmanReport& kr, const SensorProfile& profile)
   }
 }
 
+// --channels: stage-1 channels of the closed form, comma separated; north and east required.
+ChannelSet parse_channels(const std::string& list) {
+  ChannelSet c{false, false, false, false};
+  std::stringstream cs(list);
+  for (std::string name; std::getline(cs, name, ',');) {
+    if (name == "north")
+      c.north = true;
+    else if (name == "east")
+      c.east = true;
+    else if (name == "vertical")
+      c.vertical = true;
+    else if (name == "heading")
+      c.heading = true;
+    else
+      throw UsageError("--channels: unknown channel '" + name +
+                       "' (north, east, vertical, heading)");
+  }
+  if (!c.north || !c.east) throw UsageError("--channels needs at least north,east");
+  return c;
+}
+
 // Options of `calibrate`, shared by every session of a run.
 struct CalibrateOptions {
   std::string method, stage1, model, channels, attitude, on_bad_sample, static_from;
@@ -418,18 +439,7 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const std::stri
   Stage1Options o;
   o.method = co.stage1 == "point" ? Stage1Method::Point : Stage1Method::Fit;
   o.model = co.model == "uncoupled" ? ErrorModelKind::Uncoupled : ErrorModelKind::Coupled;
-  o.channels = ChannelSet{false, false, false, false};
-  std::stringstream cs(co.channels);
-  for (std::string c; std::getline(cs, c, ',');) {
-    if (c == "north")
-      o.channels.north = true;
-    else if (c == "east")
-      o.channels.east = true;
-    else if (c == "vertical")
-      o.channels.vertical = true;
-    else if (c == "heading")
-      o.channels.heading = true;
-  }
+  o.channels = parse_channels(co.channels);
   o.min_dwell = co.min_dwell;
   const Session session = Session::load(session_path);
   if (!session.sensor_file.empty()) {
@@ -704,18 +714,7 @@ int cmd_calibrate(const std::vector<std::string>& args) {
   if (o.stage1 != "fit" && o.stage1 != "point") throw UsageError("--stage1 must be fit or point");
   if (o.model != "coupled" && o.model != "uncoupled")
     throw UsageError("--model must be coupled or uncoupled");
-  {
-    bool north = false, east = false;
-    std::stringstream cs(o.channels);
-    for (std::string c; std::getline(cs, c, ',');) {
-      if (c != "north" && c != "east" && c != "vertical" && c != "heading")
-        throw UsageError("--channels: unknown channel '" + c +
-                         "' (north, east, vertical, heading)");
-      north |= c == "north";
-      east |= c == "east";
-    }
-    if (!north || !east) throw UsageError("--channels needs at least north,east");
-  }
+  parse_channels(o.channels);  // checked before any session runs
   if (!o.attitude.empty() && o.attitude != "every" && o.attitude != "first" && o.attitude != "none")
     throw UsageError("--attitude must be every, first or none");
   if (o.on_bad_sample != "stop" && o.on_bad_sample != "skip")
