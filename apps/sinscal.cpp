@@ -287,12 +287,10 @@ void print_kalman_verdicts(const KalmanReport& kr, const SensorProfile& profile)
   else {
     std::printf("Convergence: NOT converged: sigma above its target at the end:");
     for (const auto& name : kr.above_target) {
-      const auto& c = kr.coefficients.at(name);
-      for (const auto& info : coefficient_catalog())
-        if (info.name == name)
-          std::printf(" %s (%.3g > %.3g %s)", name.c_str(), c.sigma.value_or(0.0),
-                      profile.sigma_targets.at(coefficient_family(name)) / info.si_per_unit,
-                      info.unit.c_str());
+      const CoefficientInfo& info = coefficient_info(name);
+      std::printf(
+          " %s (%.3g > %.3g %s)", name.c_str(), kr.coefficients.at(name).sigma.value_or(0.0),
+          profile.sigma_targets.at(coefficient_family(name)) / info.si_per_unit, info.unit.c_str());
     }
     std::printf("\n");
   }
@@ -524,12 +522,10 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const std::stri
                                                    {"accel.misalignment.zx", p.mu_zx},
                                                    {"accel.misalignment.zy", p.mu_zy}};
     for (const auto& [name, v] : rows) {
-      for (const auto& info : coefficient_catalog())
-        if (info.name == name) {
-          const auto& c = r.coefficients.at(name);
-          std::printf("  %-24s paper %12.4f   general %12.4f %s\n", name, v / info.si_per_unit,
-                      c.observable ? c.value : std::nan(""), info.unit.c_str());
-        }
+      const CoefficientInfo& info = coefficient_info(name);
+      const auto& c = r.coefficients.at(name);
+      std::printf("  %-24s paper %12.4f   general %12.4f %s\n", name, v / info.si_per_unit,
+                  c.observable ? c.value : std::nan(""), info.unit.c_str());
     }
   }
   std::printf("\nResult written to %s (%.2f s)\n", out_path.c_str(), seconds);

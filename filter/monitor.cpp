@@ -88,12 +88,6 @@ std::string num(double v) {
   return b;
 }
 
-const CoefficientInfo& info_of(const std::string& name) {
-  for (const auto& info : coefficient_catalog())
-    if (info.name == name) return info;
-  throw std::invalid_argument("unknown coefficient " + name);
-}
-
 }  // namespace
 
 std::string convergence_plot_script(const MonitorSeries& series,
@@ -158,7 +152,7 @@ std::string convergence_plot_script(const MonitorSeries& series,
     << "plot $nis using 1:3 with steps lw 1.5 title 'converged'\nset autoscale y\n";
   for (std::size_t f = 0; f < families.size(); ++f) {
     const auto& [family, members] = families[f];
-    const CoefficientInfo& first = info_of(series.names[members.front()]);
+    const CoefficientInfo& first = coefficient_info(series.names[members.front()]);
     const std::string unit = first.unit;
     const int n = static_cast<int>(members.size());
     auto component = [&](std::size_t i) {

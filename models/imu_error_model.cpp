@@ -245,4 +245,10 @@ ImuErrorModel in_accel_triad_frame(const ImuErrorModel& model, Eigen::Matrix3d* 
   return out;
 }
 
+const CoefficientInfo& coefficient_info(const std::string& name) {
+  for (const auto& info : coefficient_catalog())
+    if (info.name == name) return info;
+  throw std::invalid_argument("unknown coefficient '" + name + "'");
+}
+
 }  // namespace sinscal

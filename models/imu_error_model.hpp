@@ -111,5 +111,7 @@ ImuErrorModel in_accel_triad_frame(const ImuErrorModel& model, Eigen::Matrix3d* 
 
 /// Names, units and groups of all coefficients in contract order.
 const std::vector<CoefficientInfo>& coefficient_catalog();
+/// The catalog entry of one coefficient; throws std::invalid_argument for an unknown name.
+const CoefficientInfo& coefficient_info(const std::string& name);
 
 }  // namespace sinscal
