@@ -662,8 +662,8 @@ int cmd_calibrate(const std::vector<std::string>& args) {
       ("no-position", "kf: no known-position updates")
       ("no-zero-velocity", "kf: no zero-velocity updates at rest")
       ("terms", po::value(&o.terms),
-       "kf: extended blocks on or off beyond the sensor profile's, e.g. k2,-lever_arm (k2, "
-       "lever_arm, time_delay, g_sensitivity, scale_asym, vertical_velocity)")
+       ("kf: extended blocks on or off beyond the sensor profile's, e.g. k2,-lever_arm: " +
+        extended_terms_help() + "; vertical_velocity; or a family's name").c_str())
       ("no-motion-zero-velocity", "kf: no zero-velocity updates while the table turns")
       ("no-table-angles", "kf: ignore the log's table-angle columns (attitude from the plan)")
       ("passes", po::value(&o.passes)->default_value(1),

@@ -21,9 +21,9 @@ namespace {
 // Input indices within u.
 constexpr int kDfN = 0, kDfE = 1, kDfD = 2, kDwN = 3, kDwE = 4, kDwD = 5;
 // Observed rows of the INS error state used by each channel.
-constexpr int kRowPhiN = ins_state::kAttitude.index + 0, kRowPhiE = ins_state::kAttitude.index + 1,
-              kRowPhiD = ins_state::kAttitude.index + 2, kRowVN = ins_state::kVelocity.index + 0,
-              kRowVE = ins_state::kVelocity.index + 1, kRowVD = ins_state::kVelocity.index + 2;
+constexpr int kRowPhiN = kInsNav.attitude.index + 0, kRowPhiE = kInsNav.attitude.index + 1,
+              kRowPhiD = kInsNav.attitude.index + 2, kRowVN = kInsNav.velocity.index + 0,
+              kRowVE = kInsNav.velocity.index + 1, kRowVD = kInsNav.velocity.index + 2;
 
 InsState observed_state(const NavError& e) {
   InsState x;
@@ -58,7 +58,7 @@ std::vector<int> rows_of(const ChannelSet& c) {
 }
 
 bool is_velocity_row(int r) {
-  return r >= ins_state::kVelocity.index && r < ins_state::kVelocity.index + 3;
+  return r >= kInsNav.velocity.index && r < kInsNav.velocity.index + 3;
 }
 
 }  // namespace
@@ -121,10 +121,10 @@ std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector
       // rotated by R(-phi) (not I - [phi x]), and the inputs act in the computed frame,
       // (I - [phi x]) df_n and -(I - [phi x]) dw_n. The fit stays linear in u.
       const Eigen::Vector3d phi = 0.5 * (a.prev.phi_n + r.error.phi_n);
-      delta.segment<3>(ins_state::kVelocity.index) -=
+      delta.segment<3>(kInsNav.velocity.index) -=
           h * ((dcm_from_rotvec(-phi) - Eigen::Matrix3d::Identity()) * f_n - f_n.cross(phi));
-      Gamma_k.block<3, 3>(ins_state::kVelocity.index, ins_input::kAccel.index) -= h * skew(phi);
-      Gamma_k.block<3, 3>(ins_state::kAttitude.index, ins_input::kGyro.index) += h * skew(phi);
+      Gamma_k.block<3, 3>(kInsNav.velocity.index, ins_input::kAccel.index) -= h * skew(phi);
+      Gamma_k.block<3, 3>(kInsNav.attitude.index, ins_input::kGyro.index) += h * skew(phi);
     }
     for (int row : rows) {
       RowSums& s = a.rows[row];

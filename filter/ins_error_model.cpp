@@ -19,27 +19,39 @@ InsSiteTerms InsSiteTerms::at(const Site& site, const Earth& earth) {
   return t;
 }
 
-InsF ins_error_matrix(const InsSiteTerms& s, const Eigen::Vector3d& f_n, ErrorModelKind kind) {
-  using namespace ins_state;
-  InsF F = InsF::Zero();
-  const int a = kAttitude.index, v = kVelocity.index, p = kPosition.index;
-  for (int i = 0; i < 3; ++i) F(p + i, v + i) = 1.0;
-  F(a + 0, v + 1) = 1.0 / s.R_E;
-  F(a + 1, v + 0) = -1.0 / s.R_N;
+void ins_error_matrix(const InsSiteTerms& s, const Eigen::Vector3d& f_n, ErrorModelKind kind,
+                      const NavBlocks& nav, Eigen::Ref<Eigen::MatrixXd> F) {
+  const Block &a = nav.attitude, &v = nav.velocity, &p = nav.position;
+  // F(row block r component i, column block c component j) = value, when both exist.
+  auto set = [&](const Block& r, int i, const Block& c, int j, double value) {
+    if (i < r.size && j < c.size) F(r.index + i, c.index + j) = value;
+  };
+  for (int i = 0; i < 3; ++i) set(p, i, v, i, 1.0);
+  set(a, 0, v, 1, 1.0 / s.R_E);
+  set(a, 1, v, 0, -1.0 / s.R_N);
   if (kind == ErrorModelKind::Uncoupled) {
-    (void)f_n;  // the paper's channels see gravity only: dv_n' = g phi_e, dv_e' = -g phi_n
-    F(v + 0, a + 1) = s.g;
-    F(v + 1, a + 0) = -s.g;
-    return F;
+    // The paper's channels see gravity only: dv_n' = g phi_e, dv_e' = -g phi_n.
+    set(v, 0, a, 1, s.g);
+    set(v, 1, a, 0, -s.g);
+    return;
   }
-  F.block<3, 3>(a, a) = -skew(s.omega_ie_n);
-  // d_omega_en from dv, d_omega_ie from the latitude error dp_n / R_N
-  F(a + 2, v + 1) = -std::tan(s.lat_rad) / s.R_E;
-  F(a + 0, p + 0) = -s.rate * std::sin(s.lat_rad) / s.R_N;
-  F(a + 2, p + 0) = -s.rate * std::cos(s.lat_rad) / s.R_N;
-  F.block<3, 3>(v, a) = skew(f_n);
-  F.block<3, 3>(v, v) = -2.0 * skew(s.omega_ie_n);
-  F(v + 2, p + 2) = 2.0 * s.g / s.R_E;
+  const Eigen::Matrix3d W = -skew(s.omega_ie_n), Fx = skew(f_n), C = -2.0 * skew(s.omega_ie_n);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      set(a, i, a, j, W(i, j));
+      set(v, i, a, j, Fx(i, j));
+      set(v, i, v, j, C(i, j));
+    }
+  // d_omega_en from dv, d_omega_ie from the latitude error dp_n / R_N.
+  set(a, 2, v, 1, -std::tan(s.lat_rad) / s.R_E);
+  set(a, 0, p, 0, -s.rate * std::sin(s.lat_rad) / s.R_N);
+  set(a, 2, p, 0, -s.rate * std::cos(s.lat_rad) / s.R_N);
+  set(v, 2, p, 2, 2.0 * s.g / s.R_E);
+}
+
+InsF ins_error_matrix(const InsSiteTerms& s, const Eigen::Vector3d& f_n, ErrorModelKind kind) {
+  InsF F = InsF::Zero();
+  ins_error_matrix(s, f_n, kind, kInsNav, F);
   return F;
 }
 
@@ -48,10 +60,8 @@ InsErrorModel InsErrorModel::at(const Site& site, ErrorModelKind kind, const Ear
   InsErrorModel m;
   m.F = ins_error_matrix(s, s.f_n_static, kind);
   m.B.setZero();
-  m.B.block<3, 3>(ins_state::kVelocity.index, ins_input::kAccel.index) =
-      Eigen::Matrix3d::Identity();
-  m.B.block<3, 3>(ins_state::kAttitude.index, ins_input::kGyro.index) =
-      -Eigen::Matrix3d::Identity();
+  m.B.block<3, 3>(kInsNav.velocity.index, ins_input::kAccel.index) = Eigen::Matrix3d::Identity();
+  m.B.block<3, 3>(kInsNav.attitude.index, ins_input::kGyro.index) = -Eigen::Matrix3d::Identity();
   return m;
 }
 

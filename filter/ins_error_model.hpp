@@ -13,23 +13,14 @@
 
 #include <Eigen/Core>
 
+#include "filter/state_layout.hpp"
 #include "models/earth.hpp"
 
 namespace sinscal {
 
-/// A block of a state or input vector.
-struct Block {
-  int index;
-  int size;
-};
-
-namespace ins_state {
-constexpr Block kAttitude{0, 3};  // phi_n, rad
-constexpr Block kVelocity{3, 3};  // dv_n, m/s
-constexpr Block kPosition{6, 3};  // dp_n, m (north, east, down)
-constexpr int kSize = kPosition.index + kPosition.size;
-static_assert(kSize == 9, "INS error state layout");
-}  // namespace ins_state
+/// The full 9-state INS error of the closed form (state_layout.hpp's default navigation blocks).
+constexpr NavBlocks kInsNav{};
+static_assert(kInsNav.size() == 9, "INS error state layout");
 
 namespace ins_input {
 constexpr Block kAccel{0, 3};  // df_n, m/s^2
@@ -37,9 +28,9 @@ constexpr Block kGyro{3, 3};   // dw_n, rad/s
 constexpr int kSize = kGyro.index + kGyro.size;
 }  // namespace ins_input
 
-using InsState = Eigen::Matrix<double, ins_state::kSize, 1>;
-using InsF = Eigen::Matrix<double, ins_state::kSize, ins_state::kSize>;
-using InsB = Eigen::Matrix<double, ins_state::kSize, ins_input::kSize>;
+using InsState = Eigen::Matrix<double, 9, 1>;
+using InsF = Eigen::Matrix<double, 9, 9>;
+using InsB = Eigen::Matrix<double, 9, ins_input::kSize>;
 
 enum class ErrorModelKind { Uncoupled, Coupled };
 
@@ -55,7 +46,12 @@ struct InsSiteTerms {
   static InsSiteTerms at(const Site& site, const Earth& earth = Earth::wgs84());
 };
 
-/// Continuous error-dynamics matrix for the specific force f_n (NED, m/s^2).
+/// Continuous error-dynamics matrix for the specific force f_n (NED, m/s^2), written into F at the
+/// indices of the navigation blocks `nav` (entries of absent components, e.g. the vertical
+/// velocity when it is off, are skipped). F must be zero where the matrix has no entry.
+void ins_error_matrix(const InsSiteTerms& site, const Eigen::Vector3d& f_n, ErrorModelKind kind,
+                      const NavBlocks& nav, Eigen::Ref<Eigen::MatrixXd> F);
+/// The same for the full 9-state layout.
 InsF ins_error_matrix(const InsSiteTerms& site, const Eigen::Vector3d& f_n, ErrorModelKind kind);
 
 struct InsErrorModel {

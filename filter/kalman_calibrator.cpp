@@ -9,48 +9,34 @@
 #include <sstream>
 
 #include "models/attitude.hpp"
+#include "models/coefficient_families.hpp"
 #include "models/units.hpp"
 #include "rig/log_io.hpp"
 #include "rig/plan.hpp"
 
 namespace sinscal {
 
-CalibratorOptions calibrator_options_from_profile(const SensorProfile& profile) {
+CalibratorOptions calibrator_options_from_profile(const SensorProfile& profile,
+                                                  double prior_scale) {
+  if (!(prior_scale > 0.0)) throw std::invalid_argument("the prior scale must be positive");
   CalibratorOptions o;
   o.noise = profile.noise;
-  o.layout.accel_k2 = profile.has("accel.k2");
-  o.layout.lever_arm = profile.has("accel.lever_arm");
-  o.layout.time_delay = profile.has("time_delay");
-  o.layout.g_sensitivity = profile.has("gyro.g_sensitivity");
-  o.layout.scale_asym = profile.has("gyro.scale_asym") || profile.has("accel.scale_asym");
+  o.prior_scale = prior_scale;
+  for (const auto& f : coefficient_families())
+    if (!f.base && profile.has(f.name)) o.layout.extended.insert(f.name);
   const auto& cat = coefficient_catalog();
   o.initial_sigma.assign(cat.size(), 0.0);
   for (std::size_t i = 0; i < cat.size(); ++i) {
-    const auto it = profile.ranges.find(coefficient_family(cat[i].name));
+    const auto it = profile.ranges.find(cat[i].family);
     if (it != profile.ranges.end() && it->second.present())
-      o.initial_sigma[i] = 1.5 * std::max(std::abs(it->second.lo), std::abs(it->second.hi));
+      o.initial_sigma[i] = prior_scale * std::max(std::abs(it->second.lo), std::abs(it->second.hi));
   }
   return o;
 }
 
-namespace {
-// Family defaults for blocks switched on without a profile range (SI).
-double default_sigma(const std::string& family) {
-  using namespace units;
-  if (family == "gyro.bias") return 1.0 * deg_per_h;
-  if (family == "accel.bias") return 1000 * ug;
-  if (family == "gyro.g_sensitivity") return 0.1 * deg_per_h_per_g;
-  if (family == "accel.k2") return 100 * ug_per_g2;
-  if (family == "accel.lever_arm") return 0.1;
-  if (family == "time_delay") return 0.01;
-  if (family.find("misalignment") != std::string::npos) return 300 * arcsec;
-  return 300 * ppm;  // scale factors, asymmetry
-}
-}  // namespace
-
 double initial_attitude_sigma(const CalibratorOptions& o) {
   if (o.initial_attitude_sigma > 0.0) return o.initial_attitude_sigma;
-  return 0.5 * units::deg;
+  return kDefaultStartAttitudeSigma;
 }
 
 StateLayoutOptions effective_layout(const CalibratorOptions& o) {
@@ -63,43 +49,30 @@ Calibrator::Calibrator(std::vector<Dwell> dwells, const Site& site,
                        const CalibratorOptions& options)
     : dwells_(std::move(dwells)),
       site_(site),
+      site_terms_(InsSiteTerms::at(site)),
       o_(options),
       layout_(StateLayout::make(effective_layout(options))),
+      propagator_(layout_, site_terms_, options.noise),
       table_(options.table_geometry) {
   if (dwells_.empty()) throw std::invalid_argument("the Kalman calibrator needs the plan's dwells");
-  site_terms_ = InsSiteTerms::at(site);
-  n_nav_ = layout_.position.index + layout_.position.size;
-  for (int i = 0; i < 3; ++i) ins_index_.push_back(ins_state::kAttitude.index + i);
-  for (int i = 0; i < layout_.velocity.size; ++i)
-    ins_index_.push_back(ins_state::kVelocity.index + i);
-  for (int i = 0; i < 3; ++i) ins_index_.push_back(ins_state::kPosition.index + i);
-  const int n = layout_.size, m = n - n_nav_;
+  const int n = layout_.size;
   const auto& cat = coefficient_catalog();
-  state_of_coefficient_.assign(cat.size(), -1);
   prior_sigma_.assign(cat.size(), 0.0);
   P_ = Eigen::MatrixXd::Zero(n, n);
-  P_.block(layout_.attitude.index, layout_.attitude.index, 3, 3)
-      .diagonal()
-      .setConstant(std::pow(initial_attitude_sigma(o_), 2));
-  P_.block(layout_.velocity.index, layout_.velocity.index, layout_.velocity.size,
-           layout_.velocity.size)
-      .diagonal()
-      .setConstant(1e-6);
-  P_.block(layout_.position.index, layout_.position.index, 3, 3).diagonal().setConstant(1e-4);
-  for (const auto& cb : layout_.coefficient_blocks())
+  auto diagonal = [&](const Block& b, double sigma) {
+    P_.diagonal().segment(b.index, b.size).setConstant(sigma * sigma);
+  };
+  diagonal(layout_.attitude, initial_attitude_sigma(o_));
+  diagonal(layout_.velocity, kStartVelocitySigma);
+  diagonal(layout_.position, kStartPositionSigma);
+  for (const auto& cb : layout_.coefficients)
     for (int k = 0; k < cb.block.size; ++k) {
-      const int c = cb.catalog[static_cast<std::size_t>(k)], x = cb.block.index + k;
-      state_of_coefficient_[static_cast<std::size_t>(c)] = x;
-      double s0 = o_.initial_sigma.size() > static_cast<std::size_t>(c)
-                      ? o_.initial_sigma[static_cast<std::size_t>(c)]
-                      : 0.0;
-      if (!(s0 > 0.0)) s0 = default_sigma(cb.family);
-      P_(x, x) = s0 * s0;
-      prior_sigma_[static_cast<std::size_t>(c)] = s0;
+      const auto c = static_cast<std::size_t>(cb.catalog[static_cast<std::size_t>(k)]);
+      double s0 = o_.initial_sigma.size() > c ? o_.initial_sigma[c] : 0.0;
+      if (!(s0 > 0.0)) s0 = coefficient_family_info(cb.family).default_prior;
+      P_(cb.block.index + k, cb.block.index + k) = s0 * s0;
+      prior_sigma_[c] = s0;
     }
-  Phi_nn_ = Eigen::MatrixXd::Identity(n_nav_, n_nav_);
-  Phi_nc_ = Eigen::MatrixXd::Zero(n_nav_, m);
-  Q_nn_ = Eigen::MatrixXd::Zero(n_nav_, n_nav_);
   if (o_.initial_model) model_ = *o_.initial_model;
   if (o_.static_from == CalibratorOptions::StaticFrom::Data)
     detector_.emplace(o_.noise, o_.detector);
@@ -159,81 +132,37 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot,
       throw PlanDataMismatch(m.str());
     }
   }
-  // Compensate with the current estimate (mean rates over the interval).
-  const Eigen::Vector3d y_g = s.dtheta_b / dt, y_a = s.dv_b / dt;
-  Eigen::Vector3d omega, f;
-  model_.compensate(y_g, y_a, omega_dot, omega, f);
+  // Compensate with the current estimate (mean rates over the interval, at its middle).
+  KinematicSample k;
+  k.omega_dot_ib_b = omega_dot;
+  k.t = s.t - 0.5 * dt - o_.time_offset;
+  model_.compensate(s.dtheta_b / dt, s.dv_b / dt, omega_dot, k.omega_ib_b, k.f_ib_b, k.t);
   // Accelerometers late by tau: f(t) = f_meas(t + tau), to second order.
   const double tau = model_.time_delay;
-  f += tau * f_dot + 0.5 * tau * tau * f_ddot;
-  nav_.step(omega * dt, f * dt, dt);
-
-  // Error dynamics of this interval.
-  const NavState& x = nav_.state();
-  const Eigen::Matrix3d C = x.C_b_n();
-  const Eigen::Vector3d f_n = C * f;
-  const int a = layout_.attitude.index, v = layout_.velocity.index;
-  const int nv = layout_.velocity.size;
-  const InsF F = ins_error_matrix(site_terms_, f_n, ErrorModelKind::Coupled);
-  Eigen::MatrixXd A(n_nav_, n_nav_);
-  for (int i = 0; i < n_nav_; ++i)
-    for (int j = 0; j < n_nav_; ++j) A(i, j) = F(ins_index_[i], ins_index_[j]);
-
-  KinematicSample k;
-  k.omega_ib_b = omega;
-  k.omega_dot_ib_b = omega_dot;
-  k.f_ib_b = f;
-  const auto J = model_.jacobian(k, f_dot);
-  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(n_nav_, layout_.size - n_nav_);
-  for (std::size_t c = 0; c < state_of_coefficient_.size(); ++c) {
-    const int xs = state_of_coefficient_[c];
-    if (xs < 0) continue;
-    const int col = xs - n_nav_;
-    const auto jc = J.col(static_cast<Eigen::Index>(c));
-    B.block<3, 1>(a, col) = -(C * jc.head<3>());
-    B.block(v, col, nv, 1) = (C * jc.tail<3>()).head(nv);
-  }
-  const Eigen::MatrixXd step = Eigen::MatrixXd::Identity(n_nav_, n_nav_) + A * dt;
-  Phi_nn_ = step * Phi_nn_;
-  Phi_nc_ = step * Phi_nc_ + B * dt;
-  // Noise entered earlier in the interval is carried by the later steps (into position, and from
-  // attitude into velocity): Q <- step Q step^T + q dt.
-  Q_nn_ = step * Q_nn_ * step.transpose();
-  Q_nn_.diagonal().segment<3>(a).array() += o_.noise.gyro.white * o_.noise.gyro.white * dt;
-  Q_nn_.diagonal().segment(v, nv).array() += o_.noise.accel.white * o_.noise.accel.white * dt;
-  accumulated_ += dt;
-  if (accumulated_ >= o_.update_interval - 1e-9) {
-    propagate_covariance();
+  k.f_ib_b += tau * f_dot + 0.5 * tau * tau * f_ddot;
+  nav_.step(k.omega_ib_b * dt, k.f_ib_b * dt, dt);
+  propagator_.step(nav_.state().C_b_n(), k, f_dot, model_, dt);
+  if (propagator_.accumulated() >= o_.update_interval - 1e-9) {
+    propagator_.propagate(P_);
     update(s.t - o_.time_offset);
   }
 }
 
-void Calibrator::propagate_covariance() {
-  const int n = n_nav_, m = layout_.size - n_nav_;
-  // P <- Phi P Phi^T + Q with Phi = [[Phi_nn, Phi_nc], [0, I]].
-  Eigen::MatrixXd T = P_;
-  T.topRows(n) = Phi_nn_ * P_.topRows(n) + Phi_nc_ * P_.bottomRows(m);
-  Eigen::MatrixXd Pn = T;
-  Pn.leftCols(n) = T.leftCols(n) * Phi_nn_.transpose() + T.rightCols(m) * Phi_nc_.transpose();
-  Pn.topLeftCorner(n, n) += Q_nn_;
-  // Biases that wander (bias instability: a Gauss-Markov process of sigma b and correlation time
-  // tau, driven by white noise of density 2 b^2 / tau; rate / acceleration random walk): random
-  // walk on the bias states. Without the decay this is conservative over runs longer than tau.
-  auto wander = [&](const Block& block, const TriadNoise& tn) {
-    if (block.size == 0) return;
-    const double q = (tn.correlation_time > 0.0
-                          ? 2.0 * tn.bias_instability * tn.bias_instability / tn.correlation_time
-                          : 0.0) +
-                     tn.random_walk * tn.random_walk;
-    for (int i = 0; i < block.size; ++i) Pn(block.index + i, block.index + i) += q * accumulated_;
-  };
-  wander(layout_.gyro_bias, o_.noise.gyro);
-  wander(layout_.accel_bias, o_.noise.accel);
-  P_ = 0.5 * (Pn + Pn.transpose());
-  Phi_nn_.setIdentity();
-  Phi_nc_.setZero();
-  Q_nn_.setZero();
-  accumulated_ = 0.0;
+Eigen::Matrix3d Calibrator::dwell_attitude(const Dwell& dwell) {
+  if (!current_.has_table || !o_.use_table_angles) return dwell.C_b_n_known;
+  // The attitude the table's angles give, checked against the plan's orientation.
+  const Eigen::Matrix3d C_table = table_.C_b_n({current_.table_outer, current_.table_inner});
+  const double apart = rotvec_from_dcm(C_table * dwell.C_b_n_known.transpose()).norm();
+  if (apart > o_.table_plan_tolerance) {
+    std::ostringstream m;
+    m << "dwell " << dwell.index << " (" << dwell.label << ") at t = " << current_.t
+      << " s: the table's angles (outer " << current_.table_outer / units::deg << " deg, inner "
+      << current_.table_inner / units::deg << " deg) put the IMU " << apart / units::deg
+      << " deg from the plan's orientation: the plan does not match the data";
+    throw PlanDataMismatch(m.str());
+  }
+  ++table_updates_;
+  return C_table;
 }
 
 void Calibrator::update(double t_plan) {
@@ -245,102 +174,56 @@ void Calibrator::update(double t_plan) {
       if (t_plan >= d.t_start + o_.static_margin && t_plan <= d.t_end - o_.static_margin)
         dwell = &d;
   }
-  if (!dwell && !o_.zero_velocity_in_motion) return;
   const NavState& x = nav_.state();
-  const NavError e =
-      nav_error(x, dwell ? dwell->C_b_n_known : x.C_b_n(), Eigen::Vector3d::Zero(), site_);
   if (!dwell) {
     // Turning about the IMU reference point: zero velocity holds, the attitude is not known.
-    std::vector<std::pair<int, double>> rows;
-    for (int i = 0; i < layout_.velocity.size; ++i)
-      rows.emplace_back(layout_.velocity.index + i, e.dv_n(i));
-    apply_update(rows, std::vector<double>(rows.size(), o_.motion_velocity_sigma));
+    if (o_.zero_velocity_in_motion) apply(zero_velocity(layout_, x, o_.motion_velocity_sigma));
     return;
   }
-  std::vector<std::pair<int, double>> rows;  // state index, measured value; with sigma
-  std::vector<double> sig;
-  if (o_.zero_velocity)
-    for (int i = 0; i < layout_.velocity.size; ++i) {
-      rows.emplace_back(layout_.velocity.index + i, e.dv_n(i));
-      sig.push_back(o_.velocity_sigma);
-    }
-  if (o_.position)
-    for (int i = 0; i < 3; ++i) {
-      rows.emplace_back(layout_.position.index + i, e.dp_n(i));
-      sig.push_back(o_.position_sigma);
-    }
+  Measurement m;
+  if (o_.zero_velocity) m.append(zero_velocity(layout_, x, o_.velocity_sigma));
+  if (o_.position) m.append(known_position(layout_, x, site_, o_.position_sigma));
   const bool attitude_wanted =
       o_.attitude == CalibratorOptions::AttitudeUpdates::Every ||
       (o_.attitude == CalibratorOptions::AttitudeUpdates::First && dwell->index == 1);
   if (attitude_wanted && dwell->index > attitude_dwell_done_) {
-    Eigen::Vector3d phi = e.phi_n;
-    if (current_.has_table && o_.use_table_angles) {
-      // The attitude the table's angles give, checked against the plan's orientation.
-      const Eigen::Matrix3d C_table = table_.C_b_n({current_.table_outer, current_.table_inner});
-      const double apart = rotvec_from_dcm(C_table * dwell->C_b_n_known.transpose()).norm();
-      if (apart > o_.table_plan_tolerance) {
-        std::ostringstream m;
-        m << "dwell " << dwell->index << " (" << dwell->label << ") at t = " << current_.t
-          << " s: the table's angles (outer " << current_.table_outer / units::deg << " deg, inner "
-          << current_.table_inner / units::deg << " deg) put the IMU " << apart / units::deg
-          << " deg from the plan's orientation: the plan does not match the data";
-        throw PlanDataMismatch(m.str());
-      }
-      phi = nav_error(x, C_table, Eigen::Vector3d::Zero(), site_).phi_n;
-      ++table_updates_;
-    }
-    for (int i = 0; i < 3; ++i) {
-      rows.emplace_back(layout_.attitude.index + i, phi(i));
-      sig.push_back(o_.attitude_sigma);
-    }
+    m.append(known_attitude(layout_, x, dwell_attitude(*dwell), o_.attitude_sigma));
     attitude_dwell_done_ = dwell->index;
   }
-  apply_update(rows, sig);
+  apply(m);
 }
 
-void Calibrator::apply_update(const std::vector<std::pair<int, double>>& rows,
-                              const std::vector<double>& sig) {
-  if (rows.empty()) return;
-  const int r = static_cast<int>(rows.size()), n = layout_.size;
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(r, n);
-  Eigen::VectorXd z(r);
-  Eigen::MatrixXd R = Eigen::MatrixXd::Zero(r, r);
-  for (int i = 0; i < r; ++i) {
-    H(i, rows[static_cast<std::size_t>(i)].first) = 1.0;
-    z(i) = rows[static_cast<std::size_t>(i)].second;
-    R(i, i) = sig[static_cast<std::size_t>(i)] * sig[static_cast<std::size_t>(i)];
-  }
-  const Eigen::MatrixXd PHt = P_ * H.transpose();
-  const Eigen::MatrixXd S = H * PHt + R;
+void Calibrator::apply(const Measurement& m) {
+  if (m.empty()) return;
+  const int r = m.rows(), n = layout_.size;
+  const Eigen::Map<const Eigen::VectorXd> z(m.z.data(), r);
+  const Eigen::VectorXd R = Eigen::Map<const Eigen::VectorXd>(m.sigma.data(), r).array().square();
+  // H selects states: H P is rows of P, H P H^T a submatrix (no products with H).
+  Eigen::MatrixXd HP(r, n);
+  for (int i = 0; i < r; ++i) HP.row(i) = P_.row(m.states[static_cast<std::size_t>(i)]);
+  Eigen::MatrixXd S(r, r);
+  for (int j = 0; j < r; ++j) S.col(j) = HP.col(m.states[static_cast<std::size_t>(j)]);
+  S.diagonal() += R;
   const Eigen::LLT<Eigen::MatrixXd> llt(S);
   if (llt.info() != Eigen::Success)
     throw std::runtime_error("Kalman update: innovation covariance not positive definite");
-  const Eigen::MatrixXd K = llt.solve(PHt.transpose()).transpose();
+  const Eigen::MatrixXd K = llt.solve(HP).transpose();
   last_nis_ = z.dot(llt.solve(z));
   last_nis_dof_ = r;
   nis_sum_ += last_nis_;
   nis_dof_ += r;
   ++updates_;
-  const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(n, n) - K * H;
-  P_ = IKH * P_ * IKH.transpose() + K * R * K.transpose();
+  // Joseph form (I - K H) P (I - K H)^T + K R K^T, symmetrized: (I - K H) P = P - K (H P), and
+  // X (I - K H)^T = X - (X H^T) K^T.
+  const Eigen::MatrixXd IKH_P = P_ - K * HP;
+  Eigen::MatrixXd IKH_P_Ht(n, r);
+  for (int j = 0; j < r; ++j) IKH_P_Ht.col(j) = IKH_P.col(m.states[static_cast<std::size_t>(j)]);
+  P_ = IKH_P - IKH_P_Ht * K.transpose() + K * R.asDiagonal() * K.transpose();
   P_ = 0.5 * (P_ + P_.transpose());
-  feed_back(K * z);
-}
-
-void Calibrator::feed_back(const Eigen::VectorXd& dx) {
   NavState x = nav_.state();
-  const Eigen::Vector3d phi = dx.segment<3>(layout_.attitude.index);
-  x.q_b_n = (quat_from_rotvec(phi) * x.q_b_n).normalized();
-  for (int i = 0; i < layout_.velocity.size; ++i) x.v_n(i) -= dx(layout_.velocity.index + i);
-  const Eigen::Vector3d dp = dx.segment<3>(layout_.position.index);
-  x.lat_rad -= dp.x() / site_terms_.R_N;
-  x.lon_rad -= dp.y() / (site_terms_.R_E * std::cos(site_.lat_rad));
-  x.h_m += dp.z();
+  feed_back(layout_, site_terms_, K * z, x, model_);
   // Keep the coning/sculling memory: the correction is tiny and the increments unchanged.
   nav_.correct(x);
-  auto refs = model_.coefficient_refs();
-  for (std::size_t c = 0; c < state_of_coefficient_.size(); ++c)
-    if (state_of_coefficient_[c] >= 0) *refs[c].second += dx(state_of_coefficient_[c]);
 }
 
 std::vector<CoefficientEstimate> Calibrator::estimate() const {
@@ -349,7 +232,7 @@ std::vector<CoefficientEstimate> Calibrator::estimate() const {
   std::vector<CoefficientEstimate> out(refs.size());
   for (std::size_t c = 0; c < refs.size(); ++c) {
     out[c].value = *refs[c].second;
-    const int xs = state_of_coefficient_[c];
+    const int xs = layout_.state_of[c];
     out[c].sigma = xs >= 0 ? std::sqrt(P_(xs, xs)) : 0.0;
     out[c].status =
         xs >= 0 ? CoefficientEstimate::Status::Estimated : CoefficientEstimate::Status::Off;

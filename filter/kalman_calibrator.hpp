@@ -23,19 +23,34 @@
 #include <string>
 #include <vector>
 
+#include "filter/error_propagation.hpp"
 #include "filter/ins_error_model.hpp"
+#include "filter/measurements.hpp"
 #include "filter/state_layout.hpp"
 #include "filter/static_detector.hpp"
 #include "filter/strapdown.hpp"
 #include "models/imu_error_model.hpp"
 #include "models/noise_model.hpp"
 #include "models/sensor_profile.hpp"
+#include "models/units.hpp"
 #include "rig/imu_sample.hpp"
 #include "rig/motion.hpp"
 #include "rig/session.hpp"
 #include "rig/table.hpp"
 
 namespace sinscal {
+
+/// The prior 1-sigma of a coefficient is this many times the largest magnitude of its family's
+/// range in the sensor profile (the range the simulator draws from): wide enough for any value
+/// the profile admits, narrow enough to keep the first pass linear.
+constexpr double kDefaultPriorScale = 1.5;
+/// Table attitude accuracy per orientation (2-3 arcsec for a precision two-axis table).
+constexpr double kDefaultTableAttitudeSigma = 2.5 * units::arcsec;
+/// Start of the navigation: attitude about the plan's start orientation (the body frame may
+/// differ from the table's by the mounting), velocity and position at rest on the site.
+constexpr double kDefaultStartAttitudeSigma = 0.5 * units::deg;
+constexpr double kStartVelocitySigma = 1e-3;  // m/s
+constexpr double kStartPositionSigma = 1e-2;  // m
 
 struct CalibratorOptions {
   StateLayoutOptions layout;
@@ -52,19 +67,21 @@ struct CalibratorOptions {
   /// Zero velocity also while the table turns (the IMU reference point on the table's axes).
   /// (The plan's IMU reference point is at the intersection of the table axes, so it stays put.)
   bool zero_velocity_in_motion = true;
-  double motion_velocity_sigma = 1e-4;                // m/s
-  double attitude_sigma = 2.5 * 4.84813681109536e-6;  // rad, table attitude (2.5 arcsec)
-  double static_margin = 0.5;                         // s: updates only this far inside a dwell
+  double motion_velocity_sigma = 1e-4;                 // m/s
+  double attitude_sigma = kDefaultTableAttitudeSigma;  // rad, table attitude
+  double static_margin = 0.5;                          // s: updates only this far inside a dwell
   /// 1-sigma of the start attitude about the plan's start orientation; zero: 0.5 deg. Not the
   /// table's attitude_sigma: the first attitude update measures the same table error again, and
   /// without attitude updates the body frame is the accelerometer triad's, which differs from
   /// the table's by the mounting.
   double initial_attitude_sigma = 0.0;  // rad
   NoiseModel noise;                     // white-noise densities drive the process noise
-  /// Initial 1-sigma of every coefficient (SI, catalog order); zero: taken from the profile
-  /// ranges (the upper bound) or a generous default for the family.
+  /// Initial 1-sigma of every coefficient (SI, catalog order); zero: the family's default prior
+  /// (models/coefficient_families.hpp). calibrator_options_from_profile() fills it with
+  /// prior_scale times the largest magnitude of the family's range in the profile.
   std::vector<double> initial_sigma;
-  double time_offset = 0.0;  // s: log time at which the plan starts
+  double prior_scale = kDefaultPriorScale;  // the scale initial_sigma was made with (reported)
+  double time_offset = 0.0;                 // s: log time at which the plan starts
   /// Coefficients to start from (the linearization point; the prior sigmas stay those above).
   /// Multi-pass runs start each pass from the previous pass's estimate.
   std::optional<ImuErrorModel> initial_model;
@@ -80,7 +97,7 @@ struct CalibratorOptions {
   /// `table_plan_tolerance` is a plan mismatch.
   bool use_table_angles = true;
   TableGeometry table_geometry;
-  double table_plan_tolerance = 1.0 * 0.017453292519943295;  // rad (1 deg)
+  double table_plan_tolerance = 1.0 * units::deg;  // rad
 };
 
 /// The data do not match the plan (a log shorter than the plan, more or fewer static intervals
@@ -90,9 +107,10 @@ class PlanDataMismatch : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Options from a sensor profile: noise, the extended blocks the profile declares present,
-/// initial sigmas from its coefficient ranges.
-CalibratorOptions calibrator_options_from_profile(const SensorProfile& profile);
+/// Options from a sensor profile: noise, the extended families the profile declares present,
+/// initial sigmas of prior_scale times its coefficient ranges.
+CalibratorOptions calibrator_options_from_profile(const SensorProfile& profile,
+                                                  double prior_scale = kDefaultPriorScale);
 
 /// The state layout the options imply: without table-attitude updates the body frame is the
 /// accelerometer triad's (docs/conventions.md), whatever `layout.accel_triad_frame` says.
@@ -144,30 +162,21 @@ class Calibrator {
  private:
   void process(const ImuSample& s, const Eigen::Vector3d& omega_dot, const Eigen::Vector3d& f_dot,
                const Eigen::Vector3d& f_ddot);
-  void propagate_covariance();
   void update(double t_plan);
-  void apply_update(const std::vector<std::pair<int, double>>& rows,
-                    const std::vector<double>& sig);
-  void feed_back(const Eigen::VectorXd& dx);
+  /// The known attitude of a dwell: the table's angles when the log has them, else the plan's.
+  Eigen::Matrix3d dwell_attitude(const Dwell& dwell);
+  void apply(const Measurement& m);
 
   std::vector<Dwell> dwells_;
   Site site_;
   InsSiteTerms site_terms_;  // Earth terms at the site (the table does not move), once
-  // The INS error state (ins_error_model.hpp) of each navigation-error state of the filter.
-  std::vector<int> ins_index_;
   CalibratorOptions o_;
   StateLayout layout_;
   ImuErrorModel model_;
   Strapdown nav_;
+  ErrorPropagator propagator_;
   bool started_ = false;
   Eigen::MatrixXd P_;
-  // Transition accumulated since the last covariance propagation: [[Phi_nn, Phi_nc], [0, I]].
-  Eigen::MatrixXd Phi_nn_;
-  Eigen::MatrixXd Q_nn_;  // process noise of the navigation errors accumulated over the interval
-  Eigen::MatrixXd Phi_nc_;
-  double accumulated_ = 0.0;
-  int n_nav_ = 0;                          // navigation-error states (attitude, velocity, position)
-  std::vector<int> state_of_coefficient_;  // catalog index -> state index (-1: off)
   // The last two samples pushed (held back for the central differences).
   std::vector<ImuSample> held_;
   int attitude_dwell_done_ = 0;

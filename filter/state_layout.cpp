@@ -3,88 +3,75 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "models/coefficient_families.hpp"
 #include "models/imu_error_model.hpp"
-#include "models/sensor_profile.hpp"
 
 namespace sinscal {
+
+bool StateLayoutOptions::on(const std::string& family) const {
+  return coefficient_family_info(family).base || extended.count(family) > 0;
+}
+
+void StateLayoutOptions::set(const std::string& family, bool is_on) {
+  if (coefficient_family_info(family).base)
+    throw std::invalid_argument("'" + family + "' is a base family: always estimated");
+  if (is_on)
+    extended.insert(family);
+  else
+    extended.erase(family);
+}
 
 StateLayout StateLayout::make(const StateLayoutOptions& o) {
   StateLayout l;
   int next = 0;
-  auto add = [&](Block& b, int size, bool on = true) {
-    if (!on) return;
+  auto add = [&](Block& b, int size) {
     b = Block{next, size};
     next += size;
   };
   add(l.attitude, 3);
   add(l.velocity, o.vertical_velocity ? 3 : 2);
   add(l.position, 3);
-  add(l.gyro_bias, 3);
-  add(l.gyro_scale, 3);
-  add(l.gyro_misalignment, 6);
-  add(l.accel_bias, 3);
-  add(l.accel_scale, 3);
-  add(l.accel_misalignment, o.accel_triad_frame ? 3 : 6);
-  add(l.accel_k2, 3, o.accel_k2);
-  add(l.gyro_scale_asym, 3, o.scale_asym);
-  add(l.accel_scale_asym, 3, o.scale_asym);
-  add(l.gyro_g_sensitivity, 9, o.g_sensitivity);
-  add(l.accel_lever_arm, 9, o.lever_arm);
-  add(l.time_delay, 1, o.time_delay);
-  l.size = next;
+  l.nav_size = next;
   l.accel_triad_frame = o.accel_triad_frame;
+  const auto& cat = coefficient_catalog();
+  std::vector<std::string> fixed = o.fixed;
+  if (o.accel_triad_frame)
+    fixed.insert(fixed.end(),
+                 {"accel.misalignment.xy", "accel.misalignment.xz", "accel.misalignment.yz"});
+  for (const auto& name : fixed) {
+    const auto it = std::find_if(cat.begin(), cat.end(),
+                                 [&](const CoefficientInfo& c) { return c.name == name; });
+    if (it == cat.end())
+      throw std::invalid_argument("state layout: no coefficient '" + name + "' to fix");
+    const int c = static_cast<int>(it - cat.begin());
+    if (std::find(l.fixed.begin(), l.fixed.end(), c) == l.fixed.end()) l.fixed.push_back(c);
+  }
+  std::sort(l.fixed.begin(), l.fixed.end());
+  l.state_of.assign(cat.size(), -1);
+  for (const auto& f : coefficient_families()) {
+    if (!o.on(f.name)) continue;
+    CoefficientBlock cb{f.name, Block{next, 0}, {}};
+    for (int c = 0; c < static_cast<int>(cat.size()); ++c)
+      if (cat[static_cast<std::size_t>(c)].family == f.name &&
+          !std::binary_search(l.fixed.begin(), l.fixed.end(), c)) {
+        l.state_of[static_cast<std::size_t>(c)] = next++;
+        cb.catalog.push_back(c);
+      }
+    cb.block.size = static_cast<int>(cb.catalog.size());
+    if (cb.block.size > 0) l.coefficients.push_back(cb);
+  }
+  l.size = next;
   return l;
 }
 
-std::vector<StateLayout::CoefficientBlock> StateLayout::coefficient_blocks() const {
-  const std::pair<const char*, const Block*> families[] = {
-      {"gyro.bias", &gyro_bias},
-      {"gyro.scale", &gyro_scale},
-      {"gyro.misalignment", &gyro_misalignment},
-      {"accel.bias", &accel_bias},
-      {"accel.scale", &accel_scale},
-      {"accel.misalignment", &accel_misalignment},
-      {"accel.k2", &accel_k2},
-      {"gyro.scale_asym", &gyro_scale_asym},
-      {"accel.scale_asym", &accel_scale_asym},
-      {"gyro.g_sensitivity", &gyro_g_sensitivity},
-      {"accel.lever_arm", &accel_lever_arm},
-      {"time_delay", &time_delay}};
-  const auto& cat = coefficient_catalog();
-  const std::vector<int> fixed = fixed_by_convention();
-  std::vector<CoefficientBlock> out;
-  for (const auto& [family, block] : families) {
-    if (!on(*block)) continue;
-    std::vector<int> members;
-    for (int i = 0; i < static_cast<int>(cat.size()); ++i)
-      if (coefficient_family(cat[i].name) == family &&
-          std::find(fixed.begin(), fixed.end(), i) == fixed.end())
-        members.push_back(i);
-    if (static_cast<int>(members.size()) != block->size)
-      throw std::logic_error(std::string("state layout: block ") + family + " has " +
-                             std::to_string(block->size) + " states, the catalog " +
-                             std::to_string(members.size()) + " coefficients");
-    out.push_back({family, *block, members});
-  }
-  return out;
-}
-
-std::vector<int> StateLayout::fixed_by_convention() const {
-  std::vector<int> out;
-  if (!accel_triad_frame) return out;
-  const auto& cat = coefficient_catalog();
-  for (const char* name :
-       {"accel.misalignment.xy", "accel.misalignment.xz", "accel.misalignment.yz"})
-    for (int i = 0; i < static_cast<int>(cat.size()); ++i)
-      if (cat[i].name == name) out.push_back(i);
-  return out;
+const StateLayout::CoefficientBlock* StateLayout::block(const std::string& family) const {
+  for (const auto& cb : coefficients)
+    if (cb.family == family) return &cb;
+  return nullptr;
 }
 
 void apply_terms(StateLayoutOptions& o, const std::string& terms) {
-  const std::pair<const char*, bool*> known[] = {
-      {"k2", &o.accel_k2},           {"lever_arm", &o.lever_arm},
-      {"time_delay", &o.time_delay}, {"g_sensitivity", &o.g_sensitivity},
-      {"scale_asym", &o.scale_asym}, {"vertical_velocity", &o.vertical_velocity}};
+  const auto known_terms = extended_terms();
   std::size_t pos = 0;
   while (pos <= terms.size()) {
     std::size_t end = terms.find(',', pos);
@@ -97,16 +84,28 @@ void apply_terms(StateLayoutOptions& o, const std::string& terms) {
       on = term[0] == '+';
       term.erase(0, 1);
     }
+    if (term == "vertical_velocity") {
+      o.vertical_velocity = on;
+      continue;
+    }
     bool found = false;
-    for (const auto& [name, flag] : known)
+    for (const auto& [name, families] : known_terms)
       if (term == name) {
-        *flag = on;
+        for (const auto& f : families) o.set(f, on);
         found = true;
       }
-    if (!found)
-      throw std::invalid_argument("unknown term '" + term +
-                                  "' (known: k2, lever_arm, time_delay, g_sensitivity, "
-                                  "scale_asym, vertical_velocity)");
+    for (const auto& f : coefficient_families())
+      if (!f.base && term == f.name) {
+        o.set(f.name, on);
+        found = true;
+      }
+    if (!found) {
+      std::string names;
+      for (const auto& t : known_terms) names += t.first + ", ";
+      throw std::invalid_argument("unknown term '" + term + "' (known: " + names +
+                                  "vertical_velocity, or an extended family's name such as "
+                                  "gyro.scale_asym)");
+    }
   }
 }
 

@@ -1,70 +1,86 @@
-// State layout of the error-state Kalman filter: named blocks {index, size}, the total size
-// derived from the blocks that are on. No index appears anywhere else as a number.
+// The one state layout of the estimators: named blocks {index, size}, the total size derived from
+// the blocks that are on. No state index appears anywhere else as a number.
 //
 // Navigation errors (always on): attitude phi_n (3, rad), velocity dv_n (3, m/s; the vertical
-// component is on by default), position dp_n (3, m). Coefficient blocks: the families of the
-// coefficient catalog (models/imu_error_model.hpp), base ones always on, extended ones switched on
-// by the options (from the sensor profile or the command line).
+// component can be switched off), position dp_n (3, m); definitions in docs/conventions.md. Then
+// one block per coefficient family of the family table (models/coefficient_families.hpp), in its
+// order: base families always, extended ones when switched on (sensor profile or `--terms`).
+// Coefficients fixed by a convention (the accelerometer-triad body frame, a reference lever arm)
+// are not states.
 #pragma once
 
+#include <set>
 #include <string>
 #include <vector>
 
-#include "filter/ins_error_model.hpp"
-
 namespace sinscal {
+
+/// A block of a state or input vector.
+struct Block {
+  int index;
+  int size;
+};
+
+/// The navigation-error blocks. The default is the full 9-state INS error (closed form).
+struct NavBlocks {
+  Block attitude{0, 3};  // phi_n, rad
+  Block velocity{3, 3};  // dv_n, m/s (north, east[, down])
+  Block position{6, 3};  // dp_n, m (north, east, down)
+  constexpr int size() const { return position.index + position.size; }
+};
+
+/// Largest number of navigation-error states (fixed-size storage in the filter).
+constexpr int kMaxNavStates = 9;
 
 struct StateLayoutOptions {
   bool vertical_velocity = true;
-  bool accel_k2 = false;
-  bool lever_arm = false;
-  bool time_delay = false;
-  bool g_sensitivity = false;
-  bool scale_asym = false;
+  /// Extended families switched on, by family name (the base families are always on).
+  std::set<std::string> extended;
   /// Body frame defined by the accelerometer triad (calibration without known attitude): the
   /// accelerometer misalignments xy, xz, yz are zero by this convention and not estimated; the
   /// block holds yx, zx, zy only (docs/conventions.md).
   bool accel_triad_frame = false;
+  /// Further coefficients fixed at zero by a stated convention (e.g. a reference lever arm).
+  std::vector<std::string> fixed;
+
+  bool on(const std::string& family) const;
+  /// Switches an extended family; throws std::invalid_argument for an unknown or base family.
+  void set(const std::string& family, bool on);
 };
 
-/// Switches extended blocks on or off from a comma-separated list, e.g.
-/// "k2,-lever_arm,+g_sensitivity": names k2, lever_arm, time_delay, g_sensitivity, scale_asym,
+/// Switches extended families on or off from a comma-separated list of `--terms` names or family
+/// names, e.g. "k2,-lever_arm,+gyro.g_sensitivity" (models/coefficient_families.hpp), plus
 /// vertical_velocity; a leading '-' switches off, none or '+' on. Throws std::invalid_argument
-/// naming an unknown term.
+/// naming an unknown term and the known ones.
 void apply_terms(StateLayoutOptions& options, const std::string& terms);
 
 struct StateLayout {
   // Navigation errors.
   Block attitude{-1, 0};
-  Block velocity{-1, 0};  // 2 or 3 components (north, east[, down])
+  Block velocity{-1, 0};
   Block position{-1, 0};
-  // Coefficient blocks, in coefficient-catalog units (SI).
-  Block gyro_bias{-1, 0};
-  Block gyro_scale{-1, 0};
-  Block gyro_misalignment{-1, 0};
-  Block accel_bias{-1, 0};
-  Block accel_scale{-1, 0};
-  Block accel_misalignment{-1, 0};
-  Block accel_k2{-1, 0};
-  Block gyro_scale_asym{-1, 0};
-  Block accel_scale_asym{-1, 0};
-  Block gyro_g_sensitivity{-1, 0};
-  Block accel_lever_arm{-1, 0};
-  Block time_delay{-1, 0};
-  int size = 0;
-
-  static StateLayout make(const StateLayoutOptions& options);
-  /// Coefficient blocks that are on, with the catalog family each one holds.
+  /// A coefficient family's block.
   struct CoefficientBlock {
     std::string family;  // e.g. "gyro.bias"
     Block block;
     std::vector<int> catalog;  // coefficient_catalog() index of each state of the block
   };
-  std::vector<CoefficientBlock> coefficient_blocks() const;
-  static bool on(const Block& b) { return b.size > 0; }
-  /// Catalog indices of the coefficients fixed at zero by the frame convention (not states).
-  std::vector<int> fixed_by_convention() const;
+  std::vector<CoefficientBlock> coefficients;  // family-table order, on families only
+  int size = 0;
+  int nav_size = 0;  // the navigation errors come first: states [0, nav_size)
   bool accel_triad_frame = false;
+  std::vector<int> fixed;     // catalog indices fixed by a convention (not states)
+  std::vector<int> state_of;  // catalog index -> state index, -1 when not a state
+
+  static StateLayout make(const StateLayoutOptions& options);
+  NavBlocks nav() const { return {attitude, velocity, position}; }
+  /// The block of a family, or null when it is not in the state.
+  const CoefficientBlock* block(const std::string& family) const;
+  /// Coefficient blocks that are on, with the catalog family each one holds.
+  const std::vector<CoefficientBlock>& coefficient_blocks() const { return coefficients; }
+  static bool on(const Block& b) { return b.size > 0; }
+  /// Catalog indices of the coefficients fixed at zero by a convention (not states).
+  const std::vector<int>& fixed_by_convention() const { return fixed; }
 };
 
 }  // namespace sinscal

@@ -12,14 +12,9 @@
 namespace sinscal {
 namespace {
 
-struct UnitEntry {
-  const char* token;
-  double factor;
-};
-
-const std::vector<UnitEntry>& units_for(QuantityKind kind) {
+const std::vector<UnitToken>& units_for(QuantityKind kind) {
   using namespace units;
-  static const std::map<QuantityKind, std::vector<UnitEntry>> table = {
+  static const std::map<QuantityKind, std::vector<UnitToken>> table = {
       {QuantityKind::Angle,
        {{"rad", 1.0}, {"mrad", mrad}, {"deg", deg}, {"arcmin", arcmin}, {"arcsec", arcsec}}},
       {QuantityKind::AngularRate, {{"rad/s", 1.0}, {"deg/s", deg_per_s}, {"deg/h", deg_per_h}}},
@@ -43,10 +38,17 @@ const std::vector<UnitEntry>& units_for(QuantityKind kind) {
   return table.at(kind);
 }
 
-std::string accepted_units(QuantityKind kind) {
+std::string accepted_units(const std::vector<UnitToken>& units) {
   std::string out;
-  for (const auto& u : units_for(kind)) out += (out.empty() ? "" : ", ") + std::string(u.token);
+  for (const auto& u : units) out += (out.empty() ? "" : ", ") + u.token;
   return out;
+}
+
+double factor_of(const std::string& unit, const std::vector<UnitToken>& units) {
+  for (const auto& u : units)
+    if (unit == u.token) return u.si_per_unit;
+  throw ConfigError("unit '" + unit +
+                    "' is not a unit of this quantity (accepted: " + accepted_units(units) + ")");
 }
 
 std::string trim(const std::string& s) {
@@ -66,13 +68,15 @@ bool parse_number(const std::string& token, double& value) {
 }  // namespace
 
 double unit_factor(const std::string& unit, QuantityKind kind) {
-  for (const auto& u : units_for(kind))
-    if (unit == u.token) return u.factor;
-  throw ConfigError("unit '" + unit +
-                    "' is not a unit of this quantity (accepted: " + accepted_units(kind) + ")");
+  return factor_of(unit, units_for(kind));
 }
 
 std::vector<double> parse_quantities(const std::string& text, QuantityKind kind,
+                                     const std::string& default_unit) {
+  return parse_quantities(text, units_for(kind), default_unit);
+}
+
+std::vector<double> parse_quantities(const std::string& text, const std::vector<UnitToken>& units,
                                      const std::string& default_unit) {
   std::istringstream in(text);
   std::vector<std::string> tokens;
@@ -84,7 +88,7 @@ std::vector<double> parse_quantities(const std::string& text, QuantityKind kind,
     unit = tokens.back();
     tokens.pop_back();
   }
-  const double factor = unit_factor(unit, kind);
+  const double factor = factor_of(unit, units);
   std::vector<double> values;
   for (const auto& t : tokens) {
     if (!parse_number(t, v)) throw ConfigError("'" + t + "' is not a finite number");
@@ -189,9 +193,15 @@ bool IniFile::get_bool(const std::string& key, bool fallback) const {
 
 std::vector<double> IniFile::get_quantities(const std::string& key, QuantityKind kind,
                                             const std::string& default_unit, int count) const {
+  return get_quantities(key, units_for(kind), default_unit, count);
+}
+
+std::vector<double> IniFile::get_quantities(const std::string& key,
+                                            const std::vector<UnitToken>& units,
+                                            const std::string& default_unit, int count) const {
   std::vector<double> v;
   try {
-    v = parse_quantities(get_string(key), kind, default_unit);
+    v = parse_quantities(get_string(key), units, default_unit);
   } catch (const ConfigError& e) {
     if (!has(key)) throw;
     throw ConfigError(where(key) + e.what());

@@ -38,6 +38,18 @@ enum class QuantityKind {
   Velocity,             // m/s; m/s, mm/s
 };
 
+/// An engineering unit: value_si = value_in_unit * si_per_unit.
+struct UnitToken {
+  std::string token;
+  double si_per_unit;
+};
+
+/// Parses "v1 v2 ... [unit]" into SI values with the units of `units`; `default_unit` (one of
+/// them) is used when no unit is written. Throws ConfigError (without location) on a bad number
+/// or a unit not in the list.
+std::vector<double> parse_quantities(const std::string& text, const std::vector<UnitToken>& units,
+                                     const std::string& default_unit);
+
 /// Parses "v1 v2 ... [unit]" into SI values. `default_unit` is used when no unit is written.
 /// Throws ConfigError (without location; callers add it) on a bad number or unit.
 std::vector<double> parse_quantities(const std::string& text, QuantityKind kind,
@@ -66,6 +78,9 @@ class IniFile {
                                      const std::string& default_unit, int count = -1) const;
   double get_quantity(const std::string& key, QuantityKind kind,
                       const std::string& default_unit) const;
+  /// The same with an explicit list of accepted units.
+  std::vector<double> get_quantities(const std::string& key, const std::vector<UnitToken>& units,
+                                     const std::string& default_unit, int count = -1) const;
   double get_quantity(const std::string& key, QuantityKind kind, const std::string& default_unit,
                       double fallback_si) const;
   /// Section names in file order that start with `prefix` (e.g. "orientation." gives

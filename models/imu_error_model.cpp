@@ -5,6 +5,7 @@
 #include <Eigen/QR>
 #include <stdexcept>
 
+#include "models/coefficient_families.hpp"
 #include "models/units.hpp"
 
 namespace sinscal {
@@ -21,10 +22,11 @@ Eigen::Vector3d TriadErrors::apply(const Eigen::Vector3d& x, const Eigen::Vector
 }
 
 Eigen::Vector3d TriadErrors::invert_step(const Eigen::Vector3d& y, const Eigen::Vector3d& extra,
-                                         const Eigen::Vector3d& x_guess) const {
+                                         const Eigen::Vector3d& x_guess,
+                                         const Eigen::Matrix3d& linear_inverse) const {
   const Eigen::Vector3d rhs = y - bias - extra - scale_asym.cwiseProduct(x_guess.cwiseAbs()) -
                               k2.cwiseProduct(x_guess.cwiseAbs2());
-  return linear().partialPivLu().solve(rhs);
+  return linear_inverse * rhs;
 }
 
 Eigen::Vector3d ImuErrorModel::size_effect(const Eigen::Vector3d& omega_ib_b,
@@ -32,7 +34,8 @@ Eigen::Vector3d ImuErrorModel::size_effect(const Eigen::Vector3d& omega_ib_b,
   Eigen::Vector3d out;
   for (int i = 0; i < 3; ++i) {
     const Eigen::Vector3d r = accel_lever_arm_b.col(i);
-    out(i) = (omega_dot_ib_b.cross(r) + omega_ib_b.cross(omega_ib_b.cross(r)))(i);
+    out(i) =
+        r.isZero(0.0) ? 0.0 : (omega_dot_ib_b.cross(r) + omega_ib_b.cross(omega_ib_b.cross(r)))(i);
   }
   return out;
 }
@@ -47,11 +50,15 @@ Eigen::Vector3d ImuErrorModel::accel_output(const KinematicSample& s) const {
 
 void ImuErrorModel::compensate(const Eigen::Vector3d& y_gyro, const Eigen::Vector3d& y_accel,
                                const Eigen::Vector3d& omega_dot_ib_b, Eigen::Vector3d& omega_ib_b,
-                               Eigen::Vector3d& f_ib_b) const {
+                               Eigen::Vector3d& f_ib_b, double /*t*/) const {
   Eigen::Vector3d w = y_gyro, f = y_accel;
+  const Eigen::Matrix3d gyro_inverse = gyro.linear().inverse();
+  const Eigen::Matrix3d accel_inverse = accel.linear().inverse();
   for (int iter = 0; iter < 60; ++iter) {
-    const Eigen::Vector3d f_new = accel.invert_step(y_accel, size_effect(w, omega_dot_ib_b), f);
-    const Eigen::Vector3d w_new = gyro.invert_step(y_gyro, gyro_g_sensitivity * f_new, w);
+    const Eigen::Vector3d f_new =
+        accel.invert_step(y_accel, size_effect(w, omega_dot_ib_b), f, accel_inverse);
+    const Eigen::Vector3d w_new =
+        gyro.invert_step(y_gyro, gyro_g_sensitivity * f_new, w, gyro_inverse);
     const double change = std::max((f_new - f).norm() / (1.0 + f_new.norm()),
                                    (w_new - w).norm() / (1.0 + w_new.norm()));
     w = w_new;
@@ -63,60 +70,13 @@ void ImuErrorModel::compensate(const Eigen::Vector3d& y_gyro, const Eigen::Vecto
     }
   }
   // Rounding may keep the last digit oscillating; accept a tiny final change.
-  const Eigen::Vector3d f_chk = accel.invert_step(y_accel, size_effect(w, omega_dot_ib_b), f);
+  const Eigen::Vector3d f_chk =
+      accel.invert_step(y_accel, size_effect(w, omega_dot_ib_b), f, accel_inverse);
   if ((f_chk - f).norm() > 1e-13 * (1.0 + f.norm()))
     throw std::runtime_error("IMU error model inverse does not converge: coefficients too large");
   omega_ib_b = w;
   f_ib_b = f;
 }
-
-namespace {
-const char* kAxis[3] = {"x", "y", "z"};
-
-template <class Visit>
-void visit_coefficients(ImuErrorModel& m, Visit&& visit) {
-  using namespace units;
-  struct Triad {
-    const char* name;
-    TriadErrors* e;
-    const char* bias_unit;
-    double bias_si;
-  };
-  const Triad triads[2] = {{"gyro", &m.gyro, "deg/h", deg_per_h}, {"accel", &m.accel, "ug", ug}};
-  for (const auto& t : triads) {
-    const std::string p = t.name;
-    for (int i = 0; i < 3; ++i)
-      visit(CoefficientInfo{p + ".bias." + kAxis[i], t.bias_unit, t.bias_si, "base"}, t.e->bias(i));
-    for (int i = 0; i < 3; ++i)
-      visit(CoefficientInfo{p + ".scale." + kAxis[i], "ppm", ppm, "base"}, t.e->scale(i));
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        if (i != j)
-          visit(
-              CoefficientInfo{p + ".misalignment." + kAxis[i] + kAxis[j], "arcsec", arcsec, "base"},
-              t.e->misalignment(i, j));
-  }
-  for (int i = 0; i < 3; ++i)
-    visit(CoefficientInfo{std::string("accel.k2.") + kAxis[i], "ug/g^2", ug_per_g2, "k2"},
-          m.accel.k2(i));
-  for (const auto& t : triads)
-    for (int i = 0; i < 3; ++i)
-      visit(CoefficientInfo{std::string(t.name) + ".scale_asym." + kAxis[i], "ppm", ppm,
-                            "scale_asym"},
-            t.e->scale_asym(i));
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      visit(CoefficientInfo{std::string("gyro.g_sensitivity.") + kAxis[i] + kAxis[j], "deg/h/g",
-                            deg_per_h_per_g, "g_sensitivity"},
-            m.gyro_g_sensitivity(i, j));
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      visit(CoefficientInfo{std::string("accel.lever_arm.") + kAxis[i] + "." + kAxis[j], "mm", mm,
-                            "lever_arm"},
-            m.accel_lever_arm_b(j, i));
-  visit(CoefficientInfo{"time_delay", "ms", ms, "time_delay"}, m.time_delay);
-}
-}  // namespace
 
 namespace {
 // Where each coefficient lives in an ImuErrorModel (byte offset, catalog order) and which output
@@ -129,11 +89,14 @@ const std::vector<CoefficientSlot>& coefficient_slots() {
   static const std::vector<CoefficientSlot> slots = [] {
     ImuErrorModel m;
     std::vector<CoefficientSlot> out;
+    if (m.coefficient_refs().size() > static_cast<std::size_t>(kMaxCoefficients))
+      throw std::logic_error("the coefficient catalog outgrew kMaxCoefficients");
     const char* base = reinterpret_cast<const char*>(&m);
     for (const auto& [info, ptr] : m.coefficient_refs()) {
-      const auto output = info.name == "time_delay"          ? CoefficientSlot::Output::Delay
-                          : info.name.rfind("gyro.", 0) == 0 ? CoefficientSlot::Output::Gyro
-                                                             : CoefficientSlot::Output::Accel;
+      const FamilyOutput family_output = coefficient_family_info(info.family).output;
+      const auto output = family_output == FamilyOutput::Delay  ? CoefficientSlot::Output::Delay
+                          : family_output == FamilyOutput::Gyro ? CoefficientSlot::Output::Gyro
+                                                                : CoefficientSlot::Output::Accel;
       out.push_back({reinterpret_cast<const char*>(ptr) - base, output});
     }
     return out;
@@ -142,8 +105,8 @@ const std::vector<CoefficientSlot>& coefficient_slots() {
 }
 }  // namespace
 
-Eigen::Matrix<double, 6, Eigen::Dynamic> ImuErrorModel::jacobian(
-    const KinematicSample& s, const Eigen::Vector3d& f_dot) const {
+void ImuErrorModel::jacobian(const KinematicSample& s, const Eigen::Vector3d& f_dot,
+                             const std::vector<int>& columns, JacobianColumns& J) const {
   // Each coefficient's column: its unit perturbation applied through the same formula, taking
   // the difference to the model without it. Exact (linear) and written once: the formula lives
   // only in TriadErrors::apply, size_effect and the g-sensitivity product. A gyro coefficient
@@ -151,14 +114,14 @@ Eigen::Matrix<double, 6, Eigen::Dynamic> ImuErrorModel::jacobian(
   // finite-difference test of the Jacobian checks this too).
   ImuErrorModel zero;
   const auto& slots = coefficient_slots();
-  Eigen::Matrix<double, 6, Eigen::Dynamic> J =
-      Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, static_cast<Eigen::Index>(slots.size()));
+  J.setZero(6, static_cast<Eigen::Index>(columns.size()));
   const Eigen::Vector3d g0 = zero.gyro_output(s), a0 = zero.accel_output(s);
   char* base = reinterpret_cast<char*>(&zero);
-  for (std::size_t k = 0; k < slots.size(); ++k) {
+  for (std::size_t k = 0; k < columns.size(); ++k) {
     const auto col = static_cast<Eigen::Index>(k);
-    double* value = reinterpret_cast<double*>(base + slots[k].offset);
-    switch (slots[k].output) {
+    const CoefficientSlot& slot = slots.at(static_cast<std::size_t>(columns[k]));
+    double* value = reinterpret_cast<double*>(base + slot.offset);
+    switch (slot.output) {
       case CoefficientSlot::Output::Delay:
         J.col(col).tail<3>() = -f_dot;
         break;
@@ -174,13 +137,26 @@ Eigen::Matrix<double, 6, Eigen::Dynamic> ImuErrorModel::jacobian(
         break;
     }
   }
+}
+
+Eigen::Matrix<double, 6, Eigen::Dynamic> ImuErrorModel::jacobian(
+    const KinematicSample& s, const Eigen::Vector3d& f_dot) const {
+  static const std::vector<int> all = [] {
+    std::vector<int> c(coefficient_slots().size());
+    for (std::size_t k = 0; k < c.size(); ++k) c[k] = static_cast<int>(k);
+    return c;
+  }();
+  JacobianColumns J;
+  jacobian(s, f_dot, all, J);
   return J;
 }
 
 std::vector<std::pair<CoefficientInfo, double*>> ImuErrorModel::coefficient_refs() {
   std::vector<std::pair<CoefficientInfo, double*>> out;
-  visit_coefficients(*this,
-                     [&](const CoefficientInfo& info, double& v) { out.emplace_back(info, &v); });
+  for (const auto& f : coefficient_families())
+    for (int k = 0; k < f.size(); ++k)
+      out.emplace_back(CoefficientInfo{f.coefficient_name(k), f.unit(), f.si_per_unit(), f.name},
+                       &f.value(*this, k));
   return out;
 }
 

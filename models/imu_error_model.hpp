@@ -11,6 +11,9 @@
 //          accels: size effect, accelerometer i sees e_i . (dw/dt x r_i + w x (w x r_i)) with r_i
 //          the position of its proof mass relative to the IMU reference point (body axes)
 //
+// The coefficient families (names, components, units, switches) are the table of
+// models/coefficient_families.hpp; this file holds their physics.
+//
 // Coefficients are errors (not corrections). The gyro-to-accelerometer time delay tau shifts the
 // accelerometer input in time: the accelerometers output the model applied to the motion at t - tau
 // (tau > 0: accelerometer samples late). The simulator evaluates the motion at t - tau;
@@ -26,6 +29,9 @@
 
 namespace sinscal {
 
+/// Upper bound of the number of coefficients of the catalog (fixed-size storage per sample).
+constexpr int kMaxCoefficients = 96;
+
 /// Errors of one sensor triad (gyro or accelerometer), SI units of its input.
 struct TriadErrors {
   Eigen::Vector3d bias = Eigen::Vector3d::Zero();          // rad/s | m/s^2
@@ -38,9 +44,11 @@ struct TriadErrors {
   Eigen::Matrix3d linear() const;
   /// The model formula (truth to output).
   Eigen::Vector3d apply(const Eigen::Vector3d& x, const Eigen::Vector3d& extra) const;
-  /// One fixed-point step of the inverse: the input x that gives output y, from a guess of x.
+  /// One fixed-point step of the inverse: the input x that gives output y, from a guess of x;
+  /// `linear_inverse` is linear().inverse() (computed once per inversion).
   Eigen::Vector3d invert_step(const Eigen::Vector3d& y, const Eigen::Vector3d& extra,
-                              const Eigen::Vector3d& x_guess) const;
+                              const Eigen::Vector3d& x_guess,
+                              const Eigen::Matrix3d& linear_inverse) const;
 };
 
 /// True kinematics at the IMU reference point at one instant, body axes.
@@ -48,14 +56,15 @@ struct KinematicSample {
   Eigen::Vector3d omega_ib_b = Eigen::Vector3d::Zero();      // rad/s
   Eigen::Vector3d omega_dot_ib_b = Eigen::Vector3d::Zero();  // rad/s^2
   Eigen::Vector3d f_ib_b = Eigen::Vector3d::Zero();          // m/s^2
+  double t = 0.0;  // s, time of the output since the start of the plan (time-dependent terms)
 };
 
-/// Name, unit and group of one coefficient; value_si = value_in_unit * si_per_unit.
+/// Name, unit and family of one coefficient; value_si = value_in_unit * si_per_unit.
 struct CoefficientInfo {
   std::string name;  // e.g. "gyro.bias.x"
   std::string unit;  // e.g. "deg/h"
   double si_per_unit;
-  std::string group;  // base | scale_asym | k2 | g_sensitivity | lever_arm | time_delay
+  std::string family;  // its entry in models/coefficient_families.hpp, e.g. "gyro.bias"
 };
 
 class ImuErrorModel {
@@ -76,9 +85,10 @@ class ImuErrorModel {
   /// Inverse of the model for time-aligned outputs: solves for omega_ib_b and f_ib_b.
   /// Converges to rounding for any coefficients of realistic size (each step gains the size of
   /// the errors, ~1e-3 or less). Throws std::runtime_error if it does not converge.
+  /// `t` is the time of the outputs since the start of the plan (time-dependent terms).
   void compensate(const Eigen::Vector3d& y_gyro, const Eigen::Vector3d& y_accel,
                   const Eigen::Vector3d& omega_dot_ib_b, Eigen::Vector3d& omega_ib_b,
-                  Eigen::Vector3d& f_ib_b) const;
+                  Eigen::Vector3d& f_ib_b, double t = 0.0) const;
 
   /// Sensitivity of the sensor errors (y - x) to every coefficient, in the order of
   /// coefficient_refs(): rows 0-2 gyro outputs (rad/s), rows 3-5 accelerometer outputs (m/s^2),
@@ -87,6 +97,12 @@ class ImuErrorModel {
   /// `f_dot_ib_b` (m/s^3): a delay tau shifts the accelerometer input by -tau f_dot.
   Eigen::Matrix<double, 6, Eigen::Dynamic> jacobian(const KinematicSample& s,
                                                     const Eigen::Vector3d& f_dot_ib_b) const;
+  /// The columns of jacobian() for the catalog indices `columns` only, in that order (the
+  /// estimators' coefficient states), into fixed storage: no allocation per sample.
+  using JacobianColumns =
+      Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, kMaxCoefficients>;
+  void jacobian(const KinematicSample& s, const Eigen::Vector3d& f_dot_ib_b,
+                const std::vector<int>& columns, JacobianColumns& J) const;
 
   /// Every coefficient with its name, unit and a pointer to its SI value, in the contract order.
   std::vector<std::pair<CoefficientInfo, double*>> coefficient_refs();
@@ -109,7 +125,7 @@ class ImuErrorModel {
 /// the old body frame: x_b = C_a_b x_a.
 ImuErrorModel in_accel_triad_frame(const ImuErrorModel& model, Eigen::Matrix3d* C_a_b = nullptr);
 
-/// Names, units and groups of all coefficients in contract order.
+/// Names, units and families of all coefficients in contract order (the family table's order).
 const std::vector<CoefficientInfo>& coefficient_catalog();
 /// The catalog entry of one coefficient; throws std::invalid_argument for an unknown name.
 const CoefficientInfo& coefficient_info(const std::string& name);

@@ -4,17 +4,11 @@
 #include <random>
 #include <vector>
 
+#include "models/coefficient_families.hpp"
 #include "models/config.hpp"
 #include "models/units.hpp"
 
 namespace sinscal {
-
-std::string coefficient_family(const std::string& name) {
-  if (name == "time_delay") return name;
-  const auto first = name.find('.');
-  const auto second = name.find('.', first + 1);
-  return name.substr(0, second);
-}
 
 bool SensorProfile::has(const std::string& family) const {
   const auto it = ranges.find(family);
@@ -27,30 +21,12 @@ SensorProfile SensorProfile::load(const std::string& path) {
   p.path = path;
   p.name = ini.get_string("sensor.name", path);
   ini.check_keys("sensor", {"name", "description"});
-  struct Family {
-    const char* section;
-    const char* key;
-    QuantityKind kind;
-    const char* unit;
-  };
-  const std::vector<Family> families = {
-      {"gyro", "bias", QuantityKind::AngularRate, "deg/h"},
-      {"gyro", "scale", QuantityKind::Ratio, "ppm"},
-      {"gyro", "misalignment", QuantityKind::Angle, "arcsec"},
-      {"gyro", "scale_asym", QuantityKind::Ratio, "ppm"},
-      {"gyro", "g_sensitivity", QuantityKind::GSensitivity, "deg/h/g"},
-      {"accel", "bias", QuantityKind::Acceleration, "ug"},
-      {"accel", "scale", QuantityKind::Ratio, "ppm"},
-      {"accel", "misalignment", QuantityKind::Angle, "arcsec"},
-      {"accel", "scale_asym", QuantityKind::Ratio, "ppm"},
-      {"accel", "k2", QuantityKind::QuadraticScale, "ug/g^2"},
-      {"accel", "lever_arm", QuantityKind::Length, "mm"},
-      {"timing", "time_delay", QuantityKind::Time, "ms"},
-  };
-  for (const auto& f : families) {
-    const std::string key = std::string(f.section) + "." + f.key;
+  // Every family of the table: its range under its profile key, its sigma target under
+  // [targets] family.
+  for (const auto& f : coefficient_families()) {
+    const std::string& key = f.profile_key;
     if (!ini.has(key)) continue;
-    const auto v = ini.get_quantities(key, f.kind, f.unit);
+    const auto v = ini.get_quantities(key, f.units, f.unit());
     if (v.size() > 2) throw ConfigError(ini.where(key) + "expected one value or a range 'lo hi'");
     CoefficientRange r;
     r.fixed = v.size() == 1;
@@ -58,17 +34,14 @@ SensorProfile SensorProfile::load(const std::string& path) {
     r.hi = v.back();
     if (!r.fixed && (r.lo < 0.0 || r.hi < r.lo))
       throw ConfigError(ini.where(key) + "a range needs 0 <= lo <= hi");
-    p.ranges[f.section == std::string("timing") ? std::string(f.key) : key] = r;
+    p.ranges[f.name] = r;
   }
-  for (const auto& f : families) {
-    const std::string family = f.section == std::string("timing")
-                                   ? std::string(f.key)
-                                   : std::string(f.section) + "." + f.key;
-    const std::string key = "targets." + family;
+  for (const auto& f : coefficient_families()) {
+    const std::string key = "targets." + f.name;
     if (!ini.has(key)) continue;
-    const double v = ini.get_quantity(key, f.kind, f.unit);
+    const double v = ini.get_quantities(key, f.units, f.unit(), 1).front();
     if (!(v > 0.0)) throw ConfigError(ini.where(key) + "a sigma target must be positive");
-    p.sigma_targets[family] = v;
+    p.sigma_targets[f.name] = v;
   }
   using Q = QuantityKind;
   auto& g = p.noise.gyro;
@@ -89,30 +62,35 @@ SensorProfile SensorProfile::load(const std::string& path) {
   for (const auto* tn : {&g, &a})
     if (tn->correlation_time <= 0.0)
       throw ConfigError(path + ": correlation_time must be positive");
-  ini.check_keys("gyro",
-                 {"bias", "scale", "misalignment", "scale_asym", "g_sensitivity", "arw",
-                  "bias_instability", "correlation_time", "rate_random_walk", "quantum", "range"});
-  ini.check_keys("accel",
-                 {"bias", "scale", "misalignment", "scale_asym", "k2", "lever_arm", "vrw",
-                  "bias_instability", "correlation_time", "random_walk", "quantum", "range"});
-  ini.check_keys("timing", {"time_delay"});
+  // Known keys: the noise and range keys above, and every family's profile key.
+  std::map<std::string, std::vector<std::string>> allowed = {
+      {"sensor", {"name", "description"}},
+      {"gyro",
+       {"arw", "bias_instability", "correlation_time", "rate_random_walk", "quantum", "range"}},
+      {"accel", {"vrw", "bias_instability", "correlation_time", "random_walk", "quantum", "range"}},
+      {"timing", {}}};
+  for (const auto& f : coefficient_families()) {
+    const auto dot = f.profile_key.find('.');
+    allowed[f.profile_key.substr(0, dot)].push_back(f.profile_key.substr(dot + 1));
+  }
+  std::string sections;
+  for (const auto& [section, keys] : allowed) {
+    ini.check_keys(section, keys);
+    sections += section + ", ";
+  }
   for (const auto& key : ini.keys()) {
     const auto section = key.substr(0, key.find('.'));
     if (section == "targets") {
       const std::string family = key.substr(8);
-      if (std::none_of(families.begin(), families.end(), [&](const Family& f) {
-            return family == (f.section == std::string("timing")
-                                  ? std::string(f.key)
-                                  : std::string(f.section) + "." + f.key);
-          }))
-        throw ConfigError(ini.where(key) +
-                          "unknown coefficient family in [targets] (e.g. gyro.bias, accel.k2, "
-                          "time_delay)");
+      try {
+        coefficient_family_info(family);
+      } catch (const std::invalid_argument& e) {
+        throw ConfigError(ini.where(key) + "in [targets]: " + e.what());
+      }
       continue;
     }
-    if (section != "sensor" && section != "gyro" && section != "accel" && section != "timing")
-      throw ConfigError(ini.where(key) +
-                        "unknown section (known: sensor, gyro, accel, timing, targets)");
+    if (!allowed.count(section))
+      throw ConfigError(ini.where(key) + "unknown section (known: " + sections + "targets)");
   }
   return p;
 }

@@ -6,6 +6,7 @@
 #include <map>
 #include <string>
 
+#include "models/coefficient_families.hpp"
 #include "models/imu_error_model.hpp"
 #include "models/noise_model.hpp"
 
@@ -39,8 +40,5 @@ struct SensorProfile {
   /// True if the family (e.g. "accel.k2") is present in the profile.
   bool has(const std::string& family) const;
 };
-
-/// The family of a coefficient name: "accel.lever_arm.x.y" -> "accel.lever_arm".
-std::string coefficient_family(const std::string& name);
 
 }  // namespace sinscal

@@ -35,7 +35,8 @@ Eigen::Vector3d ImuSimulator::integrate(double a, double b, double shift, bool g
   // The integrand is the model output for the motion at time t - shift; its kinks are at the
   // motion's knots plus shift.
   auto output = [&](double t) {
-    const KinematicState k = motion_.at(t - shift);
+    KinematicState k = motion_.at(t - shift);
+    k.imu.t = t;  // the sensor's own time (time-dependent error terms)
     return gyro ? errors_.gyro_output(k.imu) : errors_.accel_output(k.imu);
   };
   if (motion_.static_between(a - shift, b - shift)) return output(0.5 * (a + b)) * (b - a);

@@ -1,0 +1,170 @@
+#include "models/coefficient_families.hpp"
+
+#include <stdexcept>
+#include <utility>
+
+#include "models/imu_error_model.hpp"
+#include "models/units.hpp"
+
+namespace sinscal {
+
+namespace {
+
+const std::vector<std::string> kAxes = {"x", "y", "z"};
+const std::vector<std::string> kOffDiagonal = {"xy", "xz", "yx", "yz", "zx", "zy"};
+const std::vector<std::string> kMatrix = {"xx", "xy", "xz", "yx", "yy", "yz", "zx", "zy", "zz"};
+const std::vector<std::string> kArms = {"x.x", "x.y", "x.z", "y.x", "y.y",
+                                        "y.z", "z.x", "z.y", "z.z"};
+
+// Row and column of the k-th off-diagonal entry in the order xy xz yx yz zx zy.
+int off_row(int k) { return k / 2; }
+int off_col(int k) {
+  const int i = k / 2, j = k % 2;
+  return j < i ? j : j + 1;
+}
+
+std::vector<CoefficientFamily> make_families() {
+  using namespace units;
+  using F = CoefficientFamily;
+  using O = FamilyOutput;
+  const std::vector<UnitToken> rate = {{"deg/h", deg_per_h}, {"deg/s", deg_per_s}, {"rad/s", 1.0}};
+  const std::vector<UnitToken> accel = {{"ug", ug}, {"mg", mg}, {"g", g0}, {"m/s^2", 1.0}};
+  const std::vector<UnitToken> ratio = {{"ppm", ppm}, {"1", 1.0}};
+  const std::vector<UnitToken> angle = {
+      {"arcsec", arcsec}, {"arcmin", arcmin}, {"deg", deg}, {"mrad", mrad}, {"rad", 1.0}};
+  std::vector<F> t;
+  // Base: bias, scale factor and misalignment of each triad.
+  t.push_back(F{"gyro.bias", "gyro.bias", kAxes, rate, O::Gyro, true, "", 1.0 * deg_per_h, true,
+                "gyro bias", [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias(k); }});
+  t.push_back(F{"gyro.scale", "gyro.scale", kAxes, ratio, O::Gyro, true, "", 300 * ppm, false,
+                "gyro scale-factor error",
+                [](ImuErrorModel& m, int k) -> double& { return m.gyro.scale(k); }});
+  t.push_back(F{"gyro.misalignment", "gyro.misalignment", kOffDiagonal, angle, O::Gyro, true, "",
+                300 * arcsec, false, "gyro misalignment (axis i towards body axis j)",
+                [](ImuErrorModel& m, int k) -> double& {
+                  return m.gyro.misalignment(off_row(k), off_col(k));
+                }});
+  t.push_back(F{"accel.bias", "accel.bias", kAxes, accel, O::Accel, true, "", 1000 * ug, true,
+                "accelerometer bias",
+                [](ImuErrorModel& m, int k) -> double& { return m.accel.bias(k); }});
+  t.push_back(F{"accel.scale", "accel.scale", kAxes, ratio, O::Accel, true, "", 300 * ppm, false,
+                "accelerometer scale-factor error",
+                [](ImuErrorModel& m, int k) -> double& { return m.accel.scale(k); }});
+  t.push_back(F{"accel.misalignment", "accel.misalignment", kOffDiagonal, angle, O::Accel, true, "",
+                300 * arcsec, false, "accelerometer misalignment (axis i towards body axis j)",
+                [](ImuErrorModel& m, int k) -> double& {
+                  return m.accel.misalignment(off_row(k), off_col(k));
+                }});
+  // Extended terms.
+  t.push_back(F{"accel.k2",
+                "accel.k2",
+                kAxes,
+                {{"ug/g^2", ug_per_g2}, {"1/(m/s^2)", 1.0}},
+                O::Accel,
+                false,
+                "k2",
+                100 * ug_per_g2,
+                false,
+                "accelerometer quadratic scale factor",
+                [](ImuErrorModel& m, int k) -> double& { return m.accel.k2(k); }});
+  t.push_back(F{"gyro.scale_asym", "gyro.scale_asym", kAxes, ratio, O::Gyro, false, "scale_asym",
+                300 * ppm, false, "gyro scale-factor asymmetry",
+                [](ImuErrorModel& m, int k) -> double& { return m.gyro.scale_asym(k); }});
+  t.push_back(F{"accel.scale_asym", "accel.scale_asym", kAxes, ratio, O::Accel, false, "scale_asym",
+                300 * ppm, false, "accelerometer scale-factor asymmetry",
+                [](ImuErrorModel& m, int k) -> double& { return m.accel.scale_asym(k); }});
+  t.push_back(
+      F{"gyro.g_sensitivity",
+        "gyro.g_sensitivity",
+        kMatrix,
+        {{"deg/h/g", deg_per_h_per_g}, {"deg/s/g", deg_per_s / g0}, {"rad/s/(m/s^2)", 1.0}},
+        O::Gyro,
+        false,
+        "g_sensitivity",
+        0.1 * deg_per_h_per_g,
+        false,
+        "gyro g-sensitivity (gyro axis i, specific force along j)",
+        [](ImuErrorModel& m, int k) -> double& { return m.gyro_g_sensitivity(k / 3, k % 3); }});
+  t.push_back(
+      F{"accel.lever_arm",
+        "accel.lever_arm",
+        kArms,
+        {{"mm", mm}, {"cm", cm}, {"m", 1.0}},
+        O::Accel,
+        false,
+        "lever_arm",
+        0.1,
+        false,
+        "inner lever arm (accelerometer i's proof mass, component j)",
+        [](ImuErrorModel& m, int k) -> double& { return m.accel_lever_arm_b(k % 3, k / 3); }});
+  t.push_back(F{"time_delay",
+                "timing.time_delay",
+                {},
+                {{"ms", ms}, {"us", us}, {"s", 1.0}, {"min", 60.0}, {"h", hour}},
+                O::Delay,
+                false,
+                "time_delay",
+                0.01,
+                false,
+                "gyro-to-accelerometer time delay (accelerometer late is positive)",
+                [](ImuErrorModel& m, int) -> double& { return m.time_delay; }});
+  return t;
+}
+
+}  // namespace
+
+std::string CoefficientFamily::coefficient_name(int k) const {
+  return components.empty() ? name : name + "." + components[static_cast<std::size_t>(k)];
+}
+
+const std::vector<CoefficientFamily>& coefficient_families() {
+  static const std::vector<CoefficientFamily> table = make_families();
+  return table;
+}
+
+const CoefficientFamily& coefficient_family_info(const std::string& family) {
+  std::string known;
+  for (const auto& f : coefficient_families()) {
+    if (f.name == family) return f;
+    known += (known.empty() ? "" : ", ") + f.name;
+  }
+  throw std::invalid_argument("unknown coefficient family '" + family + "' (known: " + known + ")");
+}
+
+std::string coefficient_family(const std::string& coefficient) {
+  for (const auto& f : coefficient_families()) {
+    if (coefficient == f.name && f.components.empty()) return f.name;
+    if (coefficient.size() > f.name.size() + 1 &&
+        coefficient.compare(0, f.name.size(), f.name) == 0 && coefficient[f.name.size()] == '.')
+      return f.name;
+  }
+  throw std::invalid_argument("unknown coefficient '" + coefficient + "'");
+}
+
+std::vector<std::pair<std::string, std::vector<std::string>>> extended_terms() {
+  std::vector<std::pair<std::string, std::vector<std::string>>> out;
+  for (const auto& f : coefficient_families()) {
+    if (f.base) continue;
+    auto it = out.begin();
+    while (it != out.end() && it->first != f.term) ++it;
+    if (it == out.end()) {
+      out.emplace_back(f.term, std::vector<std::string>{});
+      it = out.end() - 1;
+    }
+    it->second.push_back(f.name);
+  }
+  return out;
+}
+
+std::string extended_terms_help() {
+  std::string out;
+  for (const auto& [term, families] : extended_terms()) {
+    out += (out.empty() ? "" : "; ") + term + " (";
+    for (std::size_t i = 0; i < families.size(); ++i)
+      out += (i ? ", " : "") + coefficient_family_info(families[i]).help;
+    out += ")";
+  }
+  return out;
+}
+
+}  // namespace sinscal
