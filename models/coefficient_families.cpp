@@ -108,6 +108,28 @@ std::vector<CoefficientFamily> make_families() {
                 false,
                 "gyro-to-accelerometer time delay (accelerometer late is positive)",
                 [](ImuErrorModel& m, int) -> double& { return m.time_delay; }});
+  t.push_back(F{"gyro.bias_drift",
+                "gyro.bias_drift",
+                kAxes,
+                {{"deg/h/h", deg_per_h / hour}, {"deg/s/h", deg_per_s / hour}, {"rad/s^2", 1.0}},
+                O::Gyro,
+                false,
+                "bias_drift",
+                1.0 * deg_per_h / hour,
+                false,
+                "gyro bias drift (linear in the time since the start of the plan)",
+                [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias_drift(k); }});
+  t.push_back(F{"accel.bias_drift",
+                "accel.bias_drift",
+                kAxes,
+                {{"ug/h", ug / hour}, {"mg/h", mg / hour}, {"m/s^3", 1.0}},
+                O::Accel,
+                false,
+                "bias_drift",
+                1000 * ug / hour,
+                false,
+                "accelerometer bias drift (linear in the time since the start of the plan)",
+                [](ImuErrorModel& m, int k) -> double& { return m.accel.bias_drift(k); }});
   return t;
 }
 

@@ -41,24 +41,25 @@ Eigen::Vector3d ImuErrorModel::size_effect(const Eigen::Vector3d& omega_ib_b,
 }
 
 Eigen::Vector3d ImuErrorModel::gyro_output(const KinematicSample& s) const {
-  return gyro.apply(s.omega_ib_b, gyro_g_sensitivity * s.f_ib_b);
+  return gyro.apply(s.omega_ib_b, gyro_g_sensitivity * s.f_ib_b + gyro.bias_drift * s.t);
 }
 
 Eigen::Vector3d ImuErrorModel::accel_output(const KinematicSample& s) const {
-  return accel.apply(s.f_ib_b, size_effect(s.omega_ib_b, s.omega_dot_ib_b));
+  return accel.apply(s.f_ib_b,
+                     size_effect(s.omega_ib_b, s.omega_dot_ib_b) + accel.bias_drift * s.t);
 }
 
 void ImuErrorModel::compensate(const Eigen::Vector3d& y_gyro, const Eigen::Vector3d& y_accel,
                                const Eigen::Vector3d& omega_dot_ib_b, Eigen::Vector3d& omega_ib_b,
-                               Eigen::Vector3d& f_ib_b, double /*t*/) const {
+                               Eigen::Vector3d& f_ib_b, double t) const {
   Eigen::Vector3d w = y_gyro, f = y_accel;
   const Eigen::Matrix3d gyro_inverse = gyro.linear().inverse();
   const Eigen::Matrix3d accel_inverse = accel.linear().inverse();
   for (int iter = 0; iter < 60; ++iter) {
-    const Eigen::Vector3d f_new =
-        accel.invert_step(y_accel, size_effect(w, omega_dot_ib_b), f, accel_inverse);
+    const Eigen::Vector3d f_new = accel.invert_step(
+        y_accel, size_effect(w, omega_dot_ib_b) + accel.bias_drift * t, f, accel_inverse);
     const Eigen::Vector3d w_new =
-        gyro.invert_step(y_gyro, gyro_g_sensitivity * f_new, w, gyro_inverse);
+        gyro.invert_step(y_gyro, gyro_g_sensitivity * f_new + gyro.bias_drift * t, w, gyro_inverse);
     const double change = std::max((f_new - f).norm() / (1.0 + f_new.norm()),
                                    (w_new - w).norm() / (1.0 + w_new.norm()));
     w = w_new;
@@ -70,8 +71,8 @@ void ImuErrorModel::compensate(const Eigen::Vector3d& y_gyro, const Eigen::Vecto
     }
   }
   // Rounding may keep the last digit oscillating; accept a tiny final change.
-  const Eigen::Vector3d f_chk =
-      accel.invert_step(y_accel, size_effect(w, omega_dot_ib_b), f, accel_inverse);
+  const Eigen::Vector3d f_chk = accel.invert_step(
+      y_accel, size_effect(w, omega_dot_ib_b) + accel.bias_drift * t, f, accel_inverse);
   if ((f_chk - f).norm() > 1e-13 * (1.0 + f.norm()))
     throw std::runtime_error("IMU error model inverse does not converge: coefficients too large");
   omega_ib_b = w;

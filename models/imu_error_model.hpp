@@ -4,9 +4,10 @@
 //
 //   x      true input along body axes: omega_ib_b (rad/s) for gyros, f_ib_b (m/s^2) for accels
 //   y      sensor output, same units
-//   b      bias;  k  scale-factor error;  M  misalignment (off-diagonal; M(i,j) = angle of sensor
-//          axis i towards body axis j);  a  scale-factor asymmetry (half the difference between the
-//          scale factors for positive and negative input);  k2  quadratic scale factor
+//   b      bias, drifting linearly: b + d t (d the bias drift, t the time since the start of
+//          the plan);  k  scale-factor error;  M  misalignment (off-diagonal; M(i,j) = angle of
+//          sensor axis i towards body axis j);  a  scale-factor asymmetry (half the difference
+//          between the scale factors for positive and negative input);  k2  quadratic scale factor
 //   extra  gyros: g-sensitivity G * f_ib_b (G(i,j): gyro axis i, acceleration axis j)
 //          accels: size effect, accelerometer i sees e_i . (dw/dt x r_i + w x (w x r_i)) with r_i
 //          the position of its proof mass relative to the IMU reference point (body axes)
@@ -39,6 +40,7 @@ struct TriadErrors {
   Eigen::Matrix3d misalignment = Eigen::Matrix3d::Zero();  // rad, diagonal unused (zero)
   Eigen::Vector3d scale_asym = Eigen::Vector3d::Zero();    // dimensionless
   Eigen::Vector3d k2 = Eigen::Vector3d::Zero();            // 1/(input unit)
+  Eigen::Vector3d bias_drift = Eigen::Vector3d::Zero();    // (rad/s | m/s^2) per s
 
   /// I + diag(k) + M.
   Eigen::Matrix3d linear() const;

@@ -22,6 +22,8 @@ ImuErrorModel random_extended_model(std::uint64_t seed) {
     m.gyro.scale_asym(i) = 20 * units::ppm * u(rng);
     m.accel.scale_asym(i) = 20 * units::ppm * u(rng);
     for (int j = 0; j < 3; ++j) m.gyro_g_sensitivity(i, j) = 0.05 * units::deg_per_h_per_g * u(rng);
+    m.gyro.bias_drift(i) = 0.1 * units::deg_per_h / units::hour * u(rng);
+    m.accel.bias_drift(i) = 50 * units::ug / units::hour * u(rng);
   }
   return m;
 }
@@ -40,9 +42,10 @@ TEST_CASE("Error model: apply then compensate returns the input to 1e-12 relativ
       s.omega_ib_b = Vector3d(n(rng), n(rng), n(rng)) * 0.5;
       s.omega_dot_ib_b = Vector3d(n(rng), n(rng), n(rng)) * 0.3;
       s.f_ib_b = Vector3d(n(rng), n(rng), n(rng)) * 9.8;
+      s.t = 3600.0 * std::abs(n(rng));  // time-dependent terms (bias drift)
       const Vector3d yg = m.gyro_output(s), ya = m.accel_output(s);
       Vector3d w, f;
-      m.compensate(yg, ya, s.omega_dot_ib_b, w, f);
+      m.compensate(yg, ya, s.omega_dot_ib_b, w, f, s.t);
       CHECK((w - s.omega_ib_b).norm() <= 1e-12 * s.omega_ib_b.norm());
       CHECK((f - s.f_ib_b).norm() <= 1e-12 * s.f_ib_b.norm());
       // And the errors are really there: output differs from input by far more than that.
@@ -86,16 +89,28 @@ TEST_CASE("Error model: sign conventions of each term", "[error_model]") {
   s.omega_ib_b = Vector3d(0, 0, 2.0);
   CHECK(l.accel_output(s).x() == Approx(-4.0 * 0.05));
   CHECK(l.accel_output(s).y() == 0.0);
+  // Bias drift: linear in the time since the start of the plan.
+  ImuErrorModel d;
+  d.set("gyro.bias_drift.y", 2.0);    // deg/h per hour
+  d.set("accel.bias_drift.z", 30.0);  // ug per hour
+  s.omega_ib_b.setZero();
+  s.f_ib_b.setZero();
+  s.t = 1800.0;
+  CHECK(d.gyro_output(s).y() == Approx(1.0 * units::deg_per_h));
+  CHECK(d.accel_output(s).z() == Approx(15.0 * units::ug));
+  s.t = 0.0;
+  CHECK(d.gyro_output(s).y() == 0.0);
 }
 
 TEST_CASE("Coefficient catalog: names, units and set/get", "[error_model]") {
   const auto& cat = coefficient_catalog();
-  CHECK(cat.size() == 24 + 3 + 6 + 9 + 9 + 1);
+  CHECK(cat.size() == 24 + 3 + 6 + 9 + 9 + 1 + 6);
   std::set<std::string> names;
   for (const auto& c : cat) names.insert(c.name);
   CHECK(names.size() == cat.size());
   for (const char* n : {"gyro.bias.x", "accel.misalignment.zy", "accel.k2.y", "gyro.scale_asym.z",
-                        "gyro.g_sensitivity.yx", "accel.lever_arm.z.x", "time_delay"})
+                        "gyro.g_sensitivity.yx", "accel.lever_arm.z.x", "time_delay",
+                        "gyro.bias_drift.x", "accel.bias_drift.z"})
     CHECK(names.count(n) == 1);
   ImuErrorModel m;
   m.set("time_delay", 5.0);
@@ -170,6 +185,7 @@ TEST_CASE("Error model Jacobian matches finite differences of the model",
     s.omega_ib_b = Vector3d(n(rng), n(rng), n(rng)) * 0.5;
     s.omega_dot_ib_b = Vector3d(n(rng), n(rng), n(rng)) * 0.3;
     s.f_ib_b = Vector3d(n(rng), n(rng), n(rng)) * 9.8;
+    s.t = 3600.0 * std::abs(n(rng));
     const Vector3d f_dot(n(rng), n(rng), n(rng));
     const auto J = m.jacobian(s, f_dot);
     REQUIRE(J.cols() == static_cast<Eigen::Index>(cat.size()));
