@@ -111,8 +111,8 @@ void Calibrator::finish() {
   held_.clear();
 }
 
-void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot,
-                         const Eigen::Vector3d& f_dot, const Eigen::Vector3d& f_ddot) {
+void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot_raw,
+                         const Eigen::Vector3d& f_dot_raw, const Eigen::Vector3d& f_ddot_raw) {
   current_ = s;
   if (!started_) {
     nav_.reset(NavState::at_rest(s.has_table && o_.use_table_angles
@@ -120,6 +120,7 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot,
                                      : dwells_.front().C_b_n_known,
                                  site_));
     started_ = true;
+    if (pending_error_.size() > 0) inject_error(pending_error_);
   }
   const double dt = s.dt;
   if (detector_) {
@@ -132,6 +133,11 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot,
       throw PlanDataMismatch(m.str());
     }
   }
+  // The rates of change are differences of the outputs: the inputs' are the model's linear part
+  // inverted (without it, the delay correction below would carry tau (A - I) f_dot).
+  const Eigen::Vector3d omega_dot = model_.gyro.input_rate(omega_dot_raw);
+  const Eigen::Vector3d f_dot = model_.accel.input_rate(f_dot_raw);
+  const Eigen::Vector3d f_ddot = model_.accel.input_rate(f_ddot_raw);
   // Compensate with the current estimate (mean rates over the interval, at its middle).
   KinematicSample k;
   k.omega_dot_ib_b = omega_dot;
@@ -140,12 +146,31 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot,
   // Accelerometers late by tau: f(t) = f_meas(t + tau), to second order.
   const double tau = model_.time_delay;
   k.f_ib_b += tau * f_dot + 0.5 * tau * tau * f_ddot;
+  const Eigen::Quaterniond q_before = nav_.state().q_b_n;
   nav_.step(k.omega_ib_b * dt, k.f_ib_b * dt, dt);
-  propagator_.step(nav_.state().C_b_n(), k, f_dot, model_, dt);
+  // The interval's mean rates act at its middle: the error dynamics take the attitude there (the
+  // end attitude would rotate the specific force by half the interval's turn, a spurious
+  // heading-velocity coupling of g omega dt / 2 while the table turns).
+  const Eigen::Quaterniond q_mid = q_before.slerp(0.5, nav_.state().q_b_n);
+  propagator_.step(q_mid.toRotationMatrix(), k, f_dot, model_, dt);
   if (propagator_.accumulated() >= o_.update_interval - 1e-9) {
     propagator_.propagate(P_);
     update(s.t - o_.time_offset);
   }
+}
+
+void Calibrator::inject_error(const Eigen::VectorXd& dx) {
+  if (dx.size() != layout_.size)
+    throw std::invalid_argument("inject_error: the error has " + std::to_string(dx.size()) +
+                                " states, the layout " + std::to_string(layout_.size));
+  if (!started_) {
+    pending_error_ = dx;
+    return;
+  }
+  NavState x = nav_.state();
+  sinscal::inject_error(layout_, site_terms_, dx, x, model_);
+  nav_.correct(x);
+  pending_error_.resize(0);
 }
 
 Eigen::Matrix3d Calibrator::dwell_attitude(const Dwell& dwell) {

@@ -158,6 +158,14 @@ class Calibrator {
   int table_attitude_updates() const { return table_updates_; }
   /// With static intervals from the data: the detector (its dwells found so far); else null.
   const StaticDetector* detector() const { return detector_ ? &*detector_ : nullptr; }
+  /// The navigator's state (the filter's reference trajectory).
+  const NavState& navigation() const { return nav_.state(); }
+  /// The error dynamics accumulated since the last covariance propagation.
+  const ErrorPropagator& propagator() const { return propagator_; }
+  /// Adds a known error `dx` (layout's states, the error-state convention of
+  /// filter/measurements.hpp) to the navigator and the coefficients: at once, or when the
+  /// navigation starts if it has not yet. For tests of the error dynamics and Monte Carlo runs.
+  void inject_error(const Eigen::VectorXd& dx);
 
  private:
   void process(const ImuSample& s, const Eigen::Vector3d& omega_dot, const Eigen::Vector3d& f_dot,
@@ -176,6 +184,7 @@ class Calibrator {
   Strapdown nav_;
   ErrorPropagator propagator_;
   bool started_ = false;
+  Eigen::VectorXd pending_error_;  // injected before the navigation started
   Eigen::MatrixXd P_;
   // The last two samples pushed (held back for the central differences).
   std::vector<ImuSample> held_;

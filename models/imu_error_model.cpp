@@ -16,6 +16,10 @@ Eigen::Matrix3d TriadErrors::linear() const {
   return A;
 }
 
+Eigen::Vector3d TriadErrors::input_rate(const Eigen::Vector3d& output_rate) const {
+  return linear().partialPivLu().solve(output_rate);
+}
+
 Eigen::Vector3d TriadErrors::apply(const Eigen::Vector3d& x, const Eigen::Vector3d& extra) const {
   return linear() * x + scale_asym.cwiseProduct(x.cwiseAbs()) + k2.cwiseProduct(x.cwiseAbs2()) +
          bias + extra;

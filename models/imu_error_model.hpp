@@ -44,6 +44,9 @@ struct TriadErrors {
 
   /// I + diag(k) + M.
   Eigen::Matrix3d linear() const;
+  /// The rate of change of the input from that of the output, to first order in the errors:
+  /// linear()^-1 y_dot (the rates of change of the nonlinear terms are of second order).
+  Eigen::Vector3d input_rate(const Eigen::Vector3d& output_rate) const;
   /// The model formula (truth to output).
   Eigen::Vector3d apply(const Eigen::Vector3d& x, const Eigen::Vector3d& extra) const;
   /// One fixed-point step of the inverse: the input x that gives output y, from a guess of x;
