@@ -125,6 +125,8 @@ class LogReader : public SampleSource {
   explicit LogReader(const LogFormat& format);
   /// Reads from a stream (standard input, a pipe); `format.file` names it in messages.
   LogReader(std::istream& in, const LogFormat& format);
+  LogReader(const LogReader&) = delete;  // holds pointers into itself
+  LogReader& operator=(const LogReader&) = delete;
   bool next(ImuSample& sample) override;
   /// Line of the last record read (split logs: of the accelerometer file; one file per dwell:
   /// of the current file).
