@@ -49,6 +49,16 @@ void check_nonzero(const IniFile& ini, const std::string& key, double v) {
   if (v == 0.0) throw ConfigError(ini.where(key) + "must not be zero");
 }
 
+// The SI factor of a unit key; a unit of the wrong kind is an error naming the line.
+double unit_of(const IniFile& ini, const std::string& key, const std::string& dflt,
+               QuantityKind kind) {
+  try {
+    return unit_factor(ini.get_string(key, dflt), kind);
+  } catch (const ConfigError& e) {
+    throw ConfigError(ini.where(key) + e.what());
+  }
+}
+
 TriadColumns read_triad(const IniFile& ini, const std::string& name, bool gyro,
                         bool fixed_increments = false) {
   TriadColumns c;
@@ -68,12 +78,7 @@ TriadColumns read_triad(const IniFile& ini, const std::string& name, bool gyro,
     q = c.increments ? QuantityKind::Velocity : QuantityKind::Acceleration;
     dflt = c.increments ? "m/s" : "m/s^2";
   }
-  const std::string unit = ini.get_string(p + "_unit", dflt);
-  try {
-    c.scale = unit_factor(unit, q);
-  } catch (const ConfigError& e) {
-    throw ConfigError(ini.where(p + "_unit") + e.what());
-  }
+  c.scale = unit_of(ini, p + "_unit", dflt, q);
   const double scale = ini.get_double(p + "_scale", 1.0);
   check_nonzero(ini, p + "_scale", scale);
   c.scale *= scale;
@@ -269,7 +274,7 @@ LogFormat LogFormat::from_ini(const IniFile& ini, const std::string& base_dir, d
     f.native = false;
     f.delimiter = read_delimiter(ini);
     f.header_lines = read_header_lines(ini);
-    f.time_scale = unit_factor(ini.get_string("log.time_unit", "s"), QuantityKind::Time);
+    f.time_scale = unit_of(ini, "log.time_unit", "s", QuantityKind::Time);
     if (split) {
       f.accel_file = join_path(base_dir, ini.get_string("log.accel_file"));
       f.gyro_file = join_path(base_dir, ini.get_string("log.gyro_file"));
@@ -299,8 +304,7 @@ LogFormat LogFormat::from_ini(const IniFile& ini, const std::string& base_dir, d
       if (outer != (std::count(f.columns.begin(), f.columns.end(), "inner") > 0))
         throw ConfigError(ini.where("log.columns") +
                           "give both table-angle columns, outer and inner");
-      if (outer)
-        f.table_scale = unit_factor(ini.get_string("log.table_unit", "deg"), QuantityKind::Angle);
+      if (outer) f.table_scale = unit_of(ini, "log.table_unit", "deg", QuantityKind::Angle);
     }
     f.gyro = read_triad(ini, "gyro", true);
     f.accel = read_triad(ini, "accel", false);

@@ -329,7 +329,12 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
         found.emplace_back(section_number(ini, s, "step."), st);
       }
       std::sort(found.begin(), found.end(), [](auto& a, auto& b) { return a.first < b.first; });
-      for (auto& f : found) p.steps.push_back(f.second);
+      for (std::size_t i = 0; i < found.size(); ++i) {
+        if (found[i].first != static_cast<int>(i) + 1)
+          throw ConfigError(ini.path() + ": steps must be numbered 1, 2, ... without gaps; " +
+                            "missing [step." + std::to_string(i + 1) + "]");
+        p.steps.push_back(found[i].second);
+      }
     }
     if (p.steps.empty()) throw ConfigError(ini.path() + ": a rotation plan needs rotations");
   } else {

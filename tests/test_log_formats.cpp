@@ -489,6 +489,8 @@ TEST_CASE("Log configuration: header_lines, axes, scales and max_gap out of rang
   CHECK_THAT(error_of("gyro_saturation = -5\n"), Catch::Contains("s.ini:5"));
   CHECK_THAT(error_of("max_gap = 0.5\n"), Catch::Contains("s.ini:5"));
   CHECK_THAT(error_of("columns2 = t\n"), Catch::Contains("unknown key"));
+  CHECK_THAT(error_of("time_unit = deg\n"), Catch::Contains("s.ini:5") && Catch::Contains("unit"));
+  CHECK_THAT(error_of("gyro_unit = m/s\n"), Catch::Contains("s.ini:5"));
   test::write_file(dir + "/c.ini", "[log]\nfile = f.txt\nformat = custom\ncolumns = t gx gy gz\n");
   CHECK_THAT(config_error(dir + "/c.ini", dir), Catch::Contains("column 'ax' missing"));
   test::write_file(dir + "/c.ini", "[log]\nfile = f.txt\nformat = csv\n");

@@ -258,6 +258,9 @@ TEST_CASE("Rotation plans: per-turn angles, durations or rates, and pauses", "[p
   test::write_file(dir + "/s.ini", steps + "duration = -9\n");
   CHECK_THROWS_WITH(Plan::load(dir + "/s.ini"),
                     Catch::Contains("s.ini:12") && Catch::Contains("must be positive"));
+  test::write_file(dir + "/s.ini",
+                   steps + "rate = 10\n[step.3]\naxis = +y\nangle = 90\nrate = 10\n");
+  CHECK_THROWS_WITH(Plan::load(dir + "/s.ini"), Catch::Contains("missing [step.2]"));
   test::write_file(dir + "/s.ini", steps + "rate = 0\n");
   CHECK_THROWS_WITH(Plan::load(dir + "/s.ini"),
                     Catch::Contains("s.ini:12") && Catch::Contains("must be positive"));
