@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "filter/closed_form.hpp"
 #include "filter/kalman_calibrator.hpp"
 #include "helpers.hpp"
 #include "models/config.hpp"
@@ -282,6 +283,67 @@ TEST_CASE("One file per dwell: missing file, unknown dwell, overlap, too long ar
     return Session::load(dir + "/session.ini");
   }();
   CHECK_THROWS_WITH(LogReader(in, ok.log), Catch::Contains("cannot be read from a stream"));
+}
+
+TEST_CASE(
+    "One file per dwell: seed8 cut into its dwells, each on its own clock, calibrates as "
+    "the whole log does",
+    "[log][segments][closed-form]") {
+  const std::string a = test::temp_dir("h2_seed8_whole"), b = test::temp_dir("h2_seed8_cut");
+  SessionSimulation spec;
+  spec.plan_path = test::source_path("config/plans/seed8.ini");
+  spec.data_sensor_path = test::source_path("config/sensors/nav-fog.ini");
+  spec.seed = 5;
+  const SimulatedSession sim = simulate_session(a, spec);
+  const Session whole = Session::load(sim.session_path);
+  const Motion motion = build_motion(whole.plan, whole.site);
+  // Each dwell's samples to pos<d>.csv, times on a clock of its own (1000 s * d + time since the
+  // dwell's start); the samples of the moves are dropped.
+  std::vector<std::ofstream> out;
+  std::string files;
+  for (const auto& d : motion.dwells()) {
+    const std::string name = "pos" + std::to_string(d.index) + ".csv";
+    out.emplace_back(b + "/" + name);
+    files += " " + name;
+  }
+  LogReader r(whole.log);
+  for (ImuSample s; r.next(s);) {
+    for (const auto& d : motion.dwells()) {
+      if (s.t - s.dt < d.t_start - 1e-9 || s.t > d.t_end + 1e-9) continue;
+      char line[300];
+      std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n",
+                    1000.0 * d.index + (s.t - d.t_start), s.dtheta_b.x(), s.dtheta_b.y(),
+                    s.dtheta_b.z(), s.dv_b.x(), s.dv_b.y(), s.dv_b.z());
+      out[static_cast<std::size_t>(d.index - 1)] << line;
+    }
+  }
+  for (auto& o : out) o.close();
+  std::filesystem::copy_file(a + "/plan.ini", b + "/plan.ini");
+  // Listed out of order: the reader yields them in dwell order.
+  test::write_file(b + "/session.ini",
+                   "[session]\nname = seed8-cut\nrate = 100 Hz\nplan = plan.ini\n[log]\n"
+                   "format = custom\nfiles = pos8.csv" +
+                       files.substr(0, files.rfind(" pos8.csv")) +
+                       "\ndwells = 8 1 2 3 4 5 6 7\ncolumns = t gx gy gz ax ay az\n");
+  const Session cut = Session::load(b + "/session.ini");
+  REQUIRE(cut.log.segments.size() == 8);
+  Stage1Options o;
+  o.arw = sim.profile.noise.gyro.white;
+  o.vrw = sim.profile.noise.accel.white;
+  const ClosedFormReport ra = run_closed_form(whole, o, 2.5 * units::arcsec);
+  const ClosedFormReport rb = run_closed_form(cut, o, 2.5 * units::arcsec);
+  REQUIRE(ra.coefficients.size() == rb.coefficients.size());
+  int compared = 0;
+  for (const auto& [name, ca] : ra.coefficients) {
+    const ResultCoefficient& cb = rb.coefficients.at(name);
+    CAPTURE(name);
+    REQUIRE(ca.observable == cb.observable);
+    if (!ca.observable) continue;
+    CHECK(std::abs(ca.value - cb.value) <= 1e-6 * *ca.sigma);
+    CHECK(*cb.sigma == Approx(*ca.sigma).epsilon(1e-9));
+    ++compared;
+  }
+  CHECK(compared >= 20);
 }
 
 TEST_CASE("Kalman filter: data that jump over the time between dwells stop the run",
