@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -15,6 +16,12 @@ namespace {
 using Q = QuantityKind;
 
 const double kMaxTurnAngle = 100.0 * 2.0 * M_PI;  // rad: a turn of at most 100 revolutions
+
+std::string days(double seconds) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%g", seconds / 86400.0);
+  return b;
+}
 
 int section_number(const IniFile& ini, const std::string& section, const std::string& prefix) {
   const std::string tail = section.substr(prefix.size());
@@ -67,7 +74,7 @@ double read_static_time(const IniFile& ini, const std::string& key, const PlanLi
     throw ConfigError(ini.where(key) + (zero_ok ? "must not be negative" : "must be positive"));
   if (!(t <= limits.max_duration))
     throw ConfigError(ini.where(key) + "longer than the plan limit of " +
-                      std::to_string(limits.max_duration / 86400.0) + " days" + limits.hint());
+                      days(limits.max_duration) + " days" + limits.hint());
   return t;
 }
 
@@ -118,8 +125,8 @@ void check_step(const std::string& where, double accel, const PlanLimits& limits
                           : TrapezoidProfile::by_rate(st.angle, st.rate, accel).duration();
   if (!(turn <= limits.max_duration))
     throw ConfigError(where + "the turn lasts " + std::to_string(turn) +
-                      " s, longer than the plan limit of " +
-                      std::to_string(limits.max_duration / 86400.0) + " days" + limits.hint());
+                      " s, longer than the plan limit of " + days(limits.max_duration) + " days" +
+                      limits.hint());
 }
 
 // One [step.N] section.
@@ -309,8 +316,7 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
           throw ConfigError(ini.where(pause_key) + turn +
                             "the pause is longer than the plan "
                             "limit of " +
-                            std::to_string(limits.max_duration / 86400.0) + " days" +
-                            limits.hint());
+                            days(limits.max_duration) + " days" + limits.hint());
       }
       if (!ini.sections_with_prefix("step.").empty())
         throw ConfigError(
@@ -351,9 +357,9 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
   // The whole plan's duration (dwells, moves, turns, pauses), as the motion has it.
   const double total = build_motion(p, Site{}).duration();
   if (!(total <= limits.max_duration))
-    throw ConfigError(ini.path() + ": the plan lasts " + std::to_string(total / 86400.0) +
-                      " days, longer than the plan limit of " +
-                      std::to_string(limits.max_duration / 86400.0) + " days" + limits.hint());
+    throw ConfigError(ini.path() + ": the plan lasts " + days(total) +
+                      " days, longer than the plan limit of " + days(limits.max_duration) +
+                      " days" + limits.hint());
   return p;
 }
 
