@@ -165,7 +165,7 @@ TEST_CASE("Plans in enu-rfu (PSINS): rot19 written with RFU axes is rot19's moti
   }
 }
 
-TEST_CASE("Plans in enu-rfu: yaw or heading, not both; yaw only in enu-rfu", "[plan][enu-rfu]") {
+TEST_CASE("Plans in enu-rfu: yaw or heading (not both), yaw only in enu-rfu", "[plan][enu-rfu]") {
   const std::string dir = test::temp_dir("h2_plans_enu");
   auto load = [&](const std::string& convention, const std::string& angles) {
     test::write_file(dir + "/p.ini", "[plan]\ntype = orientations\nconvention = " + convention +
