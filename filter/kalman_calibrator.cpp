@@ -79,6 +79,16 @@ Calibrator::Calibrator(std::vector<Dwell> dwells, const Site& site,
 }
 
 void Calibrator::push(const ImuSample& s) {
+  // The filter integrates through the moves between dwells: a log with holes (one file per dwell)
+  // has no data for them.
+  if (!held_.empty() && s.t - s.dt > held_.back().t + 0.5 * s.dt) {
+    char msg[320];
+    std::snprintf(msg, sizeof msg,
+                  "the data jump from t = %.6g s to %.6g s: the Kalman filter needs the samples "
+                  "between dwells too (a log in one file per dwell: use --method closed-form)",
+                  held_.back().t, s.t - s.dt);
+    throw PlanDataMismatch(msg);
+  }
   held_.push_back(s);
   if (held_.size() < 2) return;
   if (held_.size() > 3) held_.erase(held_.begin());

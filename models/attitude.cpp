@@ -52,11 +52,21 @@ Eigen::Vector3d rotvec_from_quat(const Eigen::Quaterniond& q_in) {
 AngleConvention parse_angle_convention(const std::string& name) {
   if (name == "ned-frd") return AngleConvention::NedFrd;
   if (name == "paper") return AngleConvention::Paper;
-  throw std::invalid_argument("unknown angle convention '" + name + "' (known: ned-frd, paper)");
+  if (name == "enu-rfu") return AngleConvention::EnuRfu;
+  throw std::invalid_argument("unknown angle convention '" + name +
+                              "' (known: ned-frd, paper, enu-rfu)");
 }
 
 std::string to_string(AngleConvention convention) {
-  return convention == AngleConvention::Paper ? "paper" : "ned-frd";
+  switch (convention) {
+    case AngleConvention::Paper:
+      return "paper";
+    case AngleConvention::EnuRfu:
+      return "enu-rfu";
+    case AngleConvention::NedFrd:
+      break;
+  }
+  return "ned-frd";
 }
 
 Eigen::Matrix3d C_nue_ned() {
@@ -65,12 +75,26 @@ Eigen::Matrix3d C_nue_ned() {
   return T;
 }
 
+Eigen::Matrix3d C_enu_ned() {
+  Eigen::Matrix3d T;
+  T << 0, 1, 0, 1, 0, 0, 0, 0, -1;
+  return T;
+}
+
 Eigen::Matrix3d C_b_n_from_euler(AngleConvention convention, const EulerAngles& e) {
   const Eigen::Vector3d x = Eigen::Vector3d::UnitX(), y = Eigen::Vector3d::UnitY(),
                         z = Eigen::Vector3d::UnitZ();
-  if (convention == AngleConvention::NedFrd)
-    return rotation(z, e.heading) * rotation(y, e.pitch) * rotation(x, e.roll);
-  return C_nue_ned() * rotation(y, -e.heading) * rotation(z, e.pitch) * rotation(x, e.roll);
+  switch (convention) {
+    case AngleConvention::NedFrd:
+      return rotation(z, e.heading) * rotation(y, e.pitch) * rotation(x, e.roll);
+    case AngleConvention::Paper:
+      return C_nue_ned() * rotation(y, -e.heading) * rotation(z, e.pitch) * rotation(x, e.roll);
+    case AngleConvention::EnuRfu:
+      // PSINS a2mat: yaw (about Up), then pitch (about the body's right axis x), then roll
+      // (about its forward axis y); yaw is counter-clockwise: yaw = -heading.
+      return C_enu_ned() * rotation(z, -e.heading) * rotation(x, e.pitch) * rotation(y, e.roll);
+  }
+  throw std::invalid_argument("C_b_n_from_euler: unknown angle convention");
 }
 
 EulerAngles euler_from_C_b_n(AngleConvention convention, const Eigen::Matrix3d& C_b_n) {
@@ -79,6 +103,17 @@ EulerAngles euler_from_C_b_n(AngleConvention convention, const Eigen::Matrix3d& 
     e.pitch = -std::asin(std::clamp(C_b_n(2, 0), -1.0, 1.0));
     e.heading = std::atan2(C_b_n(1, 0), C_b_n(0, 0));
     e.roll = std::atan2(C_b_n(2, 1), C_b_n(2, 2));
+  } else if (convention == AngleConvention::EnuRfu) {
+    const Eigen::Matrix3d C = C_enu_ned() * C_b_n;  // body to East-North-Up
+    e.pitch = std::asin(std::clamp(C(2, 1), -1.0, 1.0));
+    if (std::hypot(C(0, 1), C(1, 1)) > 1e-9) {
+      e.roll = std::atan2(-C(2, 0), C(2, 2));
+      e.heading = -std::atan2(-C(0, 1), C(1, 1));  // minus the yaw
+    } else {
+      // Forward (y) vertical: only yaw + roll (pitch up) or yaw - roll (down) is defined; roll 0.
+      e.roll = 0.0;
+      e.heading = -std::atan2(C(1, 0), C(0, 0));
+    }
   } else {
     const Eigen::Matrix3d C = C_nue_ned().transpose() * C_b_n;  // body to North-Up-East
     e.pitch = std::asin(std::clamp(C(1, 0), -1.0, 1.0));

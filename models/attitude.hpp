@@ -29,12 +29,18 @@ enum class AngleConvention {
   /// The source paper: body x forward, y up, z right; navigation North-Up-East;
   /// C_b^NUE = R_Y(-heading) R_Z(pitch) R_X(roll). Angles such as pitch 225 deg are literal.
   Paper,
+  /// PSINS (the reference MATLAB toolbox): body x right, y forward, z up; navigation
+  /// East-North-Up; yaw counter-clockwise from North (yaw = -heading);
+  /// C_b^ENU = R_Z(yaw) R_X(pitch) R_Y(roll), then C_b_n = C_enu_ned() C_b^ENU.
+  EnuRfu,
 };
 
-AngleConvention parse_angle_convention(const std::string& name);  // "ned-frd" | "paper"
+/// "ned-frd" | "paper" | "enu-rfu"
+AngleConvention parse_angle_convention(const std::string& name);
 std::string to_string(AngleConvention convention);
 
-/// Heading, pitch, roll (rad) in a convention.
+/// Heading, pitch, roll (rad) in a convention. `heading` is clockwise from North seen from above
+/// in every convention (enu-rfu's counter-clockwise yaw is -heading).
 struct EulerAngles {
   double heading = 0.0;
   double pitch = 0.0;
@@ -48,6 +54,8 @@ EulerAngles euler_from_C_b_n(AngleConvention convention, const Eigen::Matrix3d& 
 
 /// Matrix taking North-Up-East components to North-East-Down components.
 Eigen::Matrix3d C_nue_ned();
+/// Matrix taking East-North-Up components to North-East-Down components (its own inverse).
+Eigen::Matrix3d C_enu_ned();
 
 /// Attitude error phi_n (rad, NED) of a computed attitude against the true one, defined by
 /// C_b_n_computed = R(-phi_n) * C_b_n_true  (small: C_b_n_computed = (I - [phi_n x]) C_b_n_true).

@@ -1,7 +1,9 @@
 // IMU logs. The native format (written by `sinscal simulate`) is CSV with a header naming each
 // column and its unit; a configurable reader also takes foreign logs: column order, delimiter,
 // header lines, units including raw counts with a scale and offset, increments or rates, axis
-// mapping with signs. Format and [log] keys: docs/formats.md.
+// mapping with signs; a log split over one file per triad (accelerometers, gyros) sharing a time
+// column; NovAtel RAWIMUSA / RAWIMUSXA ASCII logs (CRC-32 checked); and a session recorded as
+// one file per dwell of the plan. Format and [log] keys: docs/formats.md.
 #pragma once
 
 #include <array>
@@ -51,8 +53,24 @@ struct TriadColumns {
   double saturation = 0.0;  // |raw value| at or beyond which a sample is saturated (0: none)
 };
 
+/// One file of a log recorded as one file per dwell: its samples are placed in the dwell.
+struct LogSegment {
+  std::string file;      // path
+  int dwell = 0;         // the plan's dwell (1-based, as Dwell::index)
+  double t_start = 0.0;  // s, log time at which the dwell starts (time_offset included)
+  double t_end = 0.0;    // s, log time at which it ends
+};
+
 struct LogFormat {
-  std::string file;                  // path of the data file
+  enum class Kind { Delimited, NovAtel };
+  /// Longest line a reader accepts (bytes); a longer one is an error, never buffered whole.
+  static constexpr std::size_t kMaxLine = 65536;
+  /// Most header lines a format may skip.
+  static constexpr int kMaxHeaderLines = 100000;
+
+  std::string file;  // path of the data file (split and segmented logs: a
+                     // description naming their files, for messages)
+  Kind kind = Kind::Delimited;
   bool native = true;                // the sinscal CSV (the header is checked)
   char delimiter = ',';              // ' ' means any run of spaces or tabs
   int header_lines = 1;              // lines skipped before the data (after them, '#' lines too)
@@ -63,9 +81,26 @@ struct LogFormat {
   double max_gap = 1.5;              // a step in time above max_gap / rate_hz is a gap (error)
   TriadColumns gyro, accel;
 
+  /// A log split over two files sharing a time column (imu_tk style): both set. Each file's
+  /// columns are named t x y z or - (skip); without t in either, the time is sample number / rate.
+  std::string accel_file, gyro_file;
+  std::vector<std::string> accel_columns, gyro_columns;
+  double time_tolerance = 0.0;  // s: split files' times may differ this much (0: 1 % of 1/rate)
+
+  /// NovAtel: IMU status bits that make a sample bad (0: the status is not checked).
+  std::uint32_t status_mask = 0;
+
+  /// A log recorded as one file per dwell (non-empty): each file in the format above, its time
+  /// relative to its own start placed at its dwell's start, in dwell order.
+  std::vector<LogSegment> segments;
+
+  bool split() const { return !accel_file.empty(); }
+
   /// The native format for a rate.
   static LogFormat native_format(const std::string& file, double rate_hz);
-  /// From the [log] section of a session file; relative paths are taken from `base_dir`.
+  /// From the [log] section of a session file; relative paths are taken from `base_dir`. A log
+  /// in one file per dwell (`files`) takes the dwells' times from the session's plan
+  /// ([session] plan, time_offset).
   static LogFormat from_ini(const IniFile& ini, const std::string& base_dir, double rate_hz);
 };
 
@@ -90,8 +125,12 @@ class LogReader : public SampleSource {
   explicit LogReader(const LogFormat& format);
   /// Reads from a stream (standard input, a pipe); `format.file` names it in messages.
   LogReader(std::istream& in, const LogFormat& format);
+  LogReader(const LogReader&) = delete;  // holds pointers into itself
+  LogReader& operator=(const LogReader&) = delete;
   bool next(ImuSample& sample) override;
-  std::size_t line() const { return line_; }
+  /// Line of the last record read (split logs: of the accelerometer file; one file per dwell:
+  /// of the current file).
+  std::size_t line() const { return segment_ ? segment_->line() : loc_->line; }
   /// Samples read so far.
   std::size_t count() const { return count_; }
   /// Skip bad samples (BadSampleError) instead of throwing: each is passed to `on_skip` and the
@@ -100,23 +139,57 @@ class LogReader : public SampleSource {
   /// sample).
   void skip_bad_samples(std::function<void(const BadSampleError&)> on_skip) {
     on_skip_ = std::move(on_skip);
+    if (segment_) segment_->skip_bad_samples(on_skip_);
   }
 
  private:
+  /// One input file or stream, read line by line with a bounded line length.
+  struct Input {
+    std::unique_ptr<std::ifstream> owned;
+    std::istream* in = nullptr;
+    std::string name;
+    std::size_t line = 0;
+    std::vector<char> buffer;
+  };
   [[noreturn]] void fail(const std::string& cause) const;
   [[noreturn]] void bad_sample(const std::string& cause) const;
-  bool parse(const std::string& line, bool had_newline, ImuSample& s);
-  bool read_line(std::string& line, bool& had_newline);
+  void open(Input& input, const std::string& path);
+  bool read_line(Input& input, std::string& line, bool& had_newline);
+  /// Next line that is neither empty nor a '#' comment.
+  bool read_data_line(Input& input, std::string& line, bool& had_newline);
+  void skip_header(Input& input);
+  /// Splits a delimited line into numbers (exactly `expected` of them).
+  void split_fields(const std::string& line, bool had_newline, std::size_t expected,
+                    std::vector<double>& out);
+  /// The next record's fields in the layout of f_.columns; false at the end.
+  bool read_record();
+  bool read_split_record();
+  bool read_novatel_record();
+  bool make_sample(ImuSample& s);
+  bool next_segment_sample(ImuSample& s);
   void start();
+
   LogFormat f_;
-  std::unique_ptr<std::ifstream> file_;
-  std::istream* in_ = nullptr;
-  std::size_t line_ = 0, count_ = 0;
+  Input main_, second_;        // the log (split: accelerometer file), the split gyro file
+  const Input* loc_ = &main_;  // the file and line messages name
+  std::size_t count_ = 0;
   int col_t_ = -1;
   std::array<int, 3> col_g_{-1, -1, -1}, col_a_{-1, -1, -1};
   int col_outer_ = -1, col_inner_ = -1;
   double t_prev_ = 0.0;
-  std::vector<double> fields_;
+  std::vector<double> fields_, acc_, gyr_;  // a record; a split log's two lines
+  std::string text_, text2_;
+  // split: where t, x, y, z are in each file's columns (-1: absent)
+  std::array<int, 4> acc_cols_{-1, -1, -1, -1}, gyr_cols_{-1, -1, -1, -1};
+  // NovAtel
+  std::string novatel_message_;  // the raw IMU log read (the first one found)
+  long novatel_week0_ = -1;
+  std::size_t novatel_other_ = 0;  // lines of other logs skipped
+  // one file per dwell
+  std::unique_ptr<LogReader> segment_;
+  std::size_t segment_next_ = 0;
+  std::size_t segment_count_ = 0;  // samples of the current segment
+  double segment_shift_ = 0.0;
   std::function<void(const BadSampleError&)> on_skip_;
   bool skipped_ = false;  // a sample was skipped since the last good one
   std::size_t skipped_count_ = 0;

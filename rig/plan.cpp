@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -14,22 +15,67 @@ namespace {
 
 using Q = QuantityKind;
 
+const double kMaxTurnAngle = 100.0 * 2.0 * M_PI;  // rad: a turn of at most 100 revolutions
+
+std::string days(double seconds) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%g", seconds / 86400.0);
+  return b;
+}
+
 int section_number(const IniFile& ini, const std::string& section, const std::string& prefix) {
   const std::string tail = section.substr(prefix.size());
   char* end = nullptr;
   const long n = std::strtol(tail.c_str(), &end, 10);
-  if (tail.empty() || *end != '\0' || n < 1)
+  if (tail.empty() || *end != '\0' || n < 1 || n > 100000000)
     throw ConfigError(ini.path() + ": section [" + section + "]: expected [" + prefix +
                       "N], N = 1, 2, ...");
   return static_cast<int>(n);
 }
 
-EulerAngles read_angles(const IniFile& ini, const std::string& s) {
+// Plan angles: finite (the INI reader refuses NaN and inf) and within one turn either way.
+double read_angle(const IniFile& ini, const std::string& key) {
+  const double a = ini.get_quantity(key, Q::Angle, "deg");
+  if (!(std::abs(a) <= 2.0 * M_PI))
+    throw ConfigError(ini.where(key) + "must be within -360 and 360 deg");
+  return a;
+}
+
+// heading (clockwise from North) or, in enu-rfu, yaw (counter-clockwise: heading = -yaw).
+EulerAngles read_angles(const IniFile& ini, const std::string& s, AngleConvention convention) {
   EulerAngles e;
-  e.heading = ini.get_quantity(s + ".heading", Q::Angle, "deg");
-  e.pitch = ini.get_quantity(s + ".pitch", Q::Angle, "deg");
-  e.roll = ini.get_quantity(s + ".roll", Q::Angle, "deg");
+  const bool yaw = ini.has(s + ".yaw");
+  if (yaw && convention != AngleConvention::EnuRfu)
+    throw ConfigError(ini.where(s + ".yaw") +
+                      "'yaw' is an angle of the enu-rfu convention; this plan's convention is " +
+                      to_string(convention) + " (give 'heading')");
+  if (yaw && ini.has(s + ".heading"))
+    throw ConfigError(ini.where(s + ".yaw") +
+                      "give either 'heading' (clockwise from North) or 'yaw' (counter-clockwise), "
+                      "not both");
+  if (yaw)
+    e.heading = -read_angle(ini, s + ".yaw");
+  else if (convention == AngleConvention::EnuRfu && !ini.has(s + ".heading"))
+    throw ConfigError(ini.path() + ": [" + s +
+                      "]: missing 'yaw' (counter-clockwise from North) or 'heading' (clockwise)");
+  else
+    e.heading = read_angle(ini, s + ".heading");
+  e.pitch = read_angle(ini, s + ".pitch");
+  e.roll = read_angle(ini, s + ".roll");
   return e;
+}
+
+// A static time (dwell, pause): finite, within the plan's duration limit; positive unless
+// `zero_ok`.
+double read_static_time(const IniFile& ini, const std::string& key, const PlanLimits& limits,
+                        bool zero_ok) {
+  const double t = ini.get_quantity(key, Q::Time, "s");
+  if (zero_ok ? !(t >= 0.0) : !(t > 0.0))
+    throw ConfigError(ini.where(key) + (zero_ok ? "must not be negative" : "must be positive"));
+  if (!(t <= limits.max_duration))
+    throw ConfigError(ini.where(key) + "longer than the plan limit of " +
+                      days(limits.max_duration) + " days" + limits.hint());
+  return t;
 }
 
 Eigen::Vector3d read_vector(const IniFile& ini, const std::string& key,
@@ -62,21 +108,69 @@ RotationStep parse_axis(const IniFile& ini, const std::string& key, const std::s
   return st;
 }
 
-void read_step_timing(const IniFile& ini, const std::string& s, double accel, RotationStep& st) {
-  st.angle = ini.get_quantity(s + ".angle", Q::Angle, "deg");
-  if (!(st.angle > 0.0)) throw ConfigError(ini.where(s + ".angle") + "must be positive");
-  st.duration = ini.get_quantity(s + ".duration", Q::Time, "s", 0.0);
-  st.rate = ini.get_quantity(s + ".rate", Q::AngularRate, "deg/s", 0.0);
-  if ((st.duration > 0.0) == (st.rate > 0.0))
-    throw ConfigError(ini.path() + ": [" + s + "]: give exactly one of 'duration' and 'rate'");
+// Checks a turn's angle and timing (given in SI by the caller). `where` names the file, line and
+// key for messages.
+void check_step(const std::string& where, double accel, const PlanLimits& limits,
+                RotationStep& st) {
+  if (!(st.angle > 0.0)) throw ConfigError(where + "the angle must be positive");
+  if (!(st.angle <= kMaxTurnAngle))
+    throw ConfigError(where + "the angle must be at most 100 turns (36000 deg)");
   if (st.duration > 0.0 && 4.0 * st.angle / accel > st.duration * st.duration)
-    throw ConfigError(ini.where(s + ".duration") + "acceleration too low to turn " +
-                      std::to_string(st.angle / units::deg) + " deg in " +
-                      std::to_string(st.duration) + " s (needs at least " +
-                      std::to_string(4.0 * st.angle / (st.duration * st.duration) / units::deg) +
-                      " deg/s^2)");
-  st.pause = ini.get_quantity(s + ".pause", Q::Time, "s", 0.0);
-  if (st.pause < 0.0) throw ConfigError(ini.where(s + ".pause") + "must not be negative");
+    throw ConfigError(
+        where + "acceleration too low to turn " + std::to_string(st.angle / units::deg) +
+        " deg in " + std::to_string(st.duration) + " s (needs at least " +
+        std::to_string(4.0 * st.angle / (st.duration * st.duration) / units::deg) + " deg/s^2)");
+  const double turn = st.duration > 0.0
+                          ? st.duration
+                          : TrapezoidProfile::by_rate(st.angle, st.rate, accel).duration();
+  if (!(turn <= limits.max_duration))
+    throw ConfigError(where + "the turn lasts " + std::to_string(turn) +
+                      " s, longer than the plan limit of " + days(limits.max_duration) + " days" +
+                      limits.hint());
+}
+
+// One [step.N] section.
+void read_step_timing(const IniFile& ini, const std::string& s, double accel,
+                      const PlanLimits& limits, RotationStep& st) {
+  st.angle = ini.get_quantity(s + ".angle", Q::Angle, "deg");
+  const bool has_duration = ini.has(s + ".duration"), has_rate = ini.has(s + ".rate");
+  if (has_duration == has_rate)
+    throw ConfigError(ini.path() + ": [" + s + "]: give exactly one of 'duration' and 'rate'");
+  if (has_duration) {
+    st.duration = ini.get_quantity(s + ".duration", Q::Time, "s");
+    if (!(st.duration > 0.0)) throw ConfigError(ini.where(s + ".duration") + "must be positive");
+  } else {
+    st.rate = ini.get_quantity(s + ".rate", Q::AngularRate, "deg/s");
+    if (!(st.rate > 0.0)) throw ConfigError(ini.where(s + ".rate") + "must be positive");
+  }
+  check_step(ini.where(s + (ini.has(s + ".angle") ? ".angle" : ".duration")), accel, limits, st);
+  st.pause = ini.has(s + ".pause") ? read_static_time(ini, s + ".pause", limits, true) : 0.0;
+}
+
+// A per-turn value of [rotations]: `one` (a single value for every turn) or `list` (one value per
+// turn, `n` of them). Empty when neither is given.
+std::vector<double> per_turn(const IniFile& ini, const std::string& one, const std::string& list,
+                             std::size_t n, Q kind, const std::string& unit) {
+  const std::string k1 = "rotations." + one, kn = "rotations." + list;
+  if (ini.has(k1) && ini.has(kn))
+    throw ConfigError(ini.where(kn) + "give either '" + one + "' (one for every turn) or '" + list +
+                      "' (one per turn), not both");
+  if (ini.has(k1)) {
+    const auto v = ini.get_quantities(k1, kind, unit);
+    if (v.size() != 1)
+      throw ConfigError(ini.where(k1) +
+                        "expected one value for every turn; give one per turn as '" + list +
+                        " = ...'");
+    return std::vector<double>(n, v.front());
+  }
+  if (ini.has(kn)) {
+    const auto v = ini.get_quantities(kn, kind, unit);
+    if (v.size() != n)
+      throw ConfigError(ini.where(kn) + "expected " + std::to_string(n) +
+                        " values, one per turn of 'axes', got " + std::to_string(v.size()));
+    return v;
+  }
+  return {};
 }
 
 }  // namespace
@@ -102,7 +196,10 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
     throw ConfigError(ini.where("plan.convention") + e.what());
   }
   ini.check_keys("plan", {"name", "description", "type", "convention", "move_rate",
-                          "move_acceleration", "rotation_acceleration"});
+                          "move_acceleration", "rotation_acceleration", "allow_large"});
+  p.limits =
+      ini.get_bool("plan.allow_large", false) ? PlanLimits::raised() : PlanLimits::standard();
+  const PlanLimits& limits = p.limits;
   if (ini.has("site.latitude")) {
     p.has_site = true;
     p.site.lat_rad = ini.get_quantity("site.latitude", Q::Angle, "deg");
@@ -117,6 +214,14 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
   p.table.inner_axis_p = read_vector(ini, "table.inner_axis", -Eigen::Vector3d::UnitZ());
   p.table.C_b_p = C_b_n_from_euler(p.convention, EulerAngles{});
   ini.check_keys("table", {"outer_axis", "inner_axis"});
+  auto check_count = [&](std::size_t n, const char* what) {
+    if (n > limits.max_entries)
+      throw ConfigError(ini.path() + ": " + std::to_string(n) + " " + what +
+                        ", more than the plan limit of " + std::to_string(limits.max_entries) +
+                        limits.hint());
+  };
+  // (yaw: enu-rfu only, which read_angles says)
+  const std::vector<std::string> angle_keys = {"heading", "yaw", "pitch", "roll", "dwell"};
 
   if (type == "orientations") {
     p.type = Type::Orientations;
@@ -124,15 +229,16 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
     p.move_accel = ini.get_quantity("plan.move_acceleration", Q::AngularAcceleration, "deg/s^2");
     if (!(p.move_rate > 0.0) || !(p.move_accel > 0.0))
       throw ConfigError(ini.path() + ": [plan] move_rate and move_acceleration must be positive");
+    const auto sections = ini.sections_with_prefix("orientation.");
+    check_count(sections.size(), "orientations");
     std::vector<std::pair<int, PlanOrientation>> found;
-    for (const auto& s : ini.sections_with_prefix("orientation.")) {
-      ini.check_keys(s, {"heading", "pitch", "roll", "dwell"});
+    for (const auto& s : sections) {
+      ini.check_keys(s, angle_keys);
       PlanOrientation o;
       const int n = section_number(ini, s, "orientation.");
       o.label = std::to_string(n);
-      o.angles = read_angles(ini, s);
-      o.dwell = ini.get_quantity(s + ".dwell", Q::Time, "s");
-      if (!(o.dwell > 0.0)) throw ConfigError(ini.where(s + ".dwell") + "must be positive");
+      o.angles = read_angles(ini, s, p.convention);
+      o.dwell = read_static_time(ini, s + ".dwell", limits, false);
       found.emplace_back(n, o);
     }
     std::sort(found.begin(), found.end(), [](auto& a, auto& b) { return a.first < b.first; });
@@ -158,31 +264,83 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
         ini.get_quantity("plan.rotation_acceleration", Q::AngularAcceleration, "deg/s^2");
     if (!(p.move_accel > 0.0))
       throw ConfigError(ini.where("plan.rotation_acceleration") + "must be positive");
-    p.start = read_angles(ini, "start");
-    p.start_dwell = ini.get_quantity("start.dwell", Q::Time, "s");
-    ini.check_keys("start", {"heading", "pitch", "roll", "dwell"});
+    ini.check_keys("start", angle_keys);
+    p.start = read_angles(ini, "start", p.convention);
+    p.start_dwell = read_static_time(ini, "start.dwell", limits, false);
     if (ini.has("rotations.axes")) {
-      ini.check_keys("rotations", {"axes", "angle", "duration", "rate", "pause"});
+      ini.check_keys("rotations", {"axes", "angle", "angles", "duration", "durations", "rate",
+                                   "rates", "pause", "pauses"});
       std::istringstream axes(ini.get_string("rotations.axes"));
       for (std::string a; axes >> a;) {
-        RotationStep st = parse_axis(ini, "rotations.axes", a);
-        read_step_timing(ini, "rotations", p.move_accel, st);
-        p.steps.push_back(st);
+        check_count(p.steps.size() + 1, "turns");
+        p.steps.push_back(parse_axis(ini, "rotations.axes", a));
+      }
+      const std::size_t n = p.steps.size();
+      if (n == 0) throw ConfigError(ini.where("rotations.axes") + "no axes given");
+      const auto angles = per_turn(ini, "angle", "angles", n, Q::Angle, "deg");
+      const auto durations = per_turn(ini, "duration", "durations", n, Q::Time, "s");
+      const auto rates = per_turn(ini, "rate", "rates", n, Q::AngularRate, "deg/s");
+      const auto pauses = per_turn(ini, "pause", "pauses", n, Q::Time, "s");
+      if (angles.empty())
+        throw ConfigError(ini.path() +
+                          ": [rotations]: missing 'angle' (or 'angles', one per turn)");
+      if (durations.empty() == rates.empty())
+        throw ConfigError(ini.path() +
+                          ": [rotations]: give exactly one of 'duration', 'durations', 'rate' "
+                          "and 'rates'");
+      auto key_of = [&](const char* one, const char* list) {
+        return ini.has(std::string("rotations.") + one) ? std::string("rotations.") + one
+                                                        : std::string("rotations.") + list;
+      };
+      const std::string timing_key =
+          durations.empty() ? key_of("rate", "rates") : key_of("duration", "durations");
+      for (std::size_t i = 0; i < n; ++i) {
+        RotationStep& st = p.steps[i];
+        const std::string turn = "turn " + std::to_string(i + 1) + " (" + st.axis_name + "): ";
+        st.angle = angles[i];
+        if (!durations.empty()) {
+          st.duration = durations[i];
+          if (!(st.duration > 0.0))
+            throw ConfigError(ini.where(timing_key) + turn + "the duration must be positive");
+        } else {
+          st.rate = rates[i];
+          if (!(st.rate > 0.0))
+            throw ConfigError(ini.where(timing_key) + turn + "the rate must be positive");
+        }
+        check_step(ini.where(key_of("angle", "angles")) + turn, p.move_accel, limits, st);
+        st.pause = pauses.empty() ? 0.0 : pauses[i];
+        const std::string pause_key = key_of("pause", "pauses");
+        if (!(st.pause >= 0.0))
+          throw ConfigError(ini.where(pause_key) + turn + "the pause must not be negative");
+        if (!(st.pause <= limits.max_duration))
+          throw ConfigError(ini.where(pause_key) + turn +
+                            "the pause is longer than the plan "
+                            "limit of " +
+                            days(limits.max_duration) + " days" + limits.hint());
       }
       if (!ini.sections_with_prefix("step.").empty())
         throw ConfigError(
             ini.path() +
             ": give the rotations either as [rotations] axes or as [step.N], not both");
     } else {
+      if (!ini.sections_with_prefix("rotations").empty())
+        throw ConfigError(ini.path() + ": [rotations] needs 'axes'");
+      const auto sections = ini.sections_with_prefix("step.");
+      check_count(sections.size(), "turns");
       std::vector<std::pair<int, RotationStep>> found;
-      for (const auto& s : ini.sections_with_prefix("step.")) {
+      for (const auto& s : sections) {
         ini.check_keys(s, {"axis", "angle", "duration", "rate", "pause"});
         RotationStep st = parse_axis(ini, s + ".axis", ini.get_string(s + ".axis"));
-        read_step_timing(ini, s, p.move_accel, st);
+        read_step_timing(ini, s, p.move_accel, limits, st);
         found.emplace_back(section_number(ini, s, "step."), st);
       }
       std::sort(found.begin(), found.end(), [](auto& a, auto& b) { return a.first < b.first; });
-      for (auto& f : found) p.steps.push_back(f.second);
+      for (std::size_t i = 0; i < found.size(); ++i) {
+        if (found[i].first != static_cast<int>(i) + 1)
+          throw ConfigError(ini.path() + ": steps must be numbered 1, 2, ... without gaps; " +
+                            "missing [step." + std::to_string(i + 1) + "]");
+        p.steps.push_back(found[i].second);
+      }
     }
     if (p.steps.empty()) throw ConfigError(ini.path() + ": a rotation plan needs rotations");
   } else {
@@ -196,6 +354,12 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
     if (std::find(known.begin(), known.end(), sec) == known.end())
       throw ConfigError(ini.where(key) + "unknown section");
   }
+  // The whole plan's duration (dwells, moves, turns, pauses), as the motion has it.
+  const double total = build_motion(p, Site{}).duration();
+  if (!(total <= limits.max_duration))
+    throw ConfigError(ini.path() + ": the plan lasts " + days(total) +
+                      " days, longer than the plan limit of " + days(limits.max_duration) +
+                      " days" + limits.hint());
   return p;
 }
 

@@ -34,6 +34,22 @@ struct RotationStep {
   double pause = 0.0;     // s static after the rotation
 };
 
+/// Size limits of a plan (docs/formats.md): orientations or turns, and the duration of the whole
+/// plan (dwells, moves, turns, pauses). `[plan] allow_large = true` raises them.
+struct PlanLimits {
+  std::size_t max_entries = 100000;
+  double max_duration = 7.0 * 86400.0;  // s
+  bool large = false;
+  static PlanLimits standard() { return {}; }
+  static PlanLimits raised() { return {10000000, 366.0 * 86400.0, true}; }
+  /// How to raise a limit, for messages ("" when raised already).
+  std::string hint() const {
+    return large ? std::string()
+                 : " ('allow_large = true' in [plan] raises the limits to 10,000,000 entries and "
+                   "366 days)";
+  }
+};
+
 struct Plan {
   enum class Type { Orientations, Rotations };
   std::string name;
@@ -50,6 +66,7 @@ struct Plan {
   EulerAngles start;         // rotations
   double start_dwell = 0.0;  // s
   std::vector<RotationStep> steps;
+  PlanLimits limits;
 
   /// Loads and validates a plan; throws ConfigError naming file, line and key.
   static Plan load(const std::string& path);

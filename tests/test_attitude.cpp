@@ -24,8 +24,8 @@ TEST_CASE("Rotation vector, quaternion and DCM round trips", "[attitude]") {
   }
 }
 
-TEST_CASE("Euler angles round trip in both conventions", "[attitude]") {
-  for (auto conv : {AngleConvention::NedFrd, AngleConvention::Paper}) {
+TEST_CASE("Euler angles round trip in every convention", "[attitude]") {
+  for (auto conv : {AngleConvention::NedFrd, AngleConvention::Paper, AngleConvention::EnuRfu}) {
     for (double h : {10.0, 100.0, 200.0, 350.0})
       for (double p : {-80.0, -30.0, 0.0, 45.0})
         for (double r : {-170.0, -20.0, 0.0, 60.0}) {
@@ -83,4 +83,88 @@ TEST_CASE("Attitude error sign: C_computed = (I - [phi x]) C_true", "[attitude]"
   CHECK((attitude_error_n(C_comp, C_true) - phi).norm() < 1e-14);
   CHECK((attitude_error_n(dcm_from_rotvec(-phi) * C_true, C_true) - phi).norm() <
         1e-15);  // rounding of unit-size matrices
+}
+
+TEST_CASE("enu-rfu (PSINS): hand-derived attitudes", "[attitude][enu-rfu]") {
+  const double d = units::deg;
+  const auto C = [](double yaw, double pitch, double roll) {
+    // Plan angles: heading = -yaw (clockwise from North).
+    return C_b_n_from_euler(AngleConvention::EnuRfu, {-yaw, pitch, roll});
+  };
+  const Vector3d N(1, 0, 0), E(0, 1, 0), Up(0, 0, -1);
+  // Zero angles: x Right = East, y Forward = North, z Up.
+  Matrix3d c = C(0, 0, 0);
+  CHECK((c.col(0) - E).norm() < 1e-15);
+  CHECK((c.col(1) - N).norm() < 1e-15);
+  CHECK((c.col(2) - Up).norm() < 1e-15);
+  CHECK((c - C_enu_ned()).norm() < 1e-15);
+  // Yaw 90 deg is counter-clockwise seen from above: forward turns from North to West.
+  c = C(90 * d, 0, 0);
+  CHECK((c.col(1) + E).norm() < 1e-15);
+  CHECK((c.col(0) - N).norm() < 1e-15);
+  // Pitch 30 deg raises the nose: forward = cos30 North + sin30 Up.
+  c = C(0, 30 * d, 0);
+  CHECK((c.col(1) - (std::sqrt(0.75) * N + 0.5 * Up)).norm() < 1e-15);
+  CHECK((c.col(0) - E).norm() < 1e-15);
+  // Roll 30 deg lowers the right side: right = cos30 East + sin30 Down.
+  c = C(0, 0, 30 * d);
+  CHECK((c.col(0) - (std::sqrt(0.75) * E - 0.5 * Up)).norm() < 1e-15);
+  CHECK((c.col(1) - N).norm() < 1e-15);
+  // The PSINS order: yaw, then pitch about the turned right axis. Yaw 90, pitch 90 deg: right
+  // (x) North, forward (y) up, z East.
+  c = C(90 * d, 90 * d, 0);
+  CHECK((c.col(1) - Up).norm() < 1e-15);
+  CHECK((c.col(0) - N).norm() < 1e-15);
+  CHECK((c.col(2) - E).norm() < 1e-15);
+  // PSINS a2mat, written out: Cnb = [cj ck - si sj sk, -ci sk, sj ck + si cj sk; cj sk + si sj ck,
+  // ci ck, sj sk - si cj ck; -ci sj, si, ci cj] (i pitch, j roll, k yaw), East-North-Up.
+  const double p = 0.3, r = -1.2, y = 2.1;
+  const double si = std::sin(p), ci = std::cos(p), sj = std::sin(r), cj = std::cos(r),
+               sk = std::sin(y), ck = std::cos(y);
+  Matrix3d Cnb;
+  Cnb << cj * ck - si * sj * sk, -ci * sk, sj * ck + si * cj * sk, cj * sk + si * sj * ck, ci * ck,
+      sj * sk - si * cj * ck, -ci * sj, si, ci * cj;
+  CHECK((C(y, p, r) - C_enu_ned() * Cnb).cwiseAbs().maxCoeff() < 1e-15);
+}
+
+TEST_CASE("enu-rfu is ned-frd with the body axes relabelled: same angles, same attitude",
+          "[attitude][enu-rfu]") {
+  // Yaw-pitch-roll about Up, Right, Forward (PSINS) is heading-pitch-roll about Down, Right,
+  // Forward (3-2-1) with yaw = -heading: for every angle, C_enu-rfu = C_ned-frd * P where
+  // P takes RFU components to FRD ones (x_frd = y_rfu, y_frd = x_rfu, z_frd = -z_rfu).
+  Matrix3d P;
+  P << 0, 1, 0, 1, 0, 0, 0, 0, -1;
+  for (double h : {0.0, 10.0, 135.0, 270.0, 359.0})
+    for (double p : {-90.0, -89.9999, -45.0, 0.0, 30.0, 89.9999, 90.0})
+      for (double r : {-179.0, -30.0, 0.0, 75.0}) {
+        const EulerAngles e{h * units::deg, p * units::deg, r * units::deg};
+        CAPTURE(h, p, r);
+        const Matrix3d c = C_b_n_from_euler(AngleConvention::EnuRfu, e);
+        CHECK((c - C_b_n_from_euler(AngleConvention::NedFrd, e) * P).cwiseAbs().maxCoeff() < 1e-15);
+        // Back to angles: the same matrix (angles themselves are ambiguous at +-90 deg pitch).
+        const EulerAngles back = euler_from_C_b_n(AngleConvention::EnuRfu, c);
+        CHECK((C_b_n_from_euler(AngleConvention::EnuRfu, back) - c).cwiseAbs().maxCoeff() < 1e-9);
+        if (std::abs(p) < 89.0) {
+          CHECK(back.pitch == Approx(e.pitch).margin(1e-12));
+          CHECK(back.roll == Approx(e.roll).margin(1e-12));
+          CHECK(std::remainder(back.heading - e.heading, 2 * M_PI) == Approx(0.0).margin(1e-12));
+        }
+      }
+  // Near pitch 90 deg: pitch 89.9999 deg, yaw 30 deg, roll 20 deg. Forward is 1.7e-6 rad from Up,
+  // its horizontal part points at yaw 30 deg (North towards West), and the angles come back to
+  // 1e-9 rad (the condition of yaw and roll there is 1 / cos(pitch) = 5.7e5).
+  const double d = units::deg;
+  const EulerAngles e{-30 * d, 89.9999 * d, 20 * d};
+  const Matrix3d c = C_b_n_from_euler(AngleConvention::EnuRfu, e);
+  const double cp = std::cos(89.9999 * d);
+  CHECK(c(2, 1) == Approx(-std::sin(89.9999 * d)).epsilon(1e-15));
+  CHECK(c(0, 1) == Approx(cp * std::cos(30 * d)).epsilon(1e-9));
+  CHECK(c(1, 1) == Approx(-cp * std::sin(30 * d)).epsilon(1e-9));
+  const EulerAngles back = euler_from_C_b_n(AngleConvention::EnuRfu, c);
+  CHECK(back.pitch == Approx(e.pitch).margin(1e-9));
+  CHECK(back.roll == Approx(e.roll).margin(1e-9));
+  CHECK(back.heading == Approx(e.heading + 2 * M_PI).margin(1e-9));
+  CHECK(parse_angle_convention("enu-rfu") == AngleConvention::EnuRfu);
+  CHECK(to_string(AngleConvention::EnuRfu) == "enu-rfu");
+  CHECK_THROWS_WITH(parse_angle_convention("enu"), Catch::Contains("enu-rfu"));
 }
