@@ -148,12 +148,12 @@ int cmd_navigate(const std::vector<std::string>& args) {
   if (vertical != "free" && vertical != "held") throw UsageError("--vertical must be free or held");
   if (interval < 0.0) throw UsageError("--interval must not be negative");
   const Session session = Session::load(session_path);
-  const Motion motion = build_motion(session.plan, session.site);
+  const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
   DwellNavOptions opt;
   opt.output_interval = interval;
   opt.time_offset = session.time_offset;
   opt.strapdown.vertical_held = vertical == "held";
-  DwellNavigation run(motion.dwells(), session.site, opt);
+  DwellNavigation run(timeline.dwells, session.site, opt);
   LogReader reader(session.log);
 
   std::ofstream out(out_path);

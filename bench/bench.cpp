@@ -85,7 +85,7 @@ int main(int argc, char** argv) {
     o.arw = profile.noise.gyro.white;
     o.vrw = profile.noise.accel.white;
     t0 = Clock::now();
-    const auto in = run_stage1(source, motion.dwells(), plan.site, o);
+    const auto in = run_stage1(source, PlanTimeline::of(plan, plan.site).dwells, plan.site, o);
     const Stage2Result r = solve_stage2(in, plan.site, Stage2Options{});
     t_cf = std::min(t_cf, seconds_since(t0));
     sink += r.theta(0);
@@ -116,7 +116,8 @@ int main(int argc, char** argv) {
   double t_kf = 1e300;
   int states = 0;
   for (int pass = 0; pass < 3; ++pass) {
-    Calibrator kf(rot_motion.dwells(), rot.site, calibrator_options_from_profile(profile));
+    Calibrator kf(PlanTimeline::of(rot, rot.site), rot.site,
+                  calibrator_options_from_profile(profile));
     t0 = Clock::now();
     for (const auto& s : rot_samples) kf.push(s);
     kf.finish();
@@ -154,7 +155,8 @@ int main(int argc, char** argv) {
     t0 = Clock::now();
     {
       LogReader r(rot_log);
-      Calibrator kf(rot_motion.dwells(), rot.site, calibrator_options_from_profile(profile));
+      Calibrator kf(PlanTimeline::of(rot, rot.site), rot.site,
+                    calibrator_options_from_profile(profile));
       ImuSample s;
       while (r.next(s)) kf.push(s);
       kf.finish();

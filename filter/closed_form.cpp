@@ -39,7 +39,7 @@ struct RowSums {
 };
 
 struct DwellAccumulator {
-  Dwell dwell;
+  PlanDwell dwell;
   bool started = false;
   NavError prev;
   NavError at_point;
@@ -72,7 +72,7 @@ std::array<bool, 6> ChannelSet::inputs() const {
   return in;
 }
 
-std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector<Dwell>& dwells,
+std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector<PlanDwell>& dwells,
                                          const Site& site, const Stage1Options& o,
                                          double time_offset) {
   if (!(o.arw > 0.0) || !(o.vrw > 0.0))
@@ -392,9 +392,9 @@ ClosedFormReport run_closed_form(const Session& session, const Stage1Options& st
                                  double table_sigma) {
   ClosedFormReport r;
   r.stage1_options = stage1;
-  const Motion motion = build_motion(session.plan, session.site);
+  const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
   LogReader reader(session.log);
-  r.stage1 = run_stage1(reader, motion.dwells(), session.site, stage1, session.time_offset);
+  r.stage1 = run_stage1(reader, timeline.dwells, session.site, stage1, session.time_offset);
   r.stage2_options.table_sigma = table_sigma;
   r.stage2_options.outer_axis_n = session.plan.table.outer_axis_n;
   r.stage2_options.inner_axis_b = Table(session.plan.table).inner_axis_b();

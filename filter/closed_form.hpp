@@ -26,8 +26,8 @@
 #include "filter/ins_error_model.hpp"
 #include "filter/strapdown.hpp"
 #include "rig/imu_sample.hpp"
-#include "rig/motion.hpp"
 #include "rig/session.hpp"
+#include "rig/timeline.hpp"
 
 namespace sinscal {
 
@@ -58,7 +58,7 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
 /// Stage-1 result of one dwell.
 struct EquivalentInputs {
-  Dwell dwell;
+  PlanDwell dwell;
   double duration = 0.0;  // s navigated
   std::size_t samples = 0;
   Vector6d u = Vector6d::Zero();    // df_n (m/s^2, NED), dw_n (rad/s, NED)
@@ -71,7 +71,7 @@ struct EquivalentInputs {
 
 /// Runs the navigator through every dwell and stage 1 on it. Throws PlanMismatch (dwell missing
 /// from the log) or std::invalid_argument (dwell shorter than min_dwell, no noise densities).
-std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector<Dwell>& dwells,
+std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector<PlanDwell>& dwells,
                                          const Site& site, const Stage1Options& options,
                                          double time_offset = 0.0);
 

@@ -5,7 +5,7 @@
 
 namespace sinscal {
 
-DwellNavigation::DwellNavigation(std::vector<Dwell> dwells, const Site& site,
+DwellNavigation::DwellNavigation(std::vector<PlanDwell> dwells, const Site& site,
                                  const DwellNavOptions& options)
     : dwells_(std::move(dwells)), site_(site), options_(options) {}
 

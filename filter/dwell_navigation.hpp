@@ -10,7 +10,7 @@
 
 #include "filter/strapdown.hpp"
 #include "rig/imu_sample.hpp"
-#include "rig/motion.hpp"
+#include "rig/timeline.hpp"
 
 namespace sinscal {
 
@@ -28,27 +28,27 @@ struct DwellNavOptions {
 
 struct DwellNavRow {
   int dwell = 0;
-  const Dwell* info = nullptr;
+  const PlanDwell* info = nullptr;
   double t_log = 0.0;  // s, log time of the row
   NavError error;      // error.t: time since the dwell's navigation started
 };
 
 struct DwellNavSummary {
-  Dwell dwell;
+  PlanDwell dwell;
   std::size_t samples = 0;
   NavError final_error;
 };
 
 class DwellNavigation {
  public:
-  DwellNavigation(std::vector<Dwell> dwells, const Site& site, const DwellNavOptions& options);
+  DwellNavigation(std::vector<PlanDwell> dwells, const Site& site, const DwellNavOptions& options);
   /// Reads all samples; `sink` gets every output row. Throws PlanMismatch if the log does not
   /// cover every dwell; the summaries of the dwells finished before stay available.
   void run(SampleSource& source, const std::function<void(const DwellNavRow&)>& sink);
   const std::vector<DwellNavSummary>& summaries() const { return summaries_; }
 
  private:
-  std::vector<Dwell> dwells_;
+  std::vector<PlanDwell> dwells_;
   Site site_;
   DwellNavOptions options_;
   std::vector<DwellNavSummary> summaries_;

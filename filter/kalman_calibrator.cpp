@@ -45,15 +45,14 @@ StateLayoutOptions effective_layout(const CalibratorOptions& o) {
   return l;
 }
 
-Calibrator::Calibrator(std::vector<Dwell> dwells, const Site& site,
-                       const CalibratorOptions& options)
-    : dwells_(std::move(dwells)),
+Calibrator::Calibrator(PlanTimeline timeline, const Site& site, const CalibratorOptions& options)
+    : dwells_(std::move(timeline.dwells)),
       site_(site),
       site_terms_(InsSiteTerms::at(site)),
       o_(options),
       layout_(StateLayout::make(effective_layout(options))),
       propagator_(layout_, site_terms_, options.noise),
-      table_(options.table_geometry) {
+      table_(timeline.table) {
   if (dwells_.empty()) throw std::invalid_argument("the Kalman calibrator needs the plan's dwells");
   const int n = layout_.size;
   const auto& cat = coefficient_catalog();
@@ -183,7 +182,7 @@ void Calibrator::inject_error(const Eigen::VectorXd& dx) {
   pending_error_.resize(0);
 }
 
-Eigen::Matrix3d Calibrator::dwell_attitude(const Dwell& dwell) {
+Eigen::Matrix3d Calibrator::dwell_attitude(const PlanDwell& dwell) {
   if (!current_.has_table || !o_.use_table_angles) return dwell.C_b_n_known;
   // The attitude the table's angles give, checked against the plan's orientation.
   const Eigen::Matrix3d C_table = table_.C_b_n({current_.table_outer, current_.table_inner});
@@ -201,7 +200,7 @@ Eigen::Matrix3d Calibrator::dwell_attitude(const Dwell& dwell) {
 }
 
 void Calibrator::update(double t_plan) {
-  const Dwell* dwell = nullptr;
+  const PlanDwell* dwell = nullptr;
   if (detector_) {
     if (detector_->dwell() > 0) dwell = &dwells_[static_cast<std::size_t>(detector_->dwell() - 1)];
   } else {
@@ -326,10 +325,8 @@ double chi2_upper(double n, double z) {
 namespace {
 KalmanReport run_kalman_pass(const Session& session, const CalibratorOptions& options,
                              SampleSource* source, const KalmanRunOptions& run) {
-  const Motion motion = build_motion(session.plan, session.site);
-  CalibratorOptions o = options;
-  o.table_geometry = session.plan.table;  // the table whose angles a log may carry
-  Calibrator kf(motion.dwells(), session.site, o);
+  const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
+  Calibrator kf(timeline, session.site, options);
   std::unique_ptr<LogReader> reader;
   if (!source) {
     reader = std::make_unique<LogReader>(session.log);
@@ -421,7 +418,7 @@ KalmanReport run_kalman_pass(const Session& session, const CalibratorOptions& op
     r.interrupted = true;
   }
   const StaticDetector* detector = kf.detector();
-  const std::size_t plan_dwells = motion.dwells().size();
+  const std::size_t plan_dwells = timeline.dwells.size();
   if (detector && r.stopped.empty() && r.diverged.empty() &&
       detector->dwells().size() < plan_dwells) {
     std::ostringstream m;
@@ -432,11 +429,11 @@ KalmanReport run_kalman_pass(const Session& session, const CalibratorOptions& op
   // A log that ends before the plan does: the data do not match the plan. The estimates from the
   // data up to there are kept, and the run says so.
   if (!detector && r.stopped.empty() && r.diverged.empty() &&
-      (r.samples == 0 || t_last - options.time_offset < motion.duration() - 1.5 * s.dt)) {
+      (r.samples == 0 || t_last - options.time_offset < timeline.duration - 1.5 * s.dt)) {
     std::ostringstream m;
     m << (source == reader.get() ? session.log.file : std::string("the input"))
       << ": the log ends at t = " << (r.samples ? t_last : 0.0) << " s but the plan runs until "
-      << motion.duration() + options.time_offset << " s: the plan does not match the data";
+      << timeline.duration + options.time_offset << " s: the plan does not match the data";
     r.stopped = m.str();
   }
   if (r.diverged.empty()) try {
@@ -479,7 +476,7 @@ KalmanReport run_kalman_pass(const Session& session, const CalibratorOptions& op
     // Where the data were static against where the plan says: the log's timing, measured.
     nlohmann::ordered_json d = nlohmann::ordered_json::array();
     for (const auto& f : detector->dwells()) {
-      const Dwell& p = motion.dwells()[static_cast<std::size_t>(f.index - 1)];
+      const PlanDwell& p = timeline.dwells[static_cast<std::size_t>(f.index - 1)];
       d.push_back({{"dwell", f.index},
                    {"label", p.label},
                    {"t_start", f.t_start},

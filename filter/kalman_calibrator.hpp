@@ -34,9 +34,9 @@
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"
 #include "rig/imu_sample.hpp"
-#include "rig/motion.hpp"
 #include "rig/session.hpp"
 #include "rig/table.hpp"
+#include "rig/timeline.hpp"
 
 namespace sinscal {
 
@@ -92,11 +92,10 @@ struct CalibratorOptions {
   StaticFrom static_from = StaticFrom::Plan;
   StaticDetectorOptions detector;
   /// Samples carrying the table's axis angles (a table-angle column in the log): the attitude
-  /// updates use the attitude the angles give through this geometry (the plan's table) instead
-  /// of the plan's orientation; a dwell where the two differ by more than
-  /// `table_plan_tolerance` is a plan mismatch.
+  /// updates use the attitude the angles give through the timeline's table geometry instead of
+  /// the plan's orientation; a dwell where the two differ by more than `table_plan_tolerance` is
+  /// a plan mismatch.
   bool use_table_angles = true;
-  TableGeometry table_geometry;
   double table_plan_tolerance = 1.0 * units::deg;  // rad
 };
 
@@ -134,7 +133,8 @@ struct CoefficientEstimate {
 
 class Calibrator {
  public:
-  Calibrator(std::vector<Dwell> dwells, const Site& site, const CalibratorOptions& options);
+  /// The plan's timeline (rig/timeline.hpp: dwells, known attitudes, table geometry), the site.
+  Calibrator(PlanTimeline timeline, const Site& site, const CalibratorOptions& options);
   /// One IMU sample (streaming: call in time order). A sample is processed when the next one
   /// arrives (one sample of latency: the rates of change of angular rate and specific force over
   /// an interval are central differences of its neighbours).
@@ -172,10 +172,10 @@ class Calibrator {
                const Eigen::Vector3d& f_ddot);
   void update(double t_plan);
   /// The known attitude of a dwell: the table's angles when the log has them, else the plan's.
-  Eigen::Matrix3d dwell_attitude(const Dwell& dwell);
+  Eigen::Matrix3d dwell_attitude(const PlanDwell& dwell);
   void apply(const Measurement& m);
 
-  std::vector<Dwell> dwells_;
+  std::vector<PlanDwell> dwells_;
   Site site_;
   InsSiteTerms site_terms_;  // Earth terms at the site (the table does not move), once
   CalibratorOptions o_;

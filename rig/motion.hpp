@@ -9,6 +9,7 @@
 
 #include "models/earth.hpp"
 #include "models/imu_error_model.hpp"
+#include "rig/timeline.hpp"
 
 namespace sinscal {
 
@@ -55,14 +56,10 @@ struct MotionSegment {
   double outer_sign = 1.0, inner_sign = 1.0;
 };
 
-/// A static interval of the plan: the attitude the plan says (known) and the one the simulation
-/// produced (true; differs by the table errors).
-struct Dwell {
-  int index = 0;
-  std::string label;
-  double t_start = 0.0;  // s
-  double t_end = 0.0;    // s
-  Eigen::Matrix3d C_b_n_known = Eigen::Matrix3d::Identity();
+/// A static interval of the simulated motion: what the plan says (rig/timeline.hpp) and the
+/// attitude the simulation produced (true; differs by the table errors). Estimators take the
+/// PlanDwell part only.
+struct Dwell : PlanDwell {
   Eigen::Matrix3d C_b_n_true = Eigen::Matrix3d::Identity();
 };
 

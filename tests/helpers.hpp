@@ -1,5 +1,7 @@
 #pragma once
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -16,9 +18,11 @@ inline std::string source_path(const std::string& relative) {
   return std::string(SINSCAL_SOURCE_DIR) + "/" + relative;
 }
 
-/// A fresh temporary directory for one test.
+/// A fresh temporary directory for one test (per process: test runs of several build trees at
+/// once do not share it).
 inline std::string temp_dir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("sinscal_test_" + name);
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("sinscal_test_" + std::to_string(::getpid()) + "_" + name);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir.string();
@@ -26,6 +30,16 @@ inline std::string temp_dir(const std::string& name) {
 
 inline Plan load_plan(const std::string& name) {
   return Plan::load(source_path("config/plans/" + name));
+}
+
+/// What the estimators know of a plan (rig/timeline.hpp), at the plan's site.
+inline PlanTimeline timeline(const Plan& plan) { return PlanTimeline::of(plan, plan.site); }
+
+/// The plan's part of a simulated motion's dwells (what the estimators may see).
+inline std::vector<PlanDwell> plan_dwells(const Motion& motion) {
+  std::vector<PlanDwell> out;
+  for (const Dwell& d : motion.dwells()) out.push_back(d);
+  return out;
 }
 
 /// All samples of a motion, noise off unless a noise model is given.

@@ -20,7 +20,7 @@ std::vector<EquivalentInputs> stage1(const Case& c, const std::vector<ImuSample>
   if (o.arw == 0.0) o.arw = c.profile.noise.gyro.white;
   if (o.vrw == 0.0) o.vrw = c.profile.noise.accel.white;
   test::VectorSource src(samples);
-  return run_stage1(src, c.motion.dwells(), c.plan.site, o);
+  return run_stage1(src, test::plan_dwells(c.motion), c.plan.site, o);
 }
 
 Stage2Options stage2_options(const Plan& p, double table_sigma = 0.0) {
@@ -299,7 +299,7 @@ TEST_CASE("Closed form Monte Carlo: spread of the errors matches the predicted s
     o.arw = c.profile.noise.gyro.white;
     o.vrw = c.profile.noise.accel.white;
     test::VectorSource src(samples);
-    const auto in = run_stage1(src, m.dwells(), c.plan.site, o);
+    const auto in = run_stage1(src, test::plan_dwells(m), c.plan.site, o);
     const Stage2Result r = solve_stage2(in, c.plan.site, stage2_options(c.plan, table_sigma));
     const Eigen::VectorXd truth = base_vector(truth_model);
     for (int i = 0; i < n; ++i) {

@@ -93,7 +93,7 @@ CalibratorOptions all_on() {
 // injected at the start.
 Calibrator run_window(const CalibratorOptions& o, const Eigen::VectorXd* dx) {
   const Window& w = window();
-  Calibrator kf(w.motion.dwells(), w.plan.site, o);
+  Calibrator kf(test::timeline(w.plan), w.plan.site, o);
   if (dx) kf.inject_error(*dx);
   for (const auto& s : w.samples) kf.push(s);
   kf.finish();

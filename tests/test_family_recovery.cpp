@@ -61,7 +61,7 @@ TEST_CASE("Every extended family is recovered by the Kalman filter within 3 sigm
     const ImuErrorModel truth = prof.draw(derive_seed(7, 1));
     const auto samples = test::simulate(m, truth, 100.0, &prof.noise, derive_seed(7, 2));
     const CalibratorOptions o = calibrator_options_from_profile(prof);
-    Calibrator kf(m.dwells(), p.site, o);
+    Calibrator kf(test::timeline(p), p.site, o);
     const auto est = test::run_filter(kf, samples);
     REQUIRE(kf.layout().block(f.name) != nullptr);
     const Eigen::VectorXd theta = truth.vector();

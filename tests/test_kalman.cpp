@@ -27,7 +27,7 @@ Run run_rot19(bool noise, std::uint64_t seed) {
   // arcsec, and its noise-free estimate is pulled towards the prior: see the Monte Carlo below.)
   CalibratorOptions o = calibrator_options_from_profile(prof);
   o.attitude = CalibratorOptions::AttitudeUpdates::Every;
-  Calibrator kf(m.dwells(), p.site, o);
+  Calibrator kf(test::timeline(p), p.site, o);
   for (const auto& s : samples) kf.push(s);
   kf.finish();
   return {kf.estimate(), truth.coefficients(), kf.nis_sum() / kf.nis_dof()};
@@ -91,7 +91,7 @@ TEST_CASE("Kalman calibrator Monte Carlo: NEES of every coefficient block in the
     const auto samples = test::simulate(mt, truth, 100.0, &prof.noise, derive_seed(seed, 2));
     CalibratorOptions o = calibrator_options_from_profile(prof);
     o.attitude = CalibratorOptions::AttitudeUpdates::First;
-    Calibrator kf(mt.dwells(), p.site, o);
+    Calibrator kf(test::timeline(p), p.site, o);
     const auto est = test::run_filter(kf, samples);
     const Eigen::VectorXd theta = truth.vector();
     for (const auto& cb : kf.layout().coefficient_blocks()) {
@@ -134,7 +134,7 @@ TEST_CASE("Kalman calibrator: streaming through the log reader equals the in-mem
   for (const auto& s : samples) w.write(s);
   w.close();
   const CalibratorOptions o = calibrator_options_from_profile(prof);
-  Calibrator batch(m.dwells(), p.site, o), stream(m.dwells(), p.site, o);
+  Calibrator batch(test::timeline(p), p.site, o), stream(test::timeline(p), p.site, o);
   for (const auto& s : samples) batch.push(s);
   batch.finish();
   LogReader reader(LogFormat::native_format(dir + "/imu.csv", 100.0));
@@ -176,7 +176,7 @@ FamilyStats monte_carlo_rot19(const CalibratorOptions& base, int runs, std::uint
     te.seed = derive_seed(seed, 3);
     const Motion mt = build_motion(p, p.site, te);
     const auto samples = test::simulate(mt, truth, 100.0, &prof.noise, derive_seed(seed, 2));
-    Calibrator kf(mt.dwells(), p.site, base);
+    Calibrator kf(test::timeline(p), p.site, base);
     for (const auto& s : samples) kf.push(s);
     kf.finish();
     const auto est = kf.estimate();

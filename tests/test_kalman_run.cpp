@@ -79,7 +79,7 @@ TEST_CASE("Kalman filter: a coefficient the plan cannot observe is named", "[kal
   const auto samples = test::simulate(m, prof.draw(3), 100.0, &prof.noise, 4);
   CalibratorOptions o = calibrator_options_from_profile(prof);
   o.attitude = CalibratorOptions::AttitudeUpdates::None;
-  Calibrator kf(m.dwells(), p.site, o);
+  Calibrator kf(test::timeline(p), p.site, o);
   const auto est = test::run_filter(kf, samples);
   auto observed = [&](const std::string& name) {
     const auto& cat = coefficient_catalog();

@@ -352,7 +352,7 @@ TEST_CASE("Kalman filter: data that jump over the time between dwells stop the r
   // integrates through them, must say so rather than integrate a wrong attitude.
   const Session session = Session::load(data_path("segments/session.ini"));
   const Motion motion = build_motion(session.plan, session.site);
-  Calibrator kf(motion.dwells(), session.site, CalibratorOptions{});
+  Calibrator kf(PlanTimeline::of(session.plan, session.site), session.site, CalibratorOptions{});
   LogReader r(session.log);
   ImuSample s;
   CHECK_THROWS_WITH(

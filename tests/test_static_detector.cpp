@@ -80,7 +80,7 @@ TEST_CASE("Kalman filter with dwells from the data: a log whose timing is off th
   auto worst_z = [&](CalibratorOptions::StaticFrom from) {
     CalibratorOptions o = calibrator_options_from_profile(prof);
     o.static_from = from;
-    Calibrator kf(m.dwells(), plan.site, o);
+    Calibrator kf(test::timeline(plan), plan.site, o);
     for (const auto& s : samples) kf.push(s);
     kf.finish();
     const double worst = max_error_over_sigma(kf.estimate(), truth);
@@ -112,10 +112,9 @@ TEST_CASE("Kalman filter with dwells from the data: more static intervals than t
       SensorProfile::load(test::source_path("config/sensors/nav-fog-extended.ini"));
   const auto samples =
       test::simulate(build_motion(full, full.site), prof.draw(3), 100.0, &prof.noise, 4);
-  const Motion m = build_motion(shorter, shorter.site);
   CalibratorOptions o = calibrator_options_from_profile(prof);
   o.static_from = CalibratorOptions::StaticFrom::Data;
-  Calibrator kf(m.dwells(), shorter.site, o);
+  Calibrator kf(test::timeline(shorter), shorter.site, o);
   CHECK_THROWS_AS(
       [&] {
         for (const auto& s : samples) kf.push(s);
@@ -123,7 +122,7 @@ TEST_CASE("Kalman filter with dwells from the data: more static intervals than t
       PlanDataMismatch);
   CHECK_THROWS_WITH(
       [&] {
-        Calibrator again(m.dwells(), shorter.site, o);
+        Calibrator again(test::timeline(shorter), shorter.site, o);
         for (const auto& s : samples) again.push(s);
       }(),
       Catch::Contains("static interval 17 found in the data") &&
@@ -152,12 +151,10 @@ TEST_CASE("Kalman filter with a table-angle column: the attitude the table reall
   for (ImuSample s; sim.next(s);) samples.push_back(s);
   REQUIRE(samples.front().has_table);
 
-  const Motion m = build_motion(plan, plan.site);
   auto worst_z = [&](bool use_angles) {
     CalibratorOptions o = calibrator_options_from_profile(prof);
-    o.table_geometry = plan.table;
     o.use_table_angles = use_angles;
-    Calibrator kf(m.dwells(), plan.site, o);
+    Calibrator kf(test::timeline(plan), plan.site, o);
     for (const auto& s : samples) kf.push(s);
     kf.finish();
     CHECK(kf.table_attitude_updates() == (use_angles ? 8 : 0));
@@ -185,10 +182,8 @@ TEST_CASE("Table-angle column far from the plan's orientation: a plan mismatch",
   so.noise = false;
   so.table_angles = true;
   ImuSimulator sim(data_motion, prof.draw(1), prof.noise, so);
-  const Motion m = build_motion(plan, plan.site);
   CalibratorOptions o = calibrator_options_from_profile(prof);
-  o.table_geometry = plan.table;
-  Calibrator kf(m.dwells(), plan.site, o);
+  Calibrator kf(test::timeline(plan), plan.site, o);
   CHECK_THROWS_WITH(
       [&] {
         for (ImuSample s; sim.next(s);) kf.push(s);

@@ -28,7 +28,7 @@ TEST_CASE("Strapdown, perfect sensors: 8 static dwells of 180 s", "[strapdown]")
     DwellNavOptions o;
     o.output_interval = 0.0;  // every sample
     o.strapdown.vertical_held = held;
-    DwellNavigation run(m.dwells(), p.site, o);
+    DwellNavigation run(test::plan_dwells(m), p.site, o);
     test::VectorSource src(samples);
     MaxError max;
     run.run(src, [&](const DwellNavRow& r) { max.add(r.error); });
@@ -91,7 +91,7 @@ void check_schuler(const ImuErrorModel& errors, bool vertical_held) {
   DwellNavOptions o;
   o.output_interval = 1.0;
   o.strapdown.vertical_held = vertical_held;
-  DwellNavigation run(m.dwells(), p.site, o);
+  DwellNavigation run(test::plan_dwells(m), p.site, o);
   test::VectorSource src(samples);
   // Per dwell: largest deviation from the analytic solution and the peak of the solution, for
   // the velocities and for the tilts.
@@ -156,7 +156,7 @@ TEST_CASE("Dwell navigation: a log shorter than the plan is a clear error, finis
   const Motion m = build_motion(p, p.site);
   auto samples = test::simulate(m);
   samples.resize(samples.size() / 2);
-  DwellNavigation run(m.dwells(), p.site, DwellNavOptions{});
+  DwellNavigation run(test::plan_dwells(m), p.site, DwellNavOptions{});
   test::VectorSource src(samples);
   CHECK_THROWS_AS(run.run(src, [](const DwellNavRow&) {}), PlanMismatch);
   CHECK(run.summaries().size() >= 3);
