@@ -4,6 +4,7 @@
 #include <array>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace sinscal {
@@ -75,6 +76,7 @@ PoseDetection detect_poses(const std::vector<ImuReading>& r, const PoseDetectorO
   // the sums of squares small against their differences).
   constexpr int kChannels = 6;
   std::array<std::vector<double>, kChannels> var;
+  std::array<double, kChannels> floor{};  // rounding level of the windowed variances
   {
     std::vector<double> s(n + 1), s2(n + 1);
     for (int c = 0; c < kChannels; ++c) {
@@ -91,6 +93,7 @@ PoseDetection detect_poses(const std::vector<ImuReading>& r, const PoseDetectorO
         const double sum = s[i + h + 1] - s[i - h], sum2 = s2[i + h + 1] - s2[i - h];
         var[c][i - h] = std::max(0.0, (sum2 - sum * sum / wd) / (wd - 1.0));
       }
+      floor[c] = 100.0 * std::numeric_limits<double>::epsilon() * s2[n] / (wd - 1.0);
     }
   }
   const std::size_t centres = n - 2 * h;
@@ -117,12 +120,12 @@ PoseDetection detect_poses(const std::vector<ImuReading>& r, const PoseDetectorO
   };
 
   // Pass 1: a low quantile of each channel's windowed variances. Noise-free (simulated) data
-  // rest with zero variance: a floor far below any motion keeps the ratios finite.
+  // rest with zero variance: the floor (the rounding of the cumulative sums) keeps the ratios
+  // finite.
   for (int c = 0; c < kChannels; ++c) {
-    const double high = quantile_of(var[c], 0.9);
-    if (!(high > 0.0))
+    if (!(quantile_of(var[c], 0.9) > floor[c]))
       throw PoseDetectorError("pose detector: a channel is constant over the record");
-    ref[c] = std::max(quantile_of(var[c], o.reference_quantile), 1e-12 * high);
+    ref[c] = std::max(quantile_of(var[c], o.reference_quantile), floor[c]);
   }
   if (classify() == 0)
     throw PoseDetectorError("pose detector: no window is quiet enough to be at rest");
@@ -133,7 +136,7 @@ PoseDetection detect_poses(const std::vector<ImuReading>& r, const PoseDetectorO
     std::vector<double> quiet;
     for (std::size_t i = 0; i < centres; ++i)
       if (is_static[i]) quiet.push_back(var[c][i]);
-    ref[c] = std::max(quantile_of(quiet, 0.5) / median_ratio, ref[c] * 1e-3);
+    ref[c] = std::max(quantile_of(quiet, 0.5) / median_ratio, floor[c]);
   }
   if (classify() == 0)
     throw PoseDetectorError("pose detector: no window is quiet enough to be at rest");
