@@ -113,7 +113,7 @@ PoseDetection detect_poses(const std::vector<ImuReading>& r, const PoseDetectorO
         sa += var[c][i] / ref[c];
         sg += var[c + 3][i] / ref[c + 3];
       }
-      is_static[i] = sa <= threshold && sg <= threshold;
+      is_static[i] = sa <= threshold && (!o.use_gyro || sg <= threshold);
       count += is_static[i] ? 1 : 0;
     }
     return count;
@@ -163,7 +163,7 @@ PoseDetection detect_poses(const std::vector<ImuReading>& r, const PoseDetectorO
       for (int c = 0; c < kChannels; ++c) mean[c] += channel(r[k], c);
     for (auto& m : mean) m /= static_cast<double>(last - first + 1);
     auto quiet = [&](std::size_t k) {
-      for (int c = 0; c < kChannels; ++c)
+      for (int c = 0; c < (o.use_gyro ? kChannels : 3); ++c)
         if (std::abs(channel(r[k], c) - mean[c]) > o.edge_sigmas * std::sqrt(ref[c])) return false;
       return true;
     };

@@ -40,6 +40,10 @@ struct PoseDetectorOptions {
   double false_alarm = 1e-3;        // white noise: chance that a static window is called moving
   double margin = 3.0;              // factor on the chi-square threshold (non-white noise)
   double edge_sigmas = 5.0;         // readings at a pose's edges: within this many noise sigmas
+  /// false: the accelerometers alone decide (imu_tk's detector), for sessions where a hand holds
+  /// the unit during the poses: the gyros then see its tremor and slow drift, which a gyro test
+  /// at the noise level calls motion.
+  bool use_gyro = true;
 };
 
 /// One static pose found. Means and standard deviations in the readings' units (counts or SI).
