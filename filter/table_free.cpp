@@ -3,6 +3,7 @@
 #include <ceres/ceres.h>
 #include <ceres/sphere_manifold.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -364,6 +365,24 @@ TableFreeResult calibrate_table_free(const std::vector<ImuReading>& r,
     throw TableFreeError(Kind::PoseTooShort, m.str());
   }
   const std::size_t P = pd.size();
+  // The accelerometer triad is observable only if gravity points along every axis in some pose:
+  // directions all near one plane leave the scale factor normal to it undetermined.
+  {
+    Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
+    for (const auto& d : pd) {
+      const Eigen::Vector3d u0 = d.accel.normalized();
+      S += u0 * u0.transpose() / static_cast<double>(P);
+    }
+    const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(S).eigenvalues()(0);
+    if (smallest < 1e-3) {
+      std::ostringstream m;
+      m << "table-free calibration: the poses' gravity directions lie within "
+        << std::asin(std::sqrt(smallest)) / units::deg
+        << " deg (RMS) of one plane: the accelerometer triad is not observable; turn the unit "
+           "so that every axis points up and down in some poses";
+      throw TableFreeError(Kind::SolveFailed, m.str());
+    }
+  }
 
   // Noise per reading, pooled over the poses; rate noise density from the sample interval.
   Eigen::Vector3d va = Eigen::Vector3d::Zero(), vg = Eigen::Vector3d::Zero();
@@ -482,7 +501,9 @@ TableFreeResult calibrate_table_free(const std::vector<ImuReading>& r,
   if (!out.joint_stage.converged)
     throw TableFreeError(Kind::SolveFailed,
                          "table-free calibration: the joint solution did not converge in " +
-                             std::to_string(o.max_iterations) + " iterations");
+                             std::to_string(o.max_iterations) +
+                             " iterations (inconsistent data: poses that are not at rest, or "
+                             "a wrong gravity?)");
   out.iterations =
       out.accel_stage.iterations + out.gyro_stage.iterations + out.joint_stage.iterations;
   out.converged = true;
