@@ -326,6 +326,16 @@ TableFreeResult calibrate_table_free(const std::vector<ImuReading>& r,
                          "table-free calibration: options out of range (min_poses must be at "
                          "least 10: 9 accelerometer unknowns and one residual)");
 
+  for (std::size_t k = 0; k < r.size(); ++k) {
+    if (!r[k].accel.allFinite() || !r[k].gyro.allFinite() || !std::isfinite(r[k].t))
+      throw TableFreeError(Kind::BadInput, "table-free calibration: reading " +
+                                               std::to_string(k + 1) + " is not finite");
+    if (k > 0 && !(r[k].t > r[k - 1].t))
+      throw TableFreeError(Kind::BadInput,
+                           "table-free calibration: times do not increase at "
+                           "reading " +
+                               std::to_string(k + 1));
+  }
   // Poses: in order, inside the record, trimmed, long enough.
   if (static_cast<int>(poses.size()) < o.min_poses) {
     std::ostringstream m;

@@ -31,12 +31,15 @@
 // Earth rate: the gyros at rest read b_g + G w_ie_b, w_ie_b of size 15 deg/h. Its vertical part
 // (Omega sin(lat) along the pose's gravity direction) is modelled when the site is known; its
 // horizontal part (Omega cos(lat)) points along the unknown heading of each pose, so it enters as
-// noise of the pose's mean rate (variance (Omega cos(lat))^2 / 2 per horizontal axis, uniform
-// heading) and of the turns (the gravity direction moves by up to Omega cos(lat) T during a turn
-// of T s). For a MEMS gyro (bias instability ~10 deg/h, ARW ~0.3 deg/sqrt(h)) this is at or below
-// the noise of a few-second pose; for a tactical-grade gyro it dominates the bias's sigma, which
-// this method cannot bring below about 15 deg/h / sqrt(2 * poses). Without a site, the whole
-// Earth rate is taken as noise of random direction.
+// noise of the pose's mean rate in the two horizontal directions only (variance
+// (Omega cos(lat))^2 / 2 each, for a uniformly random heading), and of the turns (the gravity
+// direction moves by up to Omega cos(lat) T during a turn of T s). Each pose so measures the
+// bias along its own vertical to the white-noise level, and poses in many directions give all
+// three components to that level: the horizontal Earth rate costs little even for a tactical
+// gyro (Monte Carlo: 0.3 deg/h sigma at ARW 0.05 deg/sqrt(h), errors consistent with it). For a
+// MEMS gyro (bias 0.1-2 deg/s) the Earth rate is far below the bias and comparable to the noise
+// of a few-second pose. Without a site, the whole Earth rate is taken as noise of random
+// direction (variance Omega^2 / 3 per axis).
 #pragma once
 
 #include <Eigen/Core>
