@@ -1,5 +1,6 @@
 // Static poses of hand-held sessions: simulated ones (known pose edges) in raw counts with
 // unknown offsets, and the real Xsens MTi recording of imu_tk.
+#include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdio>

@@ -1,10 +1,12 @@
 // Table-free (hand-held multi-position) calibration: exact recovery without noise, the Monte
 // Carlo consistency of estimates and sigmas with noise, bad input, and the real Xsens session.
+#include <array>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <string>
 
 #include "filter/table_free.hpp"
