@@ -24,6 +24,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/LU>
 #include <map>
 #include <string>
 #include <vector>
@@ -54,6 +55,10 @@ struct TriadErrors {
   Eigen::Vector3d invert_step(const Eigen::Vector3d& y, const Eigen::Vector3d& extra,
                               const Eigen::Vector3d& x_guess,
                               const Eigen::Matrix3d& linear_inverse) const;
+  Eigen::Vector3d invert_step(const Eigen::Vector3d& y, const Eigen::Vector3d& extra,
+                              const Eigen::Vector3d& x_guess) const {
+    return invert_step(y, extra, x_guess, linear().inverse());
+  }
 };
 
 /// True kinematics at the IMU reference point at one instant, body axes.
