@@ -22,7 +22,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   f.header_lines = static_cast<int>(b & 3);
   const bool time_column = (a & 0x10) != 0, table = (a & 0x20) != 0;
   f.columns = {time_column ? "t" : "-", "gx", "gy", "gz", "ax", "ay", "az"};
-  if ((b & 0x04) != 0) f.columns = {"az", "ay", "ax", "-", "gz", "gy", "gx", time_column ? "t" : "-"};
+  if ((b & 0x04) != 0)
+    f.columns = {"az", "ay", "ax", "-", "gz", "gy", "gx", time_column ? "t" : "-"};
   if (table) {
     f.columns.push_back("outer");
     f.columns.push_back("inner");
@@ -51,7 +52,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (!std::isfinite(s.t) || !(s.dt > 0.0) || !std::isfinite(s.dt) || !s.dtheta_b.allFinite() ||
           !s.dv_b.allFinite() || !std::isfinite(s.table_outer) || !std::isfinite(s.table_inner))
         finding("a sample is not finite", "line " + std::to_string(reader.line()));
-      if (!(s.t > t_prev)) finding("time does not increase", "line " + std::to_string(reader.line()));
+      if (!(s.t > t_prev))
+        finding("time does not increase", "line " + std::to_string(reader.line()));
       t_prev = s.t;
     }
   } catch (const sinscal::LogError& e) {

@@ -22,7 +22,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (!std::isfinite(s.t) || !(s.dt > 0.0) || !std::isfinite(s.dt) || !s.dtheta_b.allFinite() ||
           !s.dv_b.allFinite() || !std::isfinite(s.table_outer) || !std::isfinite(s.table_inner))
         finding("a sample is not finite", "line " + std::to_string(reader.line()));
-      if (!(s.t > t_prev)) finding("time does not increase", "line " + std::to_string(reader.line()));
+      if (!(s.t > t_prev))
+        finding("time does not increase", "line " + std::to_string(reader.line()));
       t_prev = s.t;
     }
   } catch (const sinscal::LogError& e) {

@@ -14,8 +14,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const std::string d = sinscal::fuzz::work_dir() + "/session";
     std::filesystem::create_directories(d);
     std::filesystem::copy_file(std::string(SINSCAL_SOURCE_DIR) + "/config/plans/seed8.ini",
-                               d + "/plan.ini",
-                               std::filesystem::copy_options::overwrite_existing);
+                               d + "/plan.ini", std::filesystem::copy_options::overwrite_existing);
     return d;
   }();
   const std::string path = dir + "/session.ini";
