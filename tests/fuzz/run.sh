@@ -68,7 +68,7 @@ done
 
 if [ ${#failed[@]} -gt 0 ]; then
   echo "== findings in: ${failed[*]} (reproduce: $build/tests/fuzz/TARGET FILE)" >&2
-  for t in "${failed[@]}"; do grep -m3 -E "ERROR|FINDING|runtime error|SUMMARY" "$out/$t.log" >&2 || true; done
+  for t in "${failed[@]}"; do grep -a -m3 -E "^(FINDING|SUMMARY)|runtime error" "$out/$t.log" >&2 || true; done
   exit 1
 fi
 echo "== no findings"
