@@ -1,11 +1,18 @@
 // INI configuration files (plans, sessions, sensor profiles) and quantities with units.
 //
-// Files are read with Boost.Program_options' config-file parser: `[section]` headers, `key = value`
-// lines, `#` comments. Keys are addressed as "section.key". A quantity is written as numbers
-// optionally followed by one unit token, e.g. `bias = 0.1 0.3 deg/h`; without a unit the
-// documented default unit of the key applies. A unit of the wrong kind is an error.
+// The syntax, line by line: blank lines; `#` starts a comment anywhere on a line (also after a
+// value; a value cannot contain `#`); `[section]` starts a section (the name trimmed, non-empty,
+// without `[`, `]` or `=`); `key = value` inside a section (key and value trimmed, the value may be
+// empty and may contain `=`). Keys are addressed as "section.key" (a key may contain dots itself,
+// e.g. `gyro.bias` in [targets]). A key given twice, a key before the first section, or any other
+// line is a ConfigError naming file and line. The parser is linear in the size of the file; user
+// text is never passed to a formatter. A quantity is written as numbers optionally followed by one
+// unit token, e.g. `bias = 0.1 0.3 deg/h`; without a unit the documented default unit of the key
+// applies. A unit of the wrong kind is an error.
 #pragma once
 
+#include <climits>
+#include <cstddef>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -51,7 +58,8 @@ std::vector<double> parse_quantities(const std::string& text, const std::vector<
                                      const std::string& default_unit);
 
 /// Parses "v1 v2 ... [unit]" into SI values. `default_unit` is used when no unit is written.
-/// Throws ConfigError (without location; callers add it) on a bad number or unit.
+/// Throws ConfigError (without location; callers add it) on a bad number or unit, and on a value
+/// that is not finite as written (inf, nan, 1e999) or once converted to SI.
 std::vector<double> parse_quantities(const std::string& text, QuantityKind kind,
                                      const std::string& default_unit);
 
@@ -71,9 +79,13 @@ class IniFile {
   std::string get_string(const std::string& key, const std::string& fallback) const;
   double get_double(const std::string& key) const;
   double get_double(const std::string& key, double fallback) const;
-  int get_int(const std::string& key, int fallback) const;
+  /// A whole number (written e.g. `3`, `3.0` or `1e3`) in [min_value, max_value]; anything else
+  /// (a fraction, out of range, not finite) is a ConfigError naming file, line and key. The
+  /// fallback is returned as given when the key is absent.
+  int get_int(const std::string& key, int fallback, int min_value = INT_MIN,
+              int max_value = INT_MAX) const;
   bool get_bool(const std::string& key, bool fallback) const;
-  /// Exactly `count` values (count < 0: any number >= 1) in SI.
+  /// Exactly `count` values (count < 0: any number >= 1) in SI, each finite.
   std::vector<double> get_quantities(const std::string& key, QuantityKind kind,
                                      const std::string& default_unit, int count = -1) const;
   double get_quantity(const std::string& key, QuantityKind kind,
@@ -84,22 +96,38 @@ class IniFile {
   double get_quantity(const std::string& key, QuantityKind kind, const std::string& default_unit,
                       double fallback_si) const;
   /// Section names in file order that start with `prefix` (e.g. "orientation." gives
-  /// "orientation.1", "orientation.2", ...).
+  /// "orientation.1", "orientation.2", ...), including sections without keys.
   std::vector<std::string> sections_with_prefix(const std::string& prefix) const;
-  /// All keys in file order.
+  /// All section names in file order (a section written twice is listed once).
+  const std::vector<std::string>& sections() const { return section_names_; }
+  bool has_section(const std::string& section) const { return sections_.count(section) != 0; }
+  /// All keys ("section.key") in file order.
   const std::vector<std::string>& keys() const { return order_; }
-  /// "file:line: [section] key: " prefix for messages about `key`.
+  /// The line of `key` (1-based; 0 if absent).
+  std::size_t line_of(const std::string& key) const;
+  /// "file:line: 'key': " prefix for messages about `key` ("file: 'key': " if absent).
   std::string where(const std::string& key) const;
-  /// Throws ConfigError for any key of `section` not in `allowed` (catches typos).
+  /// Throws ConfigError (file:line, key, the known keys) for any key of `section` not in
+  /// `allowed` (catches typos). Linear in the number of keys of that section.
   void check_keys(const std::string& section, const std::vector<std::string>& allowed) const;
 
  private:
+  struct Entry {
+    std::string value;
+    std::size_t line = 0;
+  };
+  struct Section {
+    std::size_t line = 0;           // of its first header
+    std::vector<std::string> keys;  // names within the section, file order
+  };
   void parse(const std::string& text);
+  [[noreturn]] void syntax_error(std::size_t line, const std::string& cause) const;
+  std::string missing(const std::string& key) const;
   std::string path_;
-  std::map<std::string, std::string> values_;
-  std::map<std::string, int> lines_;
-  std::vector<std::string> order_;
-  std::vector<std::string> sections_;
+  std::map<std::string, Entry> entries_;     // by "section.key"
+  std::map<std::string, Section> sections_;  // by name
+  std::vector<std::string> order_;           // keys in file order
+  std::vector<std::string> section_names_;   // sections in file order
 };
 
 }  // namespace sinscal

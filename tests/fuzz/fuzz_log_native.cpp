@@ -1,0 +1,35 @@
+// libFuzzer target: LogReader over an std::istream in the native format (rig/log_io.hpp). Input:
+// one option byte (bit 0: skip bad samples), then the log text. Every error is a LogError naming
+// the file; every sample read is finite and moves time forward.
+#include <cmath>
+#include <sstream>
+
+#include "fuzz_support.hpp"
+#include "rig/log_io.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using sinscal::fuzz::finding;
+  if (size < 1) return 0;
+  const bool skip = (data[0] & 1) != 0;
+  std::istringstream in(sinscal::fuzz::text_of(data + 1, size - 1));
+  const std::string name = "fuzz.csv";
+  try {
+    sinscal::LogReader reader(in, sinscal::LogFormat::native_format(name, 100.0));
+    if (skip) reader.skip_bad_samples([](const sinscal::BadSampleError&) {});
+    sinscal::ImuSample s;
+    double t_prev = -INFINITY;
+    while (reader.next(s)) {
+      if (!std::isfinite(s.t) || !(s.dt > 0.0) || !std::isfinite(s.dt) || !s.dtheta_b.allFinite() ||
+          !s.dv_b.allFinite() || !std::isfinite(s.table_outer) || !std::isfinite(s.table_inner))
+        finding("a sample is not finite", "line " + std::to_string(reader.line()));
+      if (!(s.t > t_prev))
+        finding("time does not increase", "line " + std::to_string(reader.line()));
+      t_prev = s.t;
+    }
+  } catch (const sinscal::LogError& e) {
+    sinscal::fuzz::check_message(e, name + ":");
+  } catch (const std::exception& e) {
+    finding("not a LogError", e.what());
+  }
+  return 0;
+}

@@ -1,0 +1,19 @@
+// libFuzzer target: read_result_json (rig/session.hpp; it may move to report/), which takes a
+// path: the input is written to a file first. Every error is a std::runtime_error naming the file.
+#include "fuzz_support.hpp"
+#include "rig/session.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string path = sinscal::fuzz::work_dir() + "/result.json";
+  sinscal::fuzz::write_file(path, sinscal::fuzz::text_of(data, size));
+  try {
+    const sinscal::ResultCoefficients r = sinscal::read_result_json(path);
+    sinscal::compare_results(r, r);
+    sinscal::max_error_over_sigma(r, r);
+  } catch (const std::runtime_error& e) {
+    sinscal::fuzz::check_message(e, path);
+  } catch (const std::exception& e) {
+    sinscal::fuzz::finding("not a std::runtime_error", e.what());
+  }
+  return 0;
+}
