@@ -10,6 +10,7 @@
 
 #include "filter/dwell_navigation.hpp"
 #include "models/attitude.hpp"
+#include "models/coefficient_families.hpp"
 #include "models/imu_error_model.hpp"
 #include "models/units.hpp"
 #include "rig/log_io.hpp"
@@ -236,80 +237,117 @@ std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector
   return out;
 }
 
-Stage2Map equivalent_input_map(const Eigen::Matrix3d& C, const Site& site) {
-  using namespace base_coeffs;
+std::vector<int> stage2_parameters() {
+  std::vector<int> out;
+  const auto& cat = coefficient_catalog();
+  for (std::size_t i = 0; i < cat.size(); ++i)
+    if (coefficient_family_info(cat[i].family).base) out.push_back(static_cast<int>(i));
+  return out;
+}
+
+Eigen::Matrix<double, 6, Eigen::Dynamic> equivalent_input_map(const Eigen::Matrix3d& C,
+                                                              const Site& site,
+                                                              const std::vector<int>& parameters) {
   const Earth& earth = Earth::wgs84();
-  const Eigen::Vector3d f_b = -(C.transpose() * earth.gravity_n(site.lat_rad, site.h_m));
-  const Eigen::Vector3d w_b = C.transpose() * earth.omega_ie_n(site.lat_rad);
-  Stage2Map H = Stage2Map::Zero();
-  auto triad = [&](int row, const Block& bias, const Block& scale, const Block& mis,
-                   const Eigen::Vector3d& x) {
-    H.block<3, 3>(row, bias.index) = C;
-    int m = mis.index;
-    for (int i = 0; i < 3; ++i) {
-      H.block<3, 1>(row, scale.index + i) = C.col(i) * x(i);
-      for (int j = 0; j < 3; ++j)
-        if (i != j) H.block<3, 1>(row, m++) = C.col(i) * x(j);
-    }
-  };
-  triad(ins_input::kAccel.index, kAccelBias, kAccelScale, kAccelMis, f_b);
-  triad(ins_input::kGyro.index, kGyroBias, kGyroScale, kGyroMis, w_b);
+  KinematicSample k;
+  k.f_ib_b = -(C.transpose() * earth.gravity_n(site.lat_rad, site.h_m));
+  k.omega_ib_b = C.transpose() * earth.omega_ie_n(site.lat_rad);
+  ImuErrorModel::JacobianColumns J;
+  ImuErrorModel{}.jacobian(k, Eigen::Vector3d::Zero(), parameters, J);
+  Eigen::Matrix<double, 6, Eigen::Dynamic> H(6, J.cols());
+  H.middleRows<3>(ins_input::kAccel.index) = C * J.bottomRows<3>();
+  H.middleRows<3>(ins_input::kGyro.index) = C * J.topRows<3>();
   return H;
 }
 
-Eigen::VectorXd base_vector(const ImuErrorModel& model) {
-  return model.vector().head(base_coeffs::kSize);
+Eigen::VectorXd parameter_vector(const ImuErrorModel& model, const std::vector<int>& parameters) {
+  const Eigen::VectorXd all = model.vector();
+  Eigen::VectorXd out(static_cast<Eigen::Index>(parameters.size()));
+  for (std::size_t k = 0; k < parameters.size(); ++k)
+    out(static_cast<Eigen::Index>(k)) = all(parameters[k]);
+  return out;
 }
 
-Stage2Result solve_stage2(const std::vector<EquivalentInputs>& inputs, const Site& site,
-                          const Stage2Options& o) {
-  const int n = base_coeffs::kSize;
+namespace {
+// Normal equations of stage 2 over every dwell, the table's attitude error in each dwell's
+// weights; the residual's chi-square at the solution comes from sum(u^T W u) - b^T theta.
+struct NormalEquations {
+  Eigen::MatrixXd J;
+  Eigen::VectorXd b;
+  double uWu = 0.0;
+  int inputs = 0;
+};
+
+NormalEquations stage2_normal_equations(const std::vector<EquivalentInputs>& inputs,
+                                        const Site& site, const Stage2Options& o) {
+  const int n = static_cast<int>(o.parameters.size());
   const Earth& earth = Earth::wgs84();
   const Eigen::Vector3d f_n = -earth.gravity_n(site.lat_rad, site.h_m);
   const Eigen::Vector3d w_ie = earth.omega_ie_n(site.lat_rad);
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
-  Eigen::VectorXd b = Eigen::VectorXd::Zero(n);
+  // A table attitude error eps (truth relative to the plan) aliases into the inputs as
+  // df_n += f_n x eps, dw_n += omega_ie_n x eps.
+  Eigen::Matrix<double, 6, 3> S;
+  S.middleRows<3>(ins_input::kAccel.index) = skew(f_n);
+  S.middleRows<3>(ins_input::kGyro.index) = skew(w_ie);
+  const Matrix6d R_table = S * o.table.covariance_n() * S.transpose();
+  NormalEquations ne{Eigen::MatrixXd::Zero(n, n), Eigen::VectorXd::Zero(n)};
   for (const auto& in : inputs) {
-    const Stage2Map H = equivalent_input_map(in.dwell.C_b_n_known, site);
-    // A table attitude error eps (truth relative to the plan) aliases into the inputs as
-    // df_n += f_n x eps, dw_n += omega_ie_n x eps.
-    Eigen::Matrix<double, 6, 3> S;
-    S.topRows<3>() = skew(f_n);
-    S.bottomRows<3>() = skew(w_ie);
-    const Eigen::Vector3d u_i = in.dwell.C_b_n_known * o.inner_axis_b.normalized();
-    const Eigen::Matrix3d Sigma_eps =
-        o.table_sigma * o.table_sigma *
-        (o.outer_axis_n.normalized() * o.outer_axis_n.normalized().transpose() +
-         u_i * u_i.transpose());
-    const Matrix6d R = in.cov + S * Sigma_eps * S.transpose();
+    const auto H = equivalent_input_map(in.dwell.C_b_n_known, site, o.parameters);
+    const Matrix6d R = in.cov + R_table;
     std::vector<int> idx;
     for (int i = 0; i < 6; ++i)
-      if (in.estimated[i]) idx.push_back(i);
+      if (in.estimated[static_cast<std::size_t>(i)]) idx.push_back(i);
     const int m = static_cast<int>(idx.size());
     Eigen::MatrixXd Hs(m, n), Rs(m, m);
     Eigen::VectorXd us(m);
     for (int i = 0; i < m; ++i) {
-      Hs.row(i) = H.row(idx[i]);
-      us(i) = in.u(idx[i]);
-      for (int j = 0; j < m; ++j) Rs(i, j) = R(idx[i], idx[j]);
+      Hs.row(i) = H.row(idx[static_cast<std::size_t>(i)]);
+      us(i) = in.u(idx[static_cast<std::size_t>(i)]);
+      for (int j = 0; j < m; ++j)
+        Rs(i, j) = R(idx[static_cast<std::size_t>(i)], idx[static_cast<std::size_t>(j)]);
     }
     const Eigen::LLT<Eigen::MatrixXd> llt(Rs);
     if (llt.info() != Eigen::Success)
       throw std::runtime_error("stage 2: the covariance of dwell " +
                                std::to_string(in.dwell.index) + " is not positive definite");
-    J += Hs.transpose() * llt.solve(Hs);
-    b += Hs.transpose() * llt.solve(us);
+    ne.J += Hs.transpose() * llt.solve(Hs);
+    ne.b += Hs.transpose() * llt.solve(us);
+    ne.uWu += us.dot(llt.solve(us));
+    ne.inputs += m;
   }
+  return ne;
+}
+
+// "+0.577 accel.scale.x +0.577 ..." for a direction in parameter space.
+std::string direction_text(const Eigen::VectorXd& dir, const std::vector<int>& parameters) {
+  const auto& cat = coefficient_catalog();
+  std::string text;
+  for (Eigen::Index i = 0; i < dir.size(); ++i)
+    if (std::abs(dir(i)) > 0.05) {
+      char buf[96];
+      std::snprintf(
+          buf, sizeof buf, "%s%+.3f %s", text.empty() ? "" : " ", dir(i),
+          cat[static_cast<std::size_t>(parameters[static_cast<std::size_t>(i)])].name.c_str());
+      text += buf;
+    }
+  return text;
+}
+}  // namespace
+
+Stage2Result solve_stage2(const std::vector<EquivalentInputs>& inputs, const Site& site,
+                          const Stage2Options& o) {
+  const int n = static_cast<int>(o.parameters.size());
+  const NormalEquations ne = stage2_normal_equations(inputs, site, o);
   // Jacobi scaling, then the eigen-decomposition names the unobservable directions.
   Eigen::VectorXd d(n);
-  for (int i = 0; i < n; ++i) d(i) = J(i, i) > 0.0 ? 1.0 / std::sqrt(J(i, i)) : 1.0;
-  const Eigen::MatrixXd Js = d.asDiagonal() * J * d.asDiagonal();
+  for (int i = 0; i < n; ++i) d(i) = ne.J(i, i) > 0.0 ? 1.0 / std::sqrt(ne.J(i, i)) : 1.0;
+  const Eigen::MatrixXd Js = d.asDiagonal() * ne.J * d.asDiagonal();
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Js);
   const double lmax = es.eigenvalues().maxCoeff();
   Eigen::MatrixXd pinv = Eigen::MatrixXd::Zero(n, n);
   Eigen::VectorXd null_weight = Eigen::VectorXd::Zero(n);
   Stage2Result r;
-  const auto& cat = coefficient_catalog();
+  r.parameters = o.parameters;
   for (int k = 0; k < n; ++k) {
     const double l = es.eigenvalues()(k);
     const Eigen::VectorXd v = es.eigenvectors().col(k);
@@ -320,27 +358,21 @@ Stage2Result solve_stage2(const std::vector<EquivalentInputs>& inputs, const Sit
     }
     null_weight += v.cwiseAbs2();
     Eigen::VectorXd dir = (d.asDiagonal() * v).normalized();
-    int lead = 0;
+    Eigen::Index lead = 0;
     dir.cwiseAbs().maxCoeff(&lead);
     if (dir(lead) < 0.0) dir = -dir;
-    std::string text;
-    for (int i = 0; i < n; ++i)
-      if (std::abs(dir(i)) > 0.05) {
-        char buf[96];
-        std::snprintf(buf, sizeof buf, "%s%+.3f %s", text.empty() ? "" : " ", dir(i),
-                      cat[i].name.c_str());
-        text += buf;
-      }
-    r.unobservable_directions.push_back(text);
+    r.unobservable_directions.push_back(direction_text(dir, o.parameters));
     r.null_vectors.push_back(dir);
   }
-  r.theta = d.asDiagonal() * pinv * d.asDiagonal() * b;
+  r.theta = d.asDiagonal() * pinv * d.asDiagonal() * ne.b;
   r.cov = d.asDiagonal() * pinv * d.asDiagonal();
-  r.observable.assign(n, true);
+  r.dof = ne.inputs - r.rank;
+  r.chi2_per_dof = r.dof > 0 ? std::max(0.0, ne.uWu - ne.b.dot(r.theta)) / r.dof : 0.0;
+  r.observable.assign(static_cast<std::size_t>(n), true);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (int i = 0; i < n; ++i)
     if (null_weight(i) > 1e-6) {
-      r.observable[i] = false;
+      r.observable[static_cast<std::size_t>(i)] = false;
       r.theta(i) = nan;
       r.cov.row(i).setConstant(nan);
       r.cov.col(i).setConstant(nan);
@@ -384,88 +416,55 @@ PaperClosedForms paper_closed_forms(const std::vector<EquivalentInputs>& in, con
 
 namespace sinscal {
 
+std::vector<std::pair<std::string, double>> named(const PaperClosedForms& p) {
+  return {{"gyro.bias.x", p.w0x},
+          {"gyro.scale.x", p.dkgx},
+          {"gyro.misalignment.xy", p.nu_xy},
+          {"gyro.misalignment.xz", p.nu_xz},
+          {"gyro.bias.z", p.w0z},
+          {"gyro.scale.z", p.dkgz},
+          {"gyro.misalignment.zx", p.nu_zx},
+          {"gyro.misalignment.zy", p.nu_zy},
+          {"accel.bias.x", p.f0x},
+          {"accel.misalignment.xy", p.mu_xy},
+          {"accel.misalignment.xz", p.mu_xz},
+          {"accel.bias.z", p.f0z},
+          {"accel.misalignment.zx", p.mu_zx},
+          {"accel.misalignment.zy", p.mu_zy}};
+}
+
 namespace {
-const char* kInputName[6] = {"df_n", "df_e", "df_d", "dw_n", "dw_e", "dw_d"};
+// The paper's 8-orientation plan (paper convention: heading, pitch, roll in deg).
+bool is_paper_plan(const Session& session, const std::vector<EquivalentInputs>& stage1) {
+  const auto& o = session.plan.orientations;
+  static const double kPaper[8][3] = {{0, 0, 45},  {90, 45, 0},   {180, 0, 315}, {270, 315, 0},
+                                      {0, 0, 225}, {90, 45, 180}, {180, 0, 135}, {90, 225, 0}};
+  if (session.plan.type != Plan::Type::Orientations || o.size() != 8 || stage1.size() != 8)
+    return false;
+  for (std::size_t i = 0; i < 8; ++i) {
+    const Eigen::Matrix3d C = C_b_n_from_euler(
+        AngleConvention::Paper,
+        {kPaper[i][0] * units::deg, kPaper[i][1] * units::deg, kPaper[i][2] * units::deg});
+    if ((C - stage1[i].dwell.C_b_n_known).cwiseAbs().maxCoeff() >= 1e-9) return false;
+  }
+  return true;
+}
 }  // namespace
 
 ClosedFormReport run_closed_form(const Session& session, const Stage1Options& stage1,
-                                 double table_sigma) {
+                                 const TableAttitudeError& table) {
   ClosedFormReport r;
   r.stage1_options = stage1;
   const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
   LogReader reader(session.log);
   r.stage1 = run_stage1(reader, timeline.dwells, session.site, stage1, session.time_offset);
-  r.stage2_options.table_sigma = table_sigma;
-  r.stage2_options.outer_axis_n = session.plan.table.outer_axis_n;
-  r.stage2_options.inner_axis_b = Table(session.plan.table).inner_axis_b();
+  r.stage2_options.table = table;
   r.stage2 = solve_stage2(r.stage1, session.site, r.stage2_options);
-
-  const auto& cat = coefficient_catalog();
-  for (int i = 0; i < base_coeffs::kSize; ++i) {
-    ResultCoefficient c;
-    c.unit = cat[i].unit;
-    c.observable = r.stage2.observable[i];
-    if (c.observable) {
-      c.value = r.stage2.theta(i) / cat[i].si_per_unit;
-      c.sigma = std::sqrt(r.stage2.cov(i, i)) / cat[i].si_per_unit;
-    }
-    r.coefficients[cat[i].name] = c;
-  }
-
   // The paper's literal closed forms, when the plan is its 8-orientation table.
-  const auto& o = session.plan.orientations;
-  static const double kPaper[8][3] = {{0, 0, 45},  {90, 45, 0},   {180, 0, 315}, {270, 315, 0},
-                                      {0, 0, 225}, {90, 45, 180}, {180, 0, 135}, {90, 225, 0}};
-  if (session.plan.type == Plan::Type::Orientations && o.size() == 8 && r.stage1.size() == 8) {
-    bool same = true;
-    for (int i = 0; i < 8; ++i) {
-      const Eigen::Matrix3d C = C_b_n_from_euler(
-          AngleConvention::Paper,
-          {kPaper[i][0] * units::deg, kPaper[i][1] * units::deg, kPaper[i][2] * units::deg});
-      same = same && (C - r.stage1[i].dwell.C_b_n_known).cwiseAbs().maxCoeff() < 1e-9;
-    }
-    if (same) {
-      r.has_paper_forms = true;
-      r.paper = paper_closed_forms(r.stage1, session.site);
-    }
+  if (is_paper_plan(session, r.stage1)) {
+    r.has_paper_forms = true;
+    r.paper = paper_closed_forms(r.stage1, session.site);
   }
-
-  nlohmann::ordered_json& d = r.details;
-  d["method"] = {{"name", "closed-form"},
-                 {"stage1", stage1.method == Stage1Method::Fit ? "fit" : "point"},
-                 {"model", stage1.model == ErrorModelKind::Coupled ? "coupled" : "uncoupled"},
-                 {"channels",
-                  {{"north", stage1.channels.north},
-                   {"east", stage1.channels.east},
-                   {"vertical", stage1.channels.vertical},
-                   {"heading", stage1.channels.heading}}},
-                 {"arw_deg_per_sqrt_h", stage1.arw / units::deg_per_sqrt_h},
-                 {"vrw_ug_per_sqrt_hz", stage1.vrw / units::ug_per_sqrt_hz},
-                 {"table_sigma_arcsec", table_sigma / units::arcsec}};
-  nlohmann::ordered_json dwells = nlohmann::ordered_json::array();
-  for (const auto& e : r.stage1) {
-    nlohmann::ordered_json x = {
-        {"dwell", e.dwell.index}, {"label", e.dwell.label}, {"duration_s", e.duration}};
-    nlohmann::ordered_json inputs = nlohmann::ordered_json::object();
-    for (int i = 0; i < 6; ++i) {
-      if (!e.estimated[i]) continue;
-      const bool gyro = i >= 3;
-      const double f = gyro ? units::deg_per_h : units::ug;
-      inputs[kInputName[i]] = {{"value", e.u(i) / f},
-                               {"sigma", std::sqrt(e.cov(i, i)) / f},
-                               {"unit", gyro ? "deg/h" : "ug"}};
-    }
-    x["equivalent_inputs"] = inputs;
-    if (stage1.method == Stage1Method::Fit)
-      x["residuals"] = {{"rms_velocity_m_per_s", e.rms_velocity},
-                        {"rms_attitude_arcsec", e.rms_attitude / units::arcsec},
-                        {"chi2_per_dof", e.chi2_per_dof}};
-    dwells.push_back(x);
-  }
-  d["stage1"] = dwells;
-  d["identifiability"] = {{"rank", r.stage2.rank},
-                          {"parameters", base_coeffs::kSize},
-                          {"unobservable_directions", r.stage2.unobservable_directions}};
   return r;
 }
 

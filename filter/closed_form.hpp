@@ -27,6 +27,7 @@
 #include "filter/strapdown.hpp"
 #include "rig/imu_sample.hpp"
 #include "rig/session.hpp"
+#include "rig/table.hpp"
 #include "rig/timeline.hpp"
 
 namespace sinscal {
@@ -75,40 +76,40 @@ std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector
                                          const Site& site, const Stage1Options& options,
                                          double time_offset = 0.0);
 
-/// Layout of the 24 base coefficients (the first 24 of coefficient_catalog(), same order).
-namespace base_coeffs {
-constexpr Block kGyroBias{0, 3};
-constexpr Block kGyroScale{3, 3};
-constexpr Block kGyroMis{6, 6};  // xy xz yx yz zx zy
-constexpr Block kAccelBias{12, 3};
-constexpr Block kAccelScale{15, 3};
-constexpr Block kAccelMis{18, 6};
-constexpr int kSize = kAccelMis.index + kAccelMis.size;
-static_assert(kSize == 24, "base coefficient layout");
-}  // namespace base_coeffs
+/// The coefficients stage 2 solves for: the base families of the family table
+/// (models/coefficient_families.hpp), as catalog indices in catalog order.
+std::vector<int> stage2_parameters();
 
-using Stage2Map = Eigen::Matrix<double, 6, base_coeffs::kSize>;
-
-/// u = H theta at a static attitude (theta in SI): df_n = C (b_a + (K_a + M_a) f_b),
-/// dw_n = C (b_g + (K_g + M_g) omega_ib_b), with f_b and omega_ib_b from gravity and Earth rate.
-Stage2Map equivalent_input_map(const Eigen::Matrix3d& C_b_n, const Site& site);
-/// Base coefficients of a model as the stage-2 vector (SI) and back.
-Eigen::VectorXd base_vector(const class ImuErrorModel& model);
+/// u = H theta at a static attitude (theta in SI, `parameters` catalog indices): the error
+/// model's Jacobian (models/imu_error_model.hpp) at the static inputs f_b = -C^T g_n and
+/// omega_ib_b = C^T omega_ie_n, rotated to NED: df_n = C J_accel theta, dw_n = C J_gyro theta.
+Eigen::Matrix<double, 6, Eigen::Dynamic> equivalent_input_map(const Eigen::Matrix3d& C_b_n,
+                                                              const Site& site,
+                                                              const std::vector<int>& parameters);
+/// The stage-2 parameters of a model (SI), in the order of `parameters`.
+Eigen::VectorXd parameter_vector(const class ImuErrorModel& model,
+                                 const std::vector<int>& parameters);
 
 struct Stage2Options {
-  double table_sigma = 0.0;  // rad, 1-sigma error of each table angle (per orientation)
-  Eigen::Vector3d outer_axis_n = Eigen::Vector3d::UnitX();
-  Eigen::Vector3d inner_axis_b = Eigen::Vector3d::UnitY();
+  /// The table's attitude error at each orientation (rig/table.hpp: the one model both methods
+  /// use); it aliases into the inputs as df_n += f_n x eps, dw_n += omega_ie_n x eps.
+  TableAttitudeError table;
   double null_tolerance = 1e-9;  // relative singular value below which a direction is unobservable
+  std::vector<int> parameters = stage2_parameters();
 };
 
 struct Stage2Result {
-  Eigen::VectorXd theta;  // 24, SI; unobservable entries are NaN
-  Eigen::MatrixXd cov;    // 24 x 24, rows/columns of unobservable entries NaN
+  std::vector<int> parameters;  // catalog index of each entry
+  Eigen::VectorXd theta;        // SI; unobservable entries are NaN
+  Eigen::MatrixXd cov;          // rows/columns of unobservable entries NaN
   std::vector<bool> observable;
   int rank = 0;
   std::vector<std::string> unobservable_directions;  // e.g. "+0.577 accel.scale.x +0.577 ..."
   std::vector<Eigen::VectorXd> null_vectors;         // in coefficient space (unit norm)
+  /// Stage-2 residual: chi-square of the equivalent inputs against the solution per degree of
+  /// freedom (inputs minus rank); 1 when the model explains the dwells to their sigmas.
+  double chi2_per_dof = 0.0;
+  int dof = 0;
 };
 
 Stage2Result solve_stage2(const std::vector<EquivalentInputs>& inputs, const Site& site,
@@ -125,19 +126,20 @@ struct PaperClosedForms {
 };
 PaperClosedForms paper_closed_forms(const std::vector<EquivalentInputs>& inputs, const Site& site);
 
+/// The paper's closed forms beside the names of the coefficients they give, in the paper's order.
+std::vector<std::pair<std::string, double>> named(const PaperClosedForms& p);
+
 /// The whole method on a recorded session: navigation through every dwell, stage 1, stage 2.
 struct ClosedFormReport {
   Stage1Options stage1_options;
   Stage2Options stage2_options;
   std::vector<EquivalentInputs> stage1;
   Stage2Result stage2;
-  ResultCoefficients coefficients;  // engineering units, the 24 base coefficients
-  nlohmann::ordered_json details;   // method, per-dwell inputs, identifiability (result JSON)
-  bool has_paper_forms = false;     // the plan is the paper's 8-orientation table
+  bool has_paper_forms = false;  // the plan is the paper's 8-orientation table
   PaperClosedForms paper{};
 };
 
 ClosedFormReport run_closed_form(const Session& session, const Stage1Options& stage1,
-                                 double table_sigma);
+                                 const TableAttitudeError& table);
 
 }  // namespace sinscal

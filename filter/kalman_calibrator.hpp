@@ -34,7 +34,6 @@
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"
 #include "rig/imu_sample.hpp"
-#include "rig/session.hpp"
 #include "rig/table.hpp"
 #include "rig/timeline.hpp"
 
@@ -124,10 +123,14 @@ struct CoefficientEstimate {
   enum class Status { Off, Estimated, FixedByConvention };
   Status status = Status::Off;
   double prior_sigma = 0.0;  // SI, the sigma before any data
+  /// Part of a combination of coefficients the data did not determine (kalman_run.hpp).
+  bool in_unobservable_direction = false;
   /// Observed: the data alone determine it better than the prior did (sigma below prior /
-  /// sqrt(2)); otherwise the plan cannot observe it and the value is the prior's.
+  /// sqrt(2)), alone and in every combination with others; otherwise the plan cannot observe it
+  /// and the value is the prior's.
   bool observed() const {
-    return status == Status::Estimated && sigma * sigma < 0.5 * prior_sigma * prior_sigma;
+    return status == Status::Estimated && !in_unobservable_direction &&
+           sigma * sigma < 0.5 * prior_sigma * prior_sigma;
   }
 };
 
@@ -200,53 +203,5 @@ class Calibrator {
   int last_nis_dof_ = 0;
   std::vector<double> prior_sigma_;  // catalog order, SI
 };
-
-/// The filter over a session's samples (batch from the log, or streaming from any source).
-struct KalmanReport {
-  ResultCoefficients coefficients;  // the coefficients of the blocks that are on
-  nlohmann::ordered_json details;
-  int states = 0;
-  std::size_t samples = 0;
-  double duration = 0.0;  // s of data
-  double nis_per_dof = 0.0;
-  std::string stopped;       // empty, or why the input stopped early (bad sample); estimates kept
-  bool interrupted = false;  // stopped on request (KalmanRunOptions::stop)
-  std::string diverged;      // empty, or the NIS alarm that stopped the run; estimates kept
-  std::optional<double> converged_at;     // s: first update with every sigma below its target
-  std::vector<std::string> unobservable;  // estimated, but the plan's data do not observe them
-  std::vector<std::string> above_target;  // at the end, sigma above the profile's target
-  std::size_t skipped = 0;                // bad samples skipped
-  ImuErrorModel model;                    // the final estimate as a model (SI)
-  static constexpr std::size_t kSkippedExamples = 20;
-  std::vector<std::string> skipped_examples;  // the first few, "FILE:LINE: cause"
-};
-
-struct KalmanRunOptions {
-  double monitor_interval = 0.0;  // s of data between monitor records (0: none)
-  /// Called with one JSON record per monitor interval: t, NIS, converged, estimate and sigma of
-  /// every coefficient (engineering units).
-  std::function<void(const nlohmann::ordered_json&)> monitor;
-  /// Sigma targets by family (SI), from the sensor profile: the "converged" verdict.
-  std::map<std::string, double> sigma_targets;
-  /// Bad samples (NaN, saturated, time backwards): skip them (reported) or stop the run.
-  bool skip_bad_samples = false;
-  /// Divergence alarm: the NIS summed over the last `nis_window` updates beyond the chi-square
-  /// quantile `nis_alarm_z` standard deviations up stops the run (estimates kept).
-  int nis_window = 30;
-  double nis_alarm_z = 6.0;
-  /// Passes over the log (batch only): each starts from the previous pass's coefficients, with
-  /// the profile's prior sigmas, so the last is linearized about a close estimate (large errors:
-  /// MEMS). The monitor, the divergence alarm and the verdicts are those of the last pass.
-  int passes = 1;
-  /// Set (e.g. from a signal handler) to stop reading: the run ends as if the log ended there,
-  /// with `interrupted` and the estimates so far.
-  const std::atomic<bool>* stop = nullptr;
-};
-
-/// Runs the filter over `source` (the session's log when null; several passes need the log). A bad
-/// sample (LogError) stops the run: the report keeps the estimates so far and says where and why in
-/// `stopped`.
-KalmanReport run_kalman(const Session& session, const CalibratorOptions& options,
-                        SampleSource* source = nullptr, const KalmanRunOptions& run = {});
 
 }  // namespace sinscal

@@ -70,6 +70,14 @@ const StateLayout::CoefficientBlock* StateLayout::block(const std::string& famil
   return nullptr;
 }
 
+void set_lever_arm_reference(StateLayoutOptions& o, const std::string& axis) {
+  if (axis != "x" && axis != "y" && axis != "z")
+    throw std::invalid_argument("the lever-arm reference is accelerometer x, y or z, not '" + axis +
+                                "'");
+  for (const char* component : {"x", "y", "z"})
+    o.fixed.push_back("accel.lever_arm." + axis + "." + component);
+}
+
 void apply_terms(StateLayoutOptions& o, const std::string& terms) {
   const auto known_terms = extended_terms();
   std::size_t pos = 0;

@@ -54,6 +54,12 @@ struct StateLayoutOptions {
 /// naming an unknown term and the known ones.
 void apply_terms(StateLayoutOptions& options, const std::string& terms);
 
+/// Fixes the inner lever arm of accelerometer `axis` ("x", "y" or "z") at zero: the IMU reference
+/// point becomes that accelerometer's proof mass (the reference MATLAB toolbox's convention; a
+/// common shift of all arms is unobservable without zero velocity while turning or a known
+/// position). Throws std::invalid_argument for another axis.
+void set_lever_arm_reference(StateLayoutOptions& options, const std::string& axis);
+
 struct StateLayout {
   // Navigation errors.
   Block attitude{-1, 0};

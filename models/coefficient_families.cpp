@@ -10,12 +10,6 @@ namespace sinscal {
 
 namespace {
 
-const std::vector<std::string> kAxes = {"x", "y", "z"};
-const std::vector<std::string> kOffDiagonal = {"xy", "xz", "yx", "yz", "zx", "zy"};
-const std::vector<std::string> kMatrix = {"xx", "xy", "xz", "yx", "yy", "yz", "zx", "zy", "zz"};
-const std::vector<std::string> kArms = {"x.x", "x.y", "x.z", "y.x", "y.y",
-                                        "y.z", "z.x", "z.y", "z.z"};
-
 // Row and column of the k-th off-diagonal entry in the order xy xz yx yz zx zy.
 int off_row(int k) { return k / 2; }
 int off_col(int k) {
@@ -24,6 +18,13 @@ int off_col(int k) {
 }
 
 std::vector<CoefficientFamily> make_families() {
+  // Local, not namespace-scope: the table may be built during another file's static
+  // initialization.
+  const std::vector<std::string> kAxes = {"x", "y", "z"};
+  const std::vector<std::string> kOffDiagonal = {"xy", "xz", "yx", "yz", "zx", "zy"};
+  const std::vector<std::string> kMatrix = {"xx", "xy", "xz", "yx", "yy", "yz", "zx", "zy", "zz"};
+  const std::vector<std::string> kArms = {"x.x", "x.y", "x.z", "y.x", "y.y",
+                                          "y.z", "z.x", "z.y", "z.z"};
   using namespace units;
   using F = CoefficientFamily;
   using O = FamilyOutput;

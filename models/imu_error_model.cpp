@@ -226,6 +226,13 @@ ImuErrorModel in_accel_triad_frame(const ImuErrorModel& model, Eigen::Matrix3d* 
   return out;
 }
 
+ImuErrorModel with_lever_arm_reference(const ImuErrorModel& model, int axis) {
+  ImuErrorModel out = model;
+  const Eigen::Vector3d reference = model.accel_lever_arm_b.col(axis);
+  out.accel_lever_arm_b.colwise() -= reference;
+  return out;
+}
+
 const CoefficientInfo& coefficient_info(const std::string& name) {
   for (const auto& info : coefficient_catalog())
     if (info.name == name) return info;

@@ -135,6 +135,11 @@ class ImuErrorModel {
 /// the old body frame: x_b = C_a_b x_a.
 ImuErrorModel in_accel_triad_frame(const ImuErrorModel& model, Eigen::Matrix3d* C_a_b = nullptr);
 
+/// The same sensors with the IMU reference point moved to the proof mass of accelerometer `axis`
+/// (0, 1, 2): every inner lever arm relative to that one's, which becomes zero (the convention
+/// of calibration with a reference lever arm, docs/conventions.md).
+ImuErrorModel with_lever_arm_reference(const ImuErrorModel& model, int axis);
+
 /// Names, units and families of all coefficients in contract order (the family table's order).
 const std::vector<CoefficientInfo>& coefficient_catalog();
 /// The catalog entry of one coefficient; throws std::invalid_argument for an unknown name.

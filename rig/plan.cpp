@@ -442,7 +442,10 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
       }
       table_known = true;
       table_now = cmd;
-      add_dwell(o.label, known, truth.C_b_n(cmd), o.dwell);
+      Eigen::Vector3d wobble = Eigen::Vector3d::Zero();
+      if (errors.attitude_sigma > 0.0)
+        for (int k = 0; k < 3; ++k) wobble(k) = errors.attitude_sigma * normal(rng);
+      add_dwell(o.label, known, dcm_from_rotvec(wobble) * truth.C_b_n(cmd), o.dwell);
       prev = cmd;
     }
   } else {

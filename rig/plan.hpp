@@ -79,7 +79,11 @@ struct Plan {
 /// (towards the outer axis). The start attitude of a rotation plan is off by `start_sigma` per
 /// axis. The known attitudes of the dwells stay the plan's.
 struct TableErrors {
-  double angle_sigma = 0.0;        // rad
+  double angle_sigma = 0.0;  // rad, error of each commanded table angle
+  /// rad: orientation plans: an independent error of the IMU's attitude about each navigation
+  /// axis at every orientation (wobble, mounting repeatability): the table-error model of the
+  /// estimators (rig/table.hpp TableAttitudeError)
+  double attitude_sigma = 0.0;
   double start_sigma = -1.0;       // rad, start attitude of rotation plans (< 0: angle_sigma)
   double non_orthogonality = 0.0;  // rad
   std::uint64_t seed = 0;

@@ -24,6 +24,15 @@ struct TableGeometry {
   Eigen::Matrix3d C_b_p = Eigen::Matrix3d::Identity();       // IMU mounting
 };
 
+/// How well the table sets the IMU's attitude at a dwell, as every estimator models it: an
+/// independent error of `sigma` about each of the three navigation axes (the two axes' angle
+/// errors and the platform's wobble and mounting repeatability about the third), constant within
+/// the dwell.
+struct TableAttitudeError {
+  double sigma = 0.0;  // rad, per axis
+  Eigen::Matrix3d covariance_n() const { return sigma * sigma * Eigen::Matrix3d::Identity(); }
+};
+
 struct TableAngles {
   double outer = 0.0;  // rad
   double inner = 0.0;  // rad

@@ -7,7 +7,7 @@
 #include <filesystem>
 
 #include "helpers.hpp"
-#include "rig/session.hpp"
+#include "report/result.hpp"
 
 using namespace sinscal;
 

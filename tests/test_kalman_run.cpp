@@ -8,6 +8,7 @@
 #include "filter/kalman_calibrator.hpp"
 #include "helpers.hpp"
 #include "models/units.hpp"
+#include "report/result.hpp"
 #include "rig/log_io.hpp"
 
 using namespace sinscal;
@@ -45,13 +46,13 @@ TEST_CASE("Kalman filter and closed form agree on seed8 within 3 sigma of the di
   Stage1Options o;
   o.arw = prof.noise.gyro.white;
   o.vrw = prof.noise.accel.white;
-  const ClosedFormReport cf = run_closed_form(s, o, 2.5 * units::arcsec);
+  const ClosedFormReport cf = run_closed_form(s, o, TableAttitudeError{2.5 * units::arcsec});
   CalibratorOptions ko = options_for(s);
   ko.attitude = CalibratorOptions::AttitudeUpdates::Every;  // the table sets each orientation
-  const KalmanReport kf = run_kalman(s, ko);
+  const KalmanRun kf = run_kalman(s, ko);
   int compared = 0;
-  for (const auto& [name, c] : cf.coefficients) {
-    const ResultCoefficient& k = kf.coefficients.at(name);
+  for (const auto& [name, c] : result_coefficients(cf)) {
+    const ResultCoefficient k = result_coefficients(kf).at(name);
     if (!c.observable) continue;  // the closed form cannot determine it (common accel scale)
     const double sigma = std::hypot(*c.sigma, *k.sigma);
     CAPTURE(name, c.value, *c.sigma, k.value, *k.sigma);
@@ -127,18 +128,18 @@ TEST_CASE("Kalman filter: bad samples are skipped (reported) or stop the run, es
   Session s = clean;
   s.log.file = bad;
   const CalibratorOptions o = options_for(s);
-  const KalmanReport reference = run_kalman(clean, o);
+  const KalmanRun reference = run_kalman(clean, o);
 
-  const KalmanReport stopped = run_kalman(s, o);
+  const KalmanRun stopped = run_kalman(s, o);
   CHECK(stopped.stopped.find(bad + ":" + std::to_string(nan_line) + ": field") !=
         std::string::npos);
   CHECK(stopped.stopped.find("NaN") != std::string::npos);
   CHECK(stopped.samples == 19999);
-  CHECK(stopped.coefficients.size() == reference.coefficients.size());  // estimates kept
+  CHECK(result_coefficients(stopped).size() == result_coefficients(reference).size());  // kept
 
   KalmanRunOptions skip;
   skip.skip_bad_samples = true;
-  const KalmanReport skipped = run_kalman(s, o, nullptr, skip);
+  const KalmanRun skipped = run_kalman(s, o, nullptr, skip);
   CHECK(skipped.stopped == "");
   REQUIRE(skipped.skipped == 2);
   CHECK(skipped.skipped_examples[0].find(":" + std::to_string(nan_line) + ":") !=
@@ -148,9 +149,9 @@ TEST_CASE("Kalman filter: bad samples are skipped (reported) or stop the run, es
   CHECK(skipped.samples == reference.samples - 2);
   // Two samples bridged by holding the neighbour's rate (at rest or turning steadily, nearly
   // exact): the estimates move by a small fraction of their sigma.
-  for (const auto& [name, c] : reference.coefficients) {
+  for (const auto& [name, c] : result_coefficients(reference)) {
     if (!c.observable) continue;
-    const auto& k = skipped.coefficients.at(name);
+    const auto k = result_coefficients(skipped).at(name);
     CAPTURE(name, c.value, k.value, *c.sigma);
     CHECK(std::abs(k.value - c.value) < 0.1 * *c.sigma);
   }
@@ -163,14 +164,14 @@ TEST_CASE("Kalman filter: divergence alarm on an unmodelled effect, none on a cl
   const Session hidden =
       make_session("kf_diverge", "rot19.ini", "config/sensors/nav-fog-extended.ini",
                    "config/sensors/nav-fog.ini", 60);
-  const KalmanReport d = run_kalman(hidden, options_for(hidden));
+  const KalmanRun d = run_kalman(hidden, options_for(hidden));
   CHECK(d.diverged.find("filter diverging") != std::string::npos);
   CHECK(d.samples < 59200);
-  CHECK(!d.coefficients.empty());
+  CHECK(!result_coefficients(d).empty());
   const Session clean =
       make_session("kf_no_diverge", "rot19.ini", "config/sensors/nav-fog-extended.ini",
                    "config/sensors/nav-fog-extended.ini", 60);
-  const KalmanReport c = run_kalman(clean, options_for(clean));
+  const KalmanRun c = run_kalman(clean, options_for(clean));
   CHECK(c.diverged.empty());
   CHECK(c.samples == 59200);
 }
@@ -189,18 +190,17 @@ TEST_CASE("Kalman filter: converged verdict against the profile's sigma targets"
   for (const auto& [family, target] : prof.sigma_targets) run.sigma_targets[family] = 2.0 * target;
   run.monitor_interval = 10.0;
   std::vector<std::pair<double, bool>> records;
-  run.monitor = [&](const nlohmann::ordered_json& r) {
-    records.emplace_back(r["t"].get<double>(), r["converged"].get<bool>());
-  };
-  const KalmanReport r = run_kalman(s, o, nullptr, run);
+  run.monitor = [&](const MonitorRecord& r) { records.emplace_back(r.t, r.converged); };
+  const KalmanRun r = run_kalman(s, o, nullptr, run);
   REQUIRE(r.converged_at.has_value());
   CHECK(*r.converged_at > 100.0);  // not before the turns have shown every sensor
   CHECK(*r.converged_at <= r.duration);
   // Every final sigma is below its target; the monitor says so from the verdict on.
   const auto& cat = coefficient_catalog();
+  const ResultCoefficients coefficients = result_coefficients(r);
   for (const auto& info : cat) {
-    const auto it = r.coefficients.find(info.name);
-    if (it == r.coefficients.end()) continue;
+    const auto it = coefficients.find(info.name);
+    if (it == coefficients.end()) continue;
     CAPTURE(info.name);
     CHECK(*it->second.sigma * info.si_per_unit <=
           run.sigma_targets.at(coefficient_family(info.name)));
@@ -222,16 +222,20 @@ TEST_CASE("Kalman filter, several passes: a MEMS unit's large errors linearized 
       make_session("kf_mems", "rot19.ini", "config/sensors/mems.ini", "config/sensors/mems.ini", 1);
   const CalibratorOptions o = options_for(s);
   KalmanRunOptions one;
-  const KalmanReport single = run_kalman(s, o, nullptr, one);
+  const KalmanRun single = run_kalman(s, o, nullptr, one);
   CHECK_FALSE(single.diverged.empty());
   KalmanRunOptions three;
   three.passes = 3;
-  const KalmanReport r = run_kalman(s, o, nullptr, three);
+  const KalmanRun r = run_kalman(s, o, nullptr, three);
   CHECK(r.diverged.empty());
   CHECK(r.stopped.empty());
-  REQUIRE(r.details["passes"].size() == 3);
-  CHECK(r.details["passes"][1]["largest_change_over_sigma"].get<double>() > 1.0);
-  CHECK(r.details["passes"][2]["largest_change_over_sigma"].get<double>() < 0.1);
+  REQUIRE(r.passes.size() == 3);
+  CHECK(*r.passes[1].largest_change_over_sigma > 1.0);
+  CHECK(*r.passes[2].largest_change_over_sigma < 0.1);
   CHECK(r.nis_per_dof < 1.0);
-  CHECK(r.details["method"]["passes"] == 3);
+  CHECK(r.passes_requested == 3);
+  // The result file echoes them.
+  const auto sections = result_sections(r);
+  CHECK(sections["passes"].size() == 3);
+  CHECK(sections["method"]["passes"] == 3);
 }

@@ -10,6 +10,7 @@
 #include "helpers.hpp"
 #include "models/config.hpp"
 #include "models/units.hpp"
+#include "report/result.hpp"
 #include "rig/log_io.hpp"
 #include "rig/session.hpp"
 
@@ -330,12 +331,14 @@ TEST_CASE(
   Stage1Options o;
   o.arw = sim.profile.noise.gyro.white;
   o.vrw = sim.profile.noise.accel.white;
-  const ClosedFormReport ra = run_closed_form(whole, o, 2.5 * units::arcsec);
-  const ClosedFormReport rb = run_closed_form(cut, o, 2.5 * units::arcsec);
-  REQUIRE(ra.coefficients.size() == rb.coefficients.size());
+  const ResultCoefficients ra =
+      result_coefficients(run_closed_form(whole, o, TableAttitudeError{2.5 * units::arcsec}));
+  const ResultCoefficients rb =
+      result_coefficients(run_closed_form(cut, o, TableAttitudeError{2.5 * units::arcsec}));
+  REQUIRE(ra.size() == rb.size());
   int compared = 0;
-  for (const auto& [name, ca] : ra.coefficients) {
-    const ResultCoefficient& cb = rb.coefficients.at(name);
+  for (const auto& [name, ca] : ra) {
+    const ResultCoefficient& cb = rb.at(name);
     CAPTURE(name);
     REQUIRE(ca.observable == cb.observable);
     if (!ca.observable) continue;

@@ -3,9 +3,9 @@
 #include <cmath>
 #include <fstream>
 
-#include "filter/monitor.hpp"
 #include "helpers.hpp"
 #include "models/units.hpp"
+#include "report/monitor.hpp"
 
 using namespace sinscal;
 

@@ -1,8 +1,8 @@
 // libFuzzer target: read_monitor (filter/monitor.hpp; it may move to report/), which takes a path:
 // the input is written to a file first. Every error is a std::runtime_error naming the file; a
 // series read has one entry per record in every column.
-#include "filter/monitor.hpp"
 #include "fuzz_support.hpp"
+#include "report/monitor.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string path = sinscal::fuzz::work_dir() + "/monitor.jsonl";

@@ -1,7 +1,7 @@
 // libFuzzer target: read_result_json (rig/session.hpp; it may move to report/), which takes a
 // path: the input is written to a file first. Every error is a std::runtime_error naming the file.
 #include "fuzz_support.hpp"
-#include "rig/session.hpp"
+#include "report/result.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string path = sinscal::fuzz::work_dir() + "/result.json";

@@ -8,7 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "rig/session.hpp"
+#include "filter/kalman_run.hpp"
+#include "report/result.hpp"
 
 namespace sinscal {
 
@@ -24,6 +25,10 @@ struct MonitorSeries {
   std::vector<std::vector<double>> value;  // [coefficient][record]
   std::vector<std::vector<double>> sigma;  // [coefficient][record]
 };
+
+/// One monitor record as a JSON line (docs/formats.md): t, NIS per dof, converged, body frame,
+/// every estimated coefficient's [value, sigma] in its unit.
+std::string monitor_line(const MonitorRecord& record);
 
 /// Reads a monitor file; throws std::runtime_error naming file and line on a malformed record,
 /// an unknown coefficient or time going backwards.
@@ -51,6 +56,9 @@ struct ConvergencePlot {
 std::string convergence_plot_script(const MonitorSeries& series,
                                     const ConvergencePlotOptions& options,
                                     const std::string& png_path, ConvergencePlot* layout = nullptr);
+
+/// The gnuplot script's path beside a PNG: conv.png -> conv.gp.
+std::string convergence_script_path(const std::string& png_path);
 
 /// Writes the script beside `png_path` and runs gnuplot on it. Throws std::runtime_error if
 /// gnuplot cannot be run (naming the Debian package) or fails (with the script's path).

@@ -1,8 +1,9 @@
-#include "filter/monitor.hpp"
+#include "report/monitor.hpp"
 
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cmath>
@@ -16,10 +17,24 @@
 
 #include "models/imu_error_model.hpp"
 #include "models/sensor_profile.hpp"
+#include "report/output.hpp"
 
 extern char** environ;
 
 namespace sinscal {
+
+std::string monitor_line(const MonitorRecord& record) {
+  nlohmann::ordered_json rec;
+  rec["t"] = record.t;
+  rec["nis_per_dof"] = record.nis_per_dof;
+  rec["converged"] = record.converged;
+  rec["body_frame"] = record.accel_triad_frame ? "accelerometer triad" : "table";
+  nlohmann::ordered_json c = nlohmann::ordered_json::object();
+  for (const auto& [name, e] : result_coefficients(record.estimates))
+    if (!e.fixed_by_convention) c[name] = {e.value, *e.sigma};
+  rec["coefficients"] = c;
+  return rec.dump();
+}
 
 MonitorSeries read_monitor(const std::string& path) {
   std::ifstream in(path);
@@ -75,9 +90,17 @@ MonitorSeries read_monitor(const std::string& path) {
 
 namespace {
 
+// Text from the user (file names, labels) as gnuplot sees it: control characters (a newline
+// would end a comment or a string and start a command) shown as '?'.
+std::string printable(const std::string& s) {
+  std::string out;
+  for (char c : s) out += static_cast<unsigned char>(c) < 0x20 || c == 0x7f ? '?' : c;
+  return out;
+}
+
 std::string quoted(const std::string& s) {  // a gnuplot single-quoted string
   std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("''") : std::string(1, c);
+  for (char c : printable(s)) q += c == '\'' ? std::string("''") : std::string(1, c);
   return q + "'";
 }
 
@@ -121,11 +144,12 @@ std::string convergence_plot_script(const MonitorSeries& series,
   const int rows = static_cast<int>(families.size()) + 1;
   const int height = rows * options.row_height_px;
   std::ostringstream g;
-  g << "# Written by sinscal plot-convergence from " << series.path
+  g << "# Written by sinscal plot-convergence from " << printable(series.path)
     << "\n# gnuplot this file to redraw; the data are inline.\n"
     << "set terminal pngcairo size " << options.width_px << "," << height
     << " font 'sans,9' noenhanced\n"
-    << "set output " << quoted(png_path) << "\nset datafile missing '?'\n"
+    << "if (!exists('output')) output = " << quoted(png_path) << "\n"
+    << "set output output\nset datafile missing '?'\n"
     << "set key outside right top vertical samplen 2\nset grid\nset xlabel 't [s]'\n";
   g << "$nis << EOD\n";
   for (std::size_t k = 0; k < series.t.size(); ++k)
@@ -192,27 +216,30 @@ std::string convergence_plot_script(const MonitorSeries& series,
   return g.str();
 }
 
+std::string convergence_script_path(const std::string& png_path) {
+  const auto dot = png_path.rfind('.');
+  return (dot != std::string::npos && png_path.find('/', dot) == std::string::npos
+              ? png_path.substr(0, dot)
+              : png_path) +
+         ".gp";
+}
+
 ConvergencePlot plot_convergence(const MonitorSeries& series, const ConvergencePlotOptions& options,
                                  const std::string& png_path) {
   ConvergencePlot plot;
   const std::string script = convergence_plot_script(series, options, png_path, &plot);
-  const auto dot = png_path.rfind('.');
-  plot.script = (dot != std::string::npos && png_path.find('/', dot) == std::string::npos
-                     ? png_path.substr(0, dot)
-                     : png_path) +
-                ".gp";
-  {
-    std::ofstream out(plot.script);
-    out << script;
-    out.close();
-    if (!out) throw std::runtime_error(plot.script + ": cannot write");
-  }
+  plot.script = convergence_script_path(png_path);
+  write_atomically(plot.script, [&](std::ostream& out) { out << script; });
+  // gnuplot draws into a temporary file renamed over the PNG when it succeeded.
+  const std::string temp_png = png_path + ".tmp-" + std::to_string(::getpid());
+  const std::string set_output = "output = " + quoted(temp_png);
   const std::string log = plot.script + ".log";
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
   posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  std::vector<char*> argv = {const_cast<char*>(options.gnuplot.c_str()),
+  std::vector<char*> argv = {const_cast<char*>(options.gnuplot.c_str()), const_cast<char*>("-e"),
+                             const_cast<char*>(set_output.c_str()),
                              const_cast<char*>(plot.script.c_str()), nullptr};
   pid_t pid = 0;
   const int err =
@@ -236,8 +263,12 @@ ConvergencePlot plot_convergence(const MonitorSeries& series, const ConvergenceP
     messages = text.str();
   }
   std::remove(log.c_str());
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    std::remove(temp_png.c_str());
     throw std::runtime_error(options.gnuplot + " failed on " + plot.script + ": " + messages);
+  }
+  if (std::rename(temp_png.c_str(), png_path.c_str()) != 0)
+    throw std::runtime_error(png_path + ": cannot replace: " + std::strerror(errno));
   return plot;
 }
 

@@ -1,0 +1,41 @@
+// sinscal calibrate: the options shared by every session of a run, and one session's calibration
+// by either method (apps/calibrate_run.cpp).
+#pragma once
+
+#include <string>
+
+#include "apps/cli.hpp"
+#include "report/batch.hpp"
+
+namespace sinscal::cli {
+
+struct CalibrateOptions {
+  Method method = Method::ClosedForm;
+  // closed form
+  Stage1Method stage1 = Stage1Method::Fit;
+  ErrorModelKind model = ErrorModelKind::Coupled;
+  ChannelSet channels{true, true, true, true};
+  double arw = 0.0, vrw = 0.0, min_dwell = 20.0;  // deg/sqrt(h), ug/sqrt(Hz), s
+  // both
+  double table_sigma = 2.5;  // arcsec
+  // Kalman filter
+  CalibratorOptions::AttitudeUpdates attitude = CalibratorOptions::AttitudeUpdates::Every;
+  CalibratorOptions::StaticFrom static_from = CalibratorOptions::StaticFrom::Plan;
+  OnBadSample on_bad_sample = OnBadSample::Stop;
+  double monitor_interval = 10.0, static_window = 1.0, static_min = 3.0, static_rate = 3.0;
+  double prior_scale = kDefaultPriorScale;
+  std::string lever_arm_reference;  // x | y | z | empty
+  bool no_table_angles = false, no_zero_velocity = false, no_position = false;
+  bool no_motion_zero_velocity = false, stream = false;
+  int passes = 1;
+  std::string terms;
+};
+
+/// One session by the options' method: the result file, the monitor file (kf, may be empty);
+/// `verbose`: tables and verdicts on standard output (a single session); `live`: the live table
+/// on the terminal. Returns the session's summary row (status by the run-status rules).
+SessionSummary calibrate_session(const CalibrateOptions& o, const std::string& session_path,
+                                 const std::string& out_path, const std::string& monitor_path,
+                                 bool verbose, bool live);
+
+}  // namespace sinscal::cli

@@ -1,0 +1,172 @@
+// One session's calibration for sinscal calibrate: options to the library, results to files,
+// tables and verdicts to the terminal.
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include "apps/calibrate.hpp"
+#include "apps/print.hpp"
+#include "models/units.hpp"
+#include "report/monitor.hpp"
+#include "report/output.hpp"
+
+namespace sinscal::cli {
+
+namespace {
+
+// Every file a session reads: an output must be none of them.
+std::vector<std::pair<std::string, std::string>> session_inputs(const Session& s) {
+  std::vector<std::pair<std::string, std::string>> in = {{"session", s.path},
+                                                         {"plan", s.plan.path},
+                                                         {"sensor profile", s.sensor_file},
+                                                         {"truth", s.truth_file}};
+  const LogFormat& log = s.log;
+  if (log.split()) {
+    in.emplace_back("accelerometer log", log.accel_file);
+    in.emplace_back("gyro log", log.gyro_file);
+  } else if (!log.segments.empty()) {
+    for (const auto& seg : log.segments) in.emplace_back("log", seg.file);
+  } else {
+    in.emplace_back("log", log.file);
+  }
+  return in;
+}
+
+CalibratorOptions kalman_options(const CalibrateOptions& o, const Session& session,
+                                 const SensorProfile& profile) {
+  CalibratorOptions ko = calibrator_options_from_profile(profile, o.prior_scale);
+  ko.attitude_sigma = o.table_sigma * units::arcsec;
+  ko.attitude = o.attitude;
+  ko.position = !o.no_position;
+  ko.zero_velocity_in_motion = !o.no_motion_zero_velocity;
+  ko.time_offset = session.time_offset;
+  ko.use_table_angles = !o.no_table_angles;
+  ko.zero_velocity = !o.no_zero_velocity;
+  try {
+    apply_terms(ko.layout, o.terms);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--terms: ") + e.what());
+  }
+  if (!o.lever_arm_reference.empty()) set_lever_arm_reference(ko.layout, o.lever_arm_reference);
+  ko.static_from = o.static_from;
+  ko.detector.window = o.static_window;
+  ko.detector.min_duration = o.static_min;
+  ko.detector.rate_threshold = o.static_rate * units::deg_per_s;
+  return ko;
+}
+
+SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
+                            const std::string& out_path, const std::string& monitor_path,
+                            bool verbose, bool live) {
+  if (session.sensor_file.empty())
+    throw UsageError(session.path +
+                     ": --method kf needs the session's sensor profile ([session] sensor =)");
+  const SensorProfile profile = SensorProfile::load(session.sensor_file);
+  const CalibratorOptions ko = kalman_options(o, session, profile);
+  KalmanRunOptions run;
+  run.skip_bad_samples = o.on_bad_sample == OnBadSample::Skip;
+  run.passes = o.passes;
+  run.stop = &g_stop;
+  run.sigma_targets = profile.sigma_targets;
+  std::unique_ptr<LogReader> stdin_reader;
+  if (o.stream) {
+    LogFormat f = session.log;
+    f.file = "<stdin>";
+    stdin_reader = std::make_unique<LogReader>(std::cin, f);
+  }
+  KalmanRun kr;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto calibrate = [&](std::ostream* monitor) {
+    if (monitor || live) {
+      run.monitor_interval = o.monitor_interval;
+      run.monitor = [&](const MonitorRecord& rec) {
+        if (monitor) *monitor << monitor_line(rec) << "\n" << std::flush;
+        if (live) print_live_table(rec, profile.sigma_targets);
+      };
+    }
+    kr = run_kalman(session, ko, stdin_reader.get(), run);
+  };
+  if (monitor_path.empty())
+    calibrate(nullptr);
+  else
+    write_atomically(
+        monitor_path, [&](std::ostream& m) { calibrate(&m); }, true);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const ResultCoefficients coefficients = result_coefficients(kr);
+  write_result_json(out_path, coefficients, result_sections(kr));
+  const ResultCoefficients truth = load_truth(session, kr.accel_triad_frame, o.lever_arm_reference);
+  SessionSummary row{session.path,
+                     session.name,
+                     out_path,
+                     "",
+                     "",
+                     kr.samples,
+                     kr.duration,
+                     kr.nis_per_dof,
+                     kr.converged_at,
+                     max_error_over_sigma(coefficients, truth),
+                     coefficients};
+  set_status(kr, row);
+  if (!verbose) return row;
+  std::printf("Kalman-filter calibration of '%s': %d states, %zu samples, NIS per dof %.3f\n",
+              session.name.c_str(), kr.states, kr.samples, kr.nis_per_dof);
+  print_coefficient_table(coefficients, truth);
+  std::printf("\nResult written to %s (%.2f s, %.0fx real time)\n", out_path.c_str(), seconds,
+              kr.duration / seconds);
+  print_kalman_verdicts(kr, profile, truth);
+  return row;
+}
+
+SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& session,
+                                     const std::string& out_path, bool verbose) {
+  Stage1Options o;
+  o.method = co.stage1;
+  o.model = co.model;
+  o.channels = co.channels;
+  o.min_dwell = co.min_dwell;
+  if (!session.sensor_file.empty()) {
+    const SensorProfile p = SensorProfile::load(session.sensor_file);
+    o.arw = p.noise.gyro.white;
+    o.vrw = p.noise.accel.white;
+  }
+  if (co.arw > 0.0) o.arw = co.arw * units::deg_per_sqrt_h;
+  if (co.vrw > 0.0) o.vrw = co.vrw * units::ug_per_sqrt_hz;
+  const auto t0 = std::chrono::steady_clock::now();
+  const ClosedFormReport r =
+      run_closed_form(session, o, TableAttitudeError{co.table_sigma * units::arcsec});
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const ResultCoefficients coefficients = result_coefficients(r);
+  write_result_json(out_path, coefficients, result_sections(r));
+  const ResultCoefficients truth = load_truth(session);
+  SessionSummary row{session.path, session.name,
+                     out_path,     "ok",
+                     "",           0,
+                     0.0,          std::nullopt,
+                     std::nullopt, max_error_over_sigma(coefficients, truth),
+                     coefficients};
+  for (const auto& e : r.stage1) row.duration += e.duration;
+  if (!verbose) return row;
+  std::printf(
+      "Closed-form calibration of '%s': stage 1 %s, %s model, channels %s, table %.2f arcsec\n",
+      session.name.c_str(), name_of(co.stage1).c_str(), name_of(co.model).c_str(),
+      name_of(co.channels).c_str(), co.table_sigma);
+  print_closed_form(r, coefficients, truth);
+  std::printf("\nResult written to %s (%.2f s)\n", out_path.c_str(), seconds);
+  return row;
+}
+
+}  // namespace
+
+SessionSummary calibrate_session(const CalibrateOptions& o, const std::string& session_path,
+                                 const std::string& out_path, const std::string& monitor_path,
+                                 bool verbose, bool live) {
+  const Session session = Session::load(session_path);
+  check_outputs(session_inputs(session), {{"--out", out_path}, {"--monitor", monitor_path}});
+  return o.method == Method::Kf ? calibrate_kf(o, session, out_path, monitor_path, verbose, live)
+                                : calibrate_closed_form(o, session, out_path, verbose);
+}
+
+}  // namespace sinscal::cli

@@ -1,0 +1,148 @@
+#include "apps/cli.hpp"
+
+#include <signal.h>  // sigaction: Ctrl-C ends a streaming run with its results written
+
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+
+namespace sinscal::cli {
+
+std::optional<po::variables_map> parse(const std::vector<std::string>& args,
+                                       const po::options_description& desc,
+                                       const std::string& usage,
+                                       const po::positional_options_description* positional) {
+  // Boost.Program_options substitutes user text into its error messages and loops forever when
+  // that text contains one of its placeholders (e.g. "%value%"): no argument may carry a '%'.
+  for (std::size_t i = 0; i < args.size(); ++i)
+    if (args[i].find('%') != std::string::npos)
+      throw UsageError("argument " + std::to_string(i + 1) +
+                       " contains '%', which sinscal does not accept in arguments");
+  po::variables_map vm;
+  po::command_line_parser parser(args);
+  parser.options(desc);
+  if (positional) parser.positional(*positional);
+  po::store(parser.run(), vm);
+  if (vm.count("help")) {
+    std::cout << usage << "\n" << desc << "\n";
+    return std::nullopt;
+  }
+  po::notify(vm);
+  return vm;
+}
+
+std::string fmt(const char* format, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, format, v);
+  return b;
+}
+
+std::atomic<bool> g_stop{false};
+namespace {
+extern "C" void on_stop_signal(int) { g_stop.store(true); }
+}  // namespace
+
+void install_stop_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;  // no SA_RESTART: a read blocked on standard input returns
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+namespace {
+// "the argument for option '--method' must be closed-form | kf, not 'x'" (the value shown
+// without control characters, never through Boost's placeholder substitution).
+po::error_with_option_name invalid(const std::string& value, const std::string& accepted) {
+  std::string shown;
+  for (char c : value.substr(0, 80)) shown += static_cast<unsigned char>(c) < 0x20 ? '?' : c;
+  return po::error_with_option_name("the argument for option '%canonical_option%' must be " +
+                                    accepted + ", not '" + shown + "'");
+}
+
+template <class E>
+void choose(boost::any& v, const std::vector<std::string>& values,
+            const std::vector<std::pair<const char*, E>>& names) {
+  po::validators::check_first_occurrence(v);
+  const std::string& s = po::validators::get_single_string(values);
+  std::string known;
+  for (const auto& [name, value] : names) {
+    if (s == name) {
+      v = boost::any(value);
+      return;
+    }
+    known += (known.empty() ? "" : " | ") + std::string(name);
+  }
+  throw invalid(s, known);
+}
+}  // namespace
+
+void validate(boost::any& v, const std::vector<std::string>& values, Method*, int) {
+  choose<Method>(v, values, {{"closed-form", Method::ClosedForm}, {"kf", Method::Kf}});
+}
+void validate(boost::any& v, const std::vector<std::string>& values, OnBadSample*, int) {
+  choose<OnBadSample>(v, values, {{"stop", OnBadSample::Stop}, {"skip", OnBadSample::Skip}});
+}
+void validate(boost::any& v, const std::vector<std::string>& values, Vertical*, int) {
+  choose<Vertical>(v, values, {{"free", Vertical::Free}, {"held", Vertical::Held}});
+}
+
+std::string name_of(Method m) { return m == Method::Kf ? "kf" : "closed-form"; }
+std::string name_of(Stage1Method m) { return m == Stage1Method::Point ? "point" : "fit"; }
+std::string name_of(ErrorModelKind m) {
+  return m == ErrorModelKind::Uncoupled ? "uncoupled" : "coupled";
+}
+std::string name_of(const ChannelSet& c) {
+  std::string out;
+  for (const auto& [on, name] :
+       {std::pair{c.north, "north"}, std::pair{c.east, "east"}, std::pair{c.vertical, "vertical"},
+        std::pair{c.heading, "heading"}})
+    if (on) out += (out.empty() ? "" : ",") + std::string(name);
+  return out;
+}
+
+}  // namespace sinscal::cli
+
+namespace sinscal {
+
+using cli::choose;
+using cli::invalid;
+namespace po = boost::program_options;
+
+void validate(boost::any& v, const std::vector<std::string>& values,
+              CalibratorOptions::AttitudeUpdates*, int) {
+  using A = CalibratorOptions::AttitudeUpdates;
+  choose<A>(v, values, {{"every", A::Every}, {"first", A::First}, {"none", A::None}});
+}
+void validate(boost::any& v, const std::vector<std::string>& values, CalibratorOptions::StaticFrom*,
+              int) {
+  using S = CalibratorOptions::StaticFrom;
+  choose<S>(v, values, {{"plan", S::Plan}, {"data", S::Data}});
+}
+void validate(boost::any& v, const std::vector<std::string>& values, Stage1Method*, int) {
+  choose<Stage1Method>(v, values, {{"fit", Stage1Method::Fit}, {"point", Stage1Method::Point}});
+}
+void validate(boost::any& v, const std::vector<std::string>& values, ErrorModelKind*, int) {
+  choose<ErrorModelKind>(
+      v, values, {{"coupled", ErrorModelKind::Coupled}, {"uncoupled", ErrorModelKind::Uncoupled}});
+}
+void validate(boost::any& v, const std::vector<std::string>& values, ChannelSet*, int) {
+  po::validators::check_first_occurrence(v);
+  const std::string& list = po::validators::get_single_string(values);
+  ChannelSet c{false, false, false, false};
+  std::stringstream cs(list);
+  for (std::string name; std::getline(cs, name, ',');) {
+    bool* flag = name == "north"      ? &c.north
+                 : name == "east"     ? &c.east
+                 : name == "vertical" ? &c.vertical
+                 : name == "heading"  ? &c.heading
+                                      : nullptr;
+    if (!flag) throw cli::invalid(name, "channels among north, east, vertical, heading");
+    *flag = true;
+  }
+  if (!c.north || !c.east) throw cli::invalid(list, "a list with at least north,east");
+  v = boost::any(c);
+}
+
+}  // namespace sinscal

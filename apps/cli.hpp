@@ -1,0 +1,77 @@
+// What every command of the sinscal tool shares: exit codes, usage errors, option parsing with
+// enum-like options validated once (Boost.Program_options validators), the stop signal.
+#pragma once
+
+#include <atomic>
+#include <boost/program_options.hpp>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "filter/closed_form.hpp"
+#include "filter/kalman_calibrator.hpp"
+
+namespace sinscal::cli {
+
+namespace po = boost::program_options;
+
+constexpr int kUsageError = 1;
+constexpr int kDataError = 2;
+constexpr int kDisagree = 3;       // compare: the results differ beyond the given tolerance
+constexpr int kInterrupted = 130;  // SIGINT / SIGTERM: stopped, what was computed written
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// Parses a command's options; prints the usage and returns nullopt for --help.
+std::optional<po::variables_map> parse(
+    const std::vector<std::string>& args, const po::options_description& desc,
+    const std::string& usage, const po::positional_options_description* positional = nullptr);
+
+/// printf-style formatting of one number.
+std::string fmt(const char* format, double v);
+
+/// Set by SIGINT / SIGTERM once install_stop_handlers() ran: a calibration stops reading,
+/// finishes and writes its results.
+extern std::atomic<bool> g_stop;
+void install_stop_handlers();
+
+/// An option whose value is one of a few names (--method kf): the names and their values.
+template <class E>
+struct Choice {
+  E value;
+};
+
+/// Calibration method of `calibrate`.
+enum class Method { ClosedForm, Kf };
+/// What a bad sample does.
+enum class OnBadSample { Stop, Skip };
+/// The vertical channel of `navigate`.
+enum class Vertical { Free, Held };
+
+// Validators (found by argument-dependent lookup, so in the namespace of each type): an unknown
+// name is a usage error naming the accepted ones.
+void validate(boost::any& v, const std::vector<std::string>& values, Method*, int);
+void validate(boost::any& v, const std::vector<std::string>& values, OnBadSample*, int);
+void validate(boost::any& v, const std::vector<std::string>& values, Vertical*, int);
+
+}  // namespace sinscal::cli
+
+namespace sinscal {
+void validate(boost::any& v, const std::vector<std::string>& values,
+              CalibratorOptions::AttitudeUpdates*, int);
+void validate(boost::any& v, const std::vector<std::string>& values, CalibratorOptions::StaticFrom*,
+              int);
+void validate(boost::any& v, const std::vector<std::string>& values, Stage1Method*, int);
+void validate(boost::any& v, const std::vector<std::string>& values, ErrorModelKind*, int);
+void validate(boost::any& v, const std::vector<std::string>& values, ChannelSet*, int);
+namespace cli {
+std::string name_of(Method m);
+std::string name_of(Stage1Method m);
+std::string name_of(ErrorModelKind m);
+std::string name_of(const ChannelSet& c);
+}  // namespace cli
+}  // namespace sinscal

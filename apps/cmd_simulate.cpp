@@ -1,0 +1,90 @@
+// sinscal simulate: a calibration session on a two-axis table, written to a directory.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+
+#include "apps/cli.hpp"
+#include "apps/commands.hpp"
+#include "models/units.hpp"
+#include "report/output.hpp"
+#include "rig/session.hpp"
+
+namespace sinscal::cli {
+
+namespace {
+constexpr double kMaxRateHz = 100000.0;  // a log beyond this is not an IMU's
+
+void print_simulation(const SimulatedSession& sim, const SessionSimulation& spec,
+                      const std::string& out_dir, double seconds) {
+  const bool noise = spec.noise && !spec.perfect;
+  std::cout << "Simulated plan '" << sim.plan.name << "' (" << sim.plan.path << "), sensor '"
+            << sim.profile.name << "'\n  " << sim.samples << " samples at " << spec.rate_hz
+            << " Hz, " << fmt("%.1f", sim.duration) << " s, " << sim.dwells << " dwells, "
+            << (noise ? "noise on" : "noise off") << ", "
+            << fmt("%.0f", static_cast<double>(sim.samples) / seconds) << " samples/s written\n";
+  if (sim.saturated > 0)
+    std::cout << "  WARNING: " << sim.saturated << " samples clipped at the sensor range\n";
+  std::cout << "  session: " << out_dir << "/session.ini\n  injected coefficients (truth.json):\n";
+  const auto truth = sim.truth.coefficients();
+  for (const auto& info : coefficient_catalog()) {
+    const double v = truth.at(info.name);
+    if (v != 0.0) std::printf("    %-28s %12.4f %s\n", info.name.c_str(), v, info.unit.c_str());
+  }
+}
+}  // namespace
+
+int cmd_simulate(const std::vector<std::string>& args) {
+  po::options_description d("sinscal simulate options");
+  SessionSimulation spec;
+  std::string out_dir;
+  double angle_sigma_arcsec = 0.0, non_orth_arcsec = 0.0;
+  unsigned long long seed = 1;
+  // clang-format off
+  d.add_options()
+      ("help,h", "this help")
+      ("plan", po::value(&spec.plan_path)->required(), "plan INI file (config/plans/*.ini)")
+      ("sensor", po::value(&spec.data_sensor_path)->required(),
+       "sensor profile INI (config/sensors/*.ini)")
+      ("out", po::value(&out_dir)->required(), "output session directory")
+      ("rate", po::value(&spec.rate_hz)->default_value(100.0), "IMU output rate [Hz]")
+      ("seed", po::value(&seed)->default_value(1), "seed of all random draws")
+      ("no-noise", "no sensor noise (coefficients still drawn)")
+      ("table-angles", "log the table's outer and inner axis angles (plans of table moves)")
+      ("perfect", "no sensor errors at all (zero coefficients, no noise)")
+      ("table-angle-sigma", po::value(&angle_sigma_arcsec)->default_value(0.0),
+       "table angle error per commanded angle, 1-sigma [arcsec]")
+      ("table-non-orthogonality", po::value(&non_orth_arcsec)->default_value(0.0),
+       "lean of the inner axis [arcsec]");
+  // clang-format on
+  const auto vm = parse(args, d,
+                        "Usage: sinscal simulate --plan P --sensor S --out DIR [--rate HZ] "
+                        "[--seed N] [--no-noise]\nSimulates a calibration session: DIR/imu.csv, "
+                        "session.ini, plan.ini, sensor.ini, truth.json.");
+  if (!vm) return 0;
+  if (!(spec.rate_hz > 0.0 && spec.rate_hz <= kMaxRateHz))
+    throw UsageError("--rate must be above 0 and at most " + fmt("%g", kMaxRateHz) + " Hz");
+  if (!(std::abs(angle_sigma_arcsec) < 3600.0 && angle_sigma_arcsec >= 0.0 &&
+        std::abs(non_orth_arcsec) < 3600.0))
+    throw UsageError(
+        "--table-angle-sigma must be 0 to 3600 arcsec and "
+        "--table-non-orthogonality within +-3600 arcsec");
+  spec.seed = seed;
+  spec.perfect = vm->count("perfect") > 0;
+  spec.noise = !vm->count("no-noise");
+  spec.table_angles = vm->count("table-angles") > 0;
+  spec.table.angle_sigma = angle_sigma_arcsec * units::arcsec;
+  spec.table.non_orthogonality = non_orth_arcsec * units::arcsec;
+  spec.table.seed = derive_seed(seed, 3);
+  std::vector<std::pair<std::string, std::string>> outputs;
+  for (const char* f : {"imu.csv", "session.ini", "plan.ini", "sensor.ini", "truth.json"})
+    outputs.emplace_back("output", out_dir + "/" + f);
+  check_outputs({{"plan", spec.plan_path}, {"sensor profile", spec.data_sensor_path}}, outputs);
+  const auto t0 = std::chrono::steady_clock::now();
+  const SimulatedSession sim = simulate_session(out_dir, spec);
+  print_simulation(sim, spec, out_dir,
+                   std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  return 0;
+}
+
+}  // namespace sinscal::cli

@@ -1,0 +1,51 @@
+// sinscal command-line tool: the command dispatch and the exit codes of errors. Each command
+// parses its options, calls the library and prints (apps/cmd_*.cpp); no algorithm lives here.
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "apps/cli.hpp"
+#include "apps/commands.hpp"
+
+namespace {
+const char* kUsage =
+    "sinscal: calibration of strapdown inertial navigation systems\n"
+    "Usage: sinscal COMMAND [options]   (sinscal COMMAND --help for the options)\n"
+    "Commands:\n"
+    "  simulate   simulate a calibration session on a two-axis table\n"
+    "  navigate   navigate through the static dwells of a session, report navigation errors\n"
+    "  calibrate  estimate the calibration coefficients of a session or a batch of sessions\n"
+    "             (closed-form method or Kalman filter)\n"
+    "  compare    two results side by side, difference over its sigma\n"
+    "  plot-convergence\n"
+    "             estimates and sigmas over time from a Kalman monitor file, to PNG (gnuplot)\n";
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace sinscal::cli;
+  if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h") {
+    std::cout << kUsage;
+    return argc < 2 ? kUsageError : 0;
+  }
+  const std::string command = argv[1];
+  const std::vector<std::string> args(argv + 2, argv + argc);
+  try {
+    if (command == "simulate") return cmd_simulate(args);
+    if (command == "navigate") return cmd_navigate(args);
+    if (command == "calibrate") return cmd_calibrate(args);
+    if (command == "compare") return cmd_compare(args);
+    if (command == "plot-convergence") return cmd_plot_convergence(args);
+    std::cerr << "sinscal: unknown command '" << command << "'\n" << kUsage;
+    return kUsageError;
+  } catch (const po::error& e) {
+    std::cerr << "sinscal " << command << ": " << e.what() << " (see sinscal " << command
+              << " --help)\n";
+    return kUsageError;
+  } catch (const UsageError& e) {
+    std::cerr << "sinscal " << command << ": " << e.what() << "\n";
+    return kUsageError;
+  } catch (const std::exception& e) {
+    std::cerr << "sinscal " << command << ": error: " << e.what() << "\n";
+    return kDataError;
+  }
+}

@@ -1,0 +1,209 @@
+#include "apps/print.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "apps/cli.hpp"
+#include "models/coefficient_families.hpp"
+#include "models/units.hpp"
+
+namespace sinscal::cli {
+
+void print_coefficient_table(const ResultCoefficients& coefficients,
+                             const ResultCoefficients& truth) {
+  std::printf("\n%-24s %12s %10s %-7s", "coefficient", "estimate", "sigma", "unit");
+  if (!truth.empty()) std::printf(" %12s %10s %7s", "truth", "error", "err/sig");
+  std::printf("\n");
+  for (const auto& info : coefficient_catalog()) {
+    const auto it = coefficients.find(info.name);
+    if (it == coefficients.end()) continue;
+    const ResultCoefficient& c = it->second;
+    const bool estimated = c.observable && !c.fixed_by_convention;
+    if (c.fixed_by_convention)
+      std::printf("%-24s %23s %-7s", info.name.c_str(), "0 (convention)", c.unit.c_str());
+    else if (!c.observable)
+      std::printf("%-24s %23s %-7s", info.name.c_str(), "unobservable", c.unit.c_str());
+    else
+      std::printf("%-24s %12.4f %10.4f %-7s", info.name.c_str(), c.value, *c.sigma, c.unit.c_str());
+    const auto t = truth.find(info.name);
+    if (t != truth.end()) {
+      if (estimated)
+        std::printf(" %12.4f %10.4f %7.2f", t->second.value, c.value - t->second.value,
+                    (c.value - t->second.value) / *c.sigma);
+      else
+        std::printf(" %12.4f", t->second.value);
+    }
+    std::printf("\n");
+  }
+}
+
+namespace {
+// Against the truth (simulations): the largest |error| / sigma and how many are beyond 3.
+void print_truth_verdict(const ResultCoefficients& coefficients, const ResultCoefficients& truth) {
+  if (truth.empty()) return;
+  const auto worst = max_error_over_sigma(coefficients, truth);
+  if (!worst) return;
+  int beyond = 0, n = 0;
+  for (const auto& [name, c] : coefficients) {
+    const auto t = truth.find(name);
+    if (t == truth.end() || !c.observable || c.fixed_by_convention || !c.sigma) continue;
+    ++n;
+    if (std::abs(c.value - t->second.value) > 3.0 * *c.sigma) ++beyond;
+  }
+  std::printf("Against the injected truth: every one of the %d estimates within %.2f sigma%s\n", n,
+              *worst,
+              beyond == 0 ? " (the errors are what the sigmas say: the calibration is right)"
+                          : "; beyond 3 sigma: see err/sig above");
+}
+
+// One family above its target, with what sets its sigma.
+void explain_above_target(const KalmanRun& run, const std::string& family, double sigma,
+                          double target, int dwells) {
+  const CoefficientFamily& f = coefficient_family_info(family);
+  std::printf("  %-20s sigma %.3g > target %.3g %s", family.c_str(), sigma / f.si_per_unit(),
+              target / f.si_per_unit(), f.unit().c_str());
+  const bool attitude = run.options.attitude != CalibratorOptions::AttitudeUpdates::None;
+  if (attitude && family.find("misalignment") != std::string::npos && dwells > 0) {
+    const double limit = run.options.attitude_sigma / std::sqrt(static_cast<double>(dwells));
+    std::printf(
+        ": the table sets each of the %d dwells to %.2f arcsec, which alone allows "
+        "about %.2f arcsec (--table-sigma)\n",
+        dwells, run.options.attitude_sigma / units::arcsec, limit / units::arcsec);
+  } else {
+    std::printf(
+        ": the noise over this plan's dwells and turns allows no less (more or longer "
+        "dwells would)\n");
+  }
+}
+}  // namespace
+
+void print_kalman_verdicts(const KalmanRun& run, const SensorProfile& profile,
+                           const ResultCoefficients& truth) {
+  const ResultCoefficients coefficients = result_coefficients(run);
+  std::vector<std::string> fixed;
+  for (const auto& [name, c] : coefficients)
+    if (c.fixed_by_convention) fixed.push_back(name);
+  if (!fixed.empty()) {
+    std::printf("\nZero by convention (not estimated):");
+    for (const auto& n : fixed) std::printf(" %s", n.c_str());
+    std::printf("\n");
+  }
+  std::printf("\n");
+  print_truth_verdict(coefficients, truth);
+  if (!run.unobservable.empty()) {
+    std::fprintf(stderr,
+                 "sinscal calibrate: warning: the plan does not observe these coefficients (the "
+                 "data determine them worse than the prior did; reported as not observable):");
+    for (const auto& n : run.unobservable) std::fprintf(stderr, " %s", n.c_str());
+    std::fprintf(stderr, "\n");
+    for (const auto& d : run.unobservable_directions)
+      std::fprintf(stderr, "  not determined by the data: %s\n", d.text().c_str());
+    for (const auto& n : run.unobservable)
+      if (n.rfind("accel.lever_arm.", 0) == 0 && run.options.layout.fixed.empty()) {
+        std::fprintf(stderr,
+                     "  (a common shift of the lever arms is the IMU reference point: "
+                     "--lever-arm-reference x fixes accelerometer x's at zero)\n");
+        break;
+      }
+  }
+  if (profile.sigma_targets.empty()) {
+    std::printf("Convergence: the sensor profile sets no sigma targets ([targets])\n");
+  } else if (run.converged_at) {
+    std::printf("Convergence: every sigma below its target from t = %.1f s\n", *run.converged_at);
+  } else {
+    std::printf(
+        "Convergence: %zu of the estimated coefficients stay above their profile's sigma "
+        "target (the estimates are still right; the targets ask for more than this plan "
+        "gives):\n",
+        run.above_target.size());
+    std::map<std::string, double> worst;  // family -> largest sigma, SI
+    for (const auto& name : run.above_target) {
+      const double s =
+          coefficients.at(name).sigma.value_or(0.0) * coefficient_info(name).si_per_unit;
+      double& w = worst[coefficient_family(name)];
+      w = std::max(w, s);
+    }
+    const int dwells =
+        run.options.attitude == CalibratorOptions::AttitudeUpdates::First ? 1 : run.dwells;
+    for (const auto& [family, s] : worst)
+      explain_above_target(run, family, s, profile.sigma_targets.at(family), dwells);
+  }
+  if (run.skipped > 0) {
+    std::fprintf(stderr, "sinscal calibrate: warning: %zu bad samples skipped, the first:\n",
+                 run.skipped);
+    for (const auto& m : run.skipped_examples) std::fprintf(stderr, "  %s\n", m.c_str());
+  }
+}
+
+void print_live_table(const MonitorRecord& rec, const std::map<std::string, double>& targets) {
+  std::map<std::string, std::pair<double, const CoefficientInfo*>> worst;  // family -> max sigma
+  const auto& cat = coefficient_catalog();
+  for (std::size_t i = 0; i < cat.size(); ++i) {
+    if (rec.estimates[i].status != CoefficientEstimate::Status::Estimated) continue;
+    auto& w = worst[cat[i].family];
+    if (rec.estimates[i].sigma >= w.first) w = {rec.estimates[i].sigma, &cat[i]};
+  }
+  std::fprintf(stderr, "\033[H\033[J");  // home, clear
+  std::fprintf(stderr, "sinscal calibrate --method kf   t = %.1f s   NIS/dof %.3f   %s\n", rec.t,
+               rec.nis_per_dof, rec.converged ? "CONVERGED" : "converging");
+  std::fprintf(stderr, "%-22s %12s %12s %-8s\n", "family", "max sigma", "target", "unit");
+  for (const auto& [family, w] : worst) {
+    const auto t = targets.find(family);
+    const double sigma = w.first / w.second->si_per_unit;
+    std::string target = "-";
+    if (t != targets.end()) target = fmt("%.4g", t->second / w.second->si_per_unit);
+    std::fprintf(stderr, "%-22s %12.4g %12s %-8s %s\n", family.c_str(), sigma, target.c_str(),
+                 w.second->unit.c_str(), t != targets.end() && w.first <= t->second ? "ok" : "");
+  }
+}
+
+void print_closed_form(const ClosedFormReport& r, const ResultCoefficients& coefficients,
+                       const ResultCoefficients& truth) {
+  std::printf("\nStage 1: equivalent inputs per dwell (value +- sigma)\n");
+  std::printf("%5s %-10s %6s %20s %20s %20s %20s %20s %20s %8s\n", "dwell", "label", "T [s]",
+              "df_n [ug]", "df_e [ug]", "df_d [ug]", "dw_n [deg/h]", "dw_e [deg/h]", "dw_d [deg/h]",
+              "chi2/dof");
+  for (const auto& e : r.stage1) {
+    std::printf("%5d %-10s %6.1f", e.dwell.index, e.dwell.label.c_str(), e.duration);
+    for (int i = 0; i < 6; ++i) {
+      const double f = i < 3 ? units::ug : units::deg_per_h;
+      if (e.estimated[static_cast<std::size_t>(i)])
+        std::printf(" %10.4f +- %6.4f", e.u(i) / f, std::sqrt(e.cov(i, i)) / f);
+      else
+        std::printf(" %20s", "-");
+    }
+    std::printf(" %8.3f\n", e.chi2_per_dof);
+  }
+  std::printf("\nIdentifiability: rank %d of %zu; stage-2 chi2 per dof %.3f (%d dof)\n",
+              r.stage2.rank, r.stage2.parameters.size(), r.stage2.chi2_per_dof, r.stage2.dof);
+  for (const auto& u : r.stage2.unobservable_directions)
+    std::printf("  unobservable direction: %s\n", u.c_str());
+  print_coefficient_table(coefficients, truth);
+  // The limits of a static plan, shown rather than hidden.
+  auto sigma_range = [&](const std::string& family) {
+    std::pair<double, double> range{1e300, 0.0};
+    for (const auto& [name, c] : coefficients)
+      if (coefficient_family(name) == family && c.observable && c.sigma)
+        range = {std::min(range.first, *c.sigma), std::max(range.second, *c.sigma)};
+    return range;
+  };
+  const auto [smin, smax] = sigma_range("gyro.scale");
+  const auto [mmin, mmax] = sigma_range("gyro.misalignment");
+  std::printf(
+      "\nLimit of static orientations: gyro scale factors and misalignments come from Earth "
+      "rate alone:\n  sigma %.0f-%.0f ppm and %.0f-%.0f arcsec. Rotations are needed for them "
+      "(Kalman filter, rot19).\n",
+      smin, smax, mmin, mmax);
+  if (!r.has_paper_forms) return;
+  std::printf(
+      "\nThe paper's literal closed forms (X and Z sensors) beside the general solution:\n");
+  for (const auto& [name, v] : named(r.paper)) {
+    const CoefficientInfo& info = coefficient_info(name);
+    const auto& c = coefficients.at(name);
+    std::printf("  %-24s paper %12.4f   general %12.4f %s\n", name.c_str(), v / info.si_per_unit,
+                c.observable ? c.value : std::nan(""), info.unit.c_str());
+  }
+}
+
+}  // namespace sinscal::cli

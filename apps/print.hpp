@@ -1,0 +1,29 @@
+// Printing of results on the terminal (the files are report/'s).
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "filter/closed_form.hpp"
+#include "filter/kalman_run.hpp"
+#include "models/sensor_profile.hpp"
+#include "report/result.hpp"
+
+namespace sinscal::cli {
+
+/// Coefficient, estimate, sigma, unit; truth, error and error/sigma when `truth` is not empty.
+void print_coefficient_table(const ResultCoefficients& coefficients,
+                             const ResultCoefficients& truth);
+/// What a newcomer reads first: how far the estimates are from the truth (simulations), whether
+/// and when every sigma reached its target (each one above it named), what the plan cannot
+/// observe, the frame convention, skipped samples.
+void print_kalman_verdicts(const KalmanRun& run, const SensorProfile& profile,
+                           const ResultCoefficients& truth);
+/// Live convergence table on a terminal (standard error): per family, the largest sigma against
+/// its target.
+void print_live_table(const MonitorRecord& record, const std::map<std::string, double>& targets);
+/// Stage-1 inputs per dwell, identifiability, the static plan's limits, the paper's forms.
+void print_closed_form(const ClosedFormReport& report, const ResultCoefficients& coefficients,
+                       const ResultCoefficients& truth);
+
+}  // namespace sinscal::cli

@@ -1,0 +1,268 @@
+#include "report/result.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "models/coefficient_families.hpp"
+#include "models/units.hpp"
+#include "report/output.hpp"
+
+namespace sinscal {
+
+ResultCoefficients result_coefficients(const std::vector<CoefficientEstimate>& est) {
+  ResultCoefficients out;
+  const auto& cat = coefficient_catalog();
+  for (std::size_t i = 0; i < cat.size() && i < est.size(); ++i) {
+    if (est[i].status == CoefficientEstimate::Status::Off) continue;
+    ResultCoefficient c;
+    c.unit = cat[i].unit;
+    c.fixed_by_convention = est[i].status == CoefficientEstimate::Status::FixedByConvention;
+    if (!c.fixed_by_convention) {
+      c.value = est[i].value / cat[i].si_per_unit;
+      c.sigma = est[i].sigma / cat[i].si_per_unit;
+      c.observable = est[i].observed();
+    }
+    out[cat[i].name] = c;
+  }
+  return out;
+}
+
+ResultCoefficients result_coefficients(const KalmanRun& run) {
+  return result_coefficients(run.estimates);
+}
+
+ResultCoefficients result_coefficients(const ClosedFormReport& r) {
+  ResultCoefficients out;
+  const auto& cat = coefficient_catalog();
+  for (std::size_t k = 0; k < r.stage2.parameters.size(); ++k) {
+    const auto i = static_cast<std::size_t>(r.stage2.parameters[k]);
+    const auto j = static_cast<Eigen::Index>(k);
+    ResultCoefficient c;
+    c.unit = cat[i].unit;
+    c.observable = r.stage2.observable[k];
+    if (c.observable) {
+      c.value = r.stage2.theta(j) / cat[i].si_per_unit;
+      c.sigma = std::sqrt(r.stage2.cov(j, j)) / cat[i].si_per_unit;
+    }
+    out[cat[i].name] = c;
+  }
+  return out;
+}
+
+namespace {
+const char* attitude_name(CalibratorOptions::AttitudeUpdates a) {
+  switch (a) {
+    case CalibratorOptions::AttitudeUpdates::Every:
+      return "every dwell";
+    case CalibratorOptions::AttitudeUpdates::First:
+      return "first dwell";
+    case CalibratorOptions::AttitudeUpdates::None:
+      break;
+  }
+  return "none";
+}
+
+nlohmann::ordered_json kalman_method(const KalmanRun& r) {
+  const CalibratorOptions& o = r.options;
+  nlohmann::ordered_json m = {
+      {"name", "kf"},
+      {"states", r.states},
+      {"zero_velocity", o.zero_velocity},
+      {"zero_velocity_in_motion", o.zero_velocity_in_motion},
+      {"position", o.position},
+      {"attitude", attitude_name(o.attitude)},
+      {"body_frame", r.accel_triad_frame ? "accelerometer triad" : "table"},
+      {"static_from", r.detected ? "data" : "plan"},
+      {"attitude_from", r.table_attitude_updates > 0 ? "table angles" : "plan"},
+      {"update_interval_s", o.update_interval},
+      {"prior_scale", o.prior_scale},
+      {"table_sigma_arcsec", o.attitude_sigma / units::arcsec}};
+  if (!o.layout.fixed.empty()) m["fixed_by_convention"] = o.layout.fixed;
+  if (!r.passes.empty()) m["passes"] = r.passes_requested;
+  return m;
+}
+
+nlohmann::ordered_json kalman_convergence(const KalmanRun& r) {
+  nlohmann::ordered_json conv = {{"targets", r.has_targets},
+                                 {"converged", r.converged_at.has_value()}};
+  if (r.converged_at) conv["converged_at_t"] = *r.converged_at;
+  conv["above_target"] = r.above_target;
+  conv["unobservable"] = r.unobservable;
+  nlohmann::ordered_json dirs = nlohmann::ordered_json::array();
+  for (const auto& d : r.unobservable_directions)
+    dirs.push_back({{"direction", d.text()}, {"remaining_variance_ratio", d.remaining}});
+  conv["unobservable_directions"] = dirs;
+  return conv;
+}
+}  // namespace
+
+nlohmann::ordered_json result_sections(const KalmanRun& r) {
+  nlohmann::ordered_json d;
+  d["method"] = kalman_method(r);
+  d["consistency"] = {{"nis_per_dof", r.nis_per_dof}, {"samples", r.samples}};
+  d["convergence"] = kalman_convergence(r);
+  if (r.detected) {
+    // Where the data were static against where the plan says: the log's timing, measured.
+    nlohmann::ordered_json dwells = nlohmann::ordered_json::array();
+    for (const auto& f : r.detected->intervals)
+      dwells.push_back({{"dwell", f.dwell},
+                        {"label", f.label},
+                        {"t_start", f.t_start},
+                        {"t_end", f.t_end},
+                        {"plan_t_start", f.plan_t_start},
+                        {"plan_t_end", f.plan_t_end}});
+    d["static_from_data"] = {
+        {"gyro_bound_deg_per_s", r.detected->gyro_bound / units::deg_per_s},
+        {"accel_bound_ug", r.detected->accel_bound / units::ug},
+        {"rate_threshold_deg_per_s", r.detected->rate_threshold / units::deg_per_s},
+        {"window_s", r.options.detector.window},
+        {"dwells", dwells}};
+  }
+  if (r.skipped > 0) d["skipped_samples"] = {{"count", r.skipped}, {"first", r.skipped_examples}};
+  if (!r.diverged.empty()) d["diverged"] = {{"reason", r.diverged}, {"t", r.t_last}};
+  if (!r.stopped.empty())
+    d["stopped"] = {
+        {"reason", r.stopped}, {"last_good_t", r.t_last}, {"interrupted", r.interrupted}};
+  if (!r.passes.empty()) {
+    nlohmann::ordered_json passes = nlohmann::ordered_json::array();
+    for (const auto& p : r.passes) {
+      nlohmann::ordered_json e = {{"pass", p.pass}, {"nis_per_dof", p.nis_per_dof}};
+      if (p.largest_change_over_sigma)
+        e["largest_change_over_sigma"] = *p.largest_change_over_sigma;
+      passes.push_back(e);
+    }
+    d["passes"] = passes;
+  }
+  return d;
+}
+
+namespace {
+const char* kInputName[6] = {"df_n", "df_e", "df_d", "dw_n", "dw_e", "dw_d"};
+}  // namespace
+
+nlohmann::ordered_json result_sections(const ClosedFormReport& r) {
+  const Stage1Options& s1 = r.stage1_options;
+  nlohmann::ordered_json d;
+  d["method"] = {{"name", "closed-form"},
+                 {"stage1", s1.method == Stage1Method::Fit ? "fit" : "point"},
+                 {"model", s1.model == ErrorModelKind::Coupled ? "coupled" : "uncoupled"},
+                 {"channels",
+                  {{"north", s1.channels.north},
+                   {"east", s1.channels.east},
+                   {"vertical", s1.channels.vertical},
+                   {"heading", s1.channels.heading}}},
+                 {"arw_deg_per_sqrt_h", s1.arw / units::deg_per_sqrt_h},
+                 {"vrw_ug_per_sqrt_hz", s1.vrw / units::ug_per_sqrt_hz},
+                 {"table_sigma_arcsec", r.stage2_options.table.sigma / units::arcsec}};
+  nlohmann::ordered_json dwells = nlohmann::ordered_json::array();
+  for (const auto& e : r.stage1) {
+    nlohmann::ordered_json x = {
+        {"dwell", e.dwell.index}, {"label", e.dwell.label}, {"duration_s", e.duration}};
+    nlohmann::ordered_json inputs = nlohmann::ordered_json::object();
+    for (int i = 0; i < 6; ++i) {
+      if (!e.estimated[static_cast<std::size_t>(i)]) continue;
+      const bool gyro = i >= 3;
+      const double f = gyro ? units::deg_per_h : units::ug;
+      inputs[kInputName[i]] = {{"value", e.u(i) / f},
+                               {"sigma", std::sqrt(e.cov(i, i)) / f},
+                               {"unit", gyro ? "deg/h" : "ug"}};
+    }
+    x["equivalent_inputs"] = inputs;
+    if (s1.method == Stage1Method::Fit)
+      x["residuals"] = {{"rms_velocity_m_per_s", e.rms_velocity},
+                        {"rms_attitude_arcsec", e.rms_attitude / units::arcsec},
+                        {"chi2_per_dof", e.chi2_per_dof}};
+    dwells.push_back(x);
+  }
+  d["stage1"] = dwells;
+  d["identifiability"] = {{"rank", r.stage2.rank},
+                          {"parameters", r.stage2.parameters.size()},
+                          {"unobservable_directions", r.stage2.unobservable_directions}};
+  return d;
+}
+
+void write_result_json(const std::string& path, const ResultCoefficients& coefficients,
+                       const nlohmann::ordered_json& extra) {
+  nlohmann::ordered_json j;
+  auto& c = j["coefficients"];
+  for (const auto& info : coefficient_catalog()) {
+    const auto it = coefficients.find(info.name);
+    if (it == coefficients.end()) continue;
+    nlohmann::ordered_json e = nlohmann::ordered_json::object();
+    if (it->second.fixed_by_convention) {
+      e["value"] = 0.0;
+      e["fixed_by_convention"] = true;
+    } else if (it->second.observable) {
+      e["value"] = it->second.value;
+      if (it->second.sigma) e["sigma"] = *it->second.sigma;
+    } else {
+      e["observable"] = false;
+      if (it->second.sigma) e["sigma"] = *it->second.sigma;
+    }
+    e["unit"] = it->second.unit;
+    c[info.name] = e;
+  }
+  for (const auto& [key, value] : extra.items()) j[key] = value;
+  write_atomically(path, [&](std::ostream& out) { out << j.dump(2) << "\n"; });
+}
+
+namespace {
+ResultCoefficient read_coefficient(const std::string& path, const std::string& name,
+                                   const nlohmann::json& e) {
+  ResultCoefficient r;
+  r.observable = e.value("observable", true);
+  r.fixed_by_convention = e.value("fixed_by_convention", false);
+  if (r.observable) r.value = e.at("value").get<double>();
+  if (e.contains("sigma")) r.sigma = e.at("sigma").get<double>();
+  r.unit = e.value("unit", "");
+  if (!std::isfinite(r.value))
+    throw std::runtime_error(path + ": coefficient '" + name + "': the value is not finite");
+  if (r.sigma && !(std::isfinite(*r.sigma) && *r.sigma >= 0.0))
+    throw std::runtime_error(path + ": coefficient '" + name +
+                             "': a sigma must be a finite number >= 0");
+  return r;
+}
+}  // namespace
+
+ResultCoefficients read_result_json(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open");
+  ResultCoefficients out;
+  try {
+    const auto j = nlohmann::json::parse(in);
+    for (const auto& [name, e] : j.at("coefficients").items())
+      out[name] = read_coefficient(path, name, e);
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(path + ": not a sinscal result file: " + e.what());
+  }
+  return out;
+}
+
+ResultCoefficients load_truth(const Session& session, bool accel_triad_frame,
+                              const std::string& lever_arm_reference) {
+  if (session.truth_file.empty() || !std::filesystem::exists(session.truth_file)) return {};
+  ResultCoefficients truth = read_result_json(session.truth_file);
+  if (!accel_triad_frame && lever_arm_reference.empty()) return truth;
+  ImuErrorModel m;
+  for (const auto& [name, t] : truth) m.set(name, t.value);
+  if (accel_triad_frame) m = in_accel_triad_frame(m);
+  if (!lever_arm_reference.empty()) m = with_lever_arm_reference(m, lever_arm_reference[0] - 'x');
+  for (const auto& [name, v] : m.coefficients()) truth[name].value = v;
+  return truth;
+}
+
+std::optional<double> max_error_over_sigma(const ResultCoefficients& result,
+                                           const ResultCoefficients& truth) {
+  std::optional<double> worst;
+  for (const auto& [name, c] : result) {
+    const auto t = truth.find(name);
+    if (t == truth.end() || !c.observable || c.fixed_by_convention || !c.sigma || !(*c.sigma > 0))
+      continue;
+    const double z = std::abs(c.value - t->second.value) / *c.sigma;
+    if (!worst || z > *worst) worst = z;
+  }
+  return worst;
+}
+
+}  // namespace sinscal

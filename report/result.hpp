@@ -1,0 +1,59 @@
+// Result and truth files (JSON, docs/formats.md): the coefficients in engineering units with their
+// sigma, and the sections each method adds. The estimators return typed results (SI); this is
+// where they become the files users script against.
+#pragma once
+
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "filter/closed_form.hpp"
+#include "filter/kalman_run.hpp"
+#include "rig/session.hpp"
+
+namespace sinscal {
+
+/// One coefficient of a result file.
+struct ResultCoefficient {
+  double value = 0.0;
+  std::optional<double> sigma;  // absent: not estimated (truth files)
+  std::string unit;
+  bool observable = true;            // false: the data cannot determine it; no value is given
+  bool fixed_by_convention = false;  // zero by the body-frame convention, not estimated
+};
+
+/// Result / truth JSON: {"coefficients": {"gyro.bias.x": {"value": .., "sigma": .., "unit": ..}}}.
+using ResultCoefficients = std::map<std::string, ResultCoefficient>;
+
+/// The coefficients of the blocks an estimator had on (status not Off), in engineering units.
+ResultCoefficients result_coefficients(const std::vector<CoefficientEstimate>& estimates);
+/// The Kalman filter's and the closed form's coefficients.
+ResultCoefficients result_coefficients(const KalmanRun& run);
+ResultCoefficients result_coefficients(const ClosedFormReport& report);
+
+/// The sections after "coefficients" of each method's result file.
+nlohmann::ordered_json result_sections(const KalmanRun& run);
+nlohmann::ordered_json result_sections(const ClosedFormReport& report);
+
+/// Writes a result file; `extra` (an object) adds sections after "coefficients". Written to a
+/// temporary name beside `path` and renamed when complete.
+void write_result_json(const std::string& path, const ResultCoefficients& coefficients,
+                       const nlohmann::ordered_json& extra = nlohmann::ordered_json::object());
+/// Reads a result or truth file; throws std::runtime_error naming the file on a bad file (not
+/// JSON, no coefficients, an unknown coefficient name, a negative or non-finite sigma).
+ResultCoefficients read_result_json(const std::string& path);
+
+/// The session's truth (simulations), empty when it has none. With `accel_triad_frame` the truth
+/// is converted to the body frame of the accelerometer triad, as results without table attitude
+/// are (docs/conventions.md).
+/// With a lever-arm reference ("x", "y", "z"), the truth's arms are relative to that
+/// accelerometer's.
+ResultCoefficients load_truth(const Session& session, bool accel_triad_frame = false,
+                              const std::string& lever_arm_reference = "");
+/// Largest |estimate - truth| / sigma over the estimated coefficients (none: nullopt).
+std::optional<double> max_error_over_sigma(const ResultCoefficients& result,
+                                           const ResultCoefficients& truth);
+
+}  // namespace sinscal
