@@ -594,6 +594,10 @@ bool LogReader::read_record() {
   loc_ = &main_;
   bool nl = true;
   if (!read_data_line(main_, text_, nl)) return false;
+  // sinscal writes a line end after every sample: a last line without one was cut (its last
+  // number may be cut short and still read as a number).
+  if (f_.native && !nl)
+    fail("truncated line: the last line has no line end (the file was cut while being written?)");
   split_fields(text_, nl, f_.columns.size(), fields_);
   return true;
 }

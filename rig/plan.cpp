@@ -104,19 +104,19 @@ Eigen::Vector3d read_vector(const IniFile& ini, const std::string& key,
 RotationStep parse_axis(const IniFile& ini, const std::string& key, const std::string& text) {
   RotationStep st;
   st.axis_name = text;
-  if (text.size() < 2 || (text[0] != '+' && text[0] != '-'))
+  const std::string name = text.size() < 2 ? std::string() : text.substr(1);
+  const bool body = name == "x" || name == "y" || name == "z";
+  const bool table = name == "outer" || name == "inner";
+  if ((text[0] != '+' && text[0] != '-') || !(body || table))
     throw ConfigError(ini.where(key) + "axis '" + text +
                       "': expected +x, -x, +y, -y, +z, -z, +outer, -outer, +inner or -inner");
   const double sign = text[0] == '-' ? -1.0 : 1.0;
-  const std::string name = text.substr(1);
-  if (name == "x" || name == "y" || name == "z") {
+  if (body) {
     st.kind = RotationStep::Axis::Body;
     st.axis_b = sign * Eigen::Vector3d::Unit(name[0] - 'x');
-  } else if (name == "outer" || name == "inner") {
+  } else {
     st.kind = name == "outer" ? RotationStep::Axis::Outer : RotationStep::Axis::Inner;
     st.sign = sign;
-  } else {
-    return parse_axis(ini, key, "");
   }
   return st;
 }

@@ -132,7 +132,8 @@ TEST_CASE("Session: keys, sections, files and the site checked with file and lin
     return config_error([&] { Session::load(path); });
   };
   CHECK(error_of("plan = plan.ini", "") == "no error");
-  CHECK(error_of("plan = plan.ini", "[site]\nlatitude = -89 deg\nheight = -11000 m\n") == "no error");
+  CHECK(error_of("plan = plan.ini", "[site]\nlatitude = -89 deg\nheight = -11000 m\n") ==
+        "no error");
   for (const char* lat : {"90", "1000 deg", "55.75 rad"}) {
     CAPTURE(lat);
     CHECK_THAT(error_of("plan = plan.ini", std::string("[site]\nlatitude = ") + lat + "\n"),
@@ -307,4 +308,35 @@ TEST_CASE("Log configuration: a scale or max_gap no sensor or log has is refused
              Contains("s.ini:5: 'log.max_gap'") && Contains("1 to 1000"));
   CHECK(error_of("max_gap = 1000\n") == "no error");
   CHECK_THAT(error_of("header_lines = -1\n"), Contains("s.ini:5: 'log.header_lines'"));
+}
+
+TEST_CASE("Log: a native log's last line without a line end was cut", "[input][log]") {
+  const std::string dir = test::temp_dir("input_log_cut");
+  const std::string path = dir + "/imu.csv";
+  const std::string header =
+      "t [s],dtheta_x [rad],dtheta_y [rad],dtheta_z [rad],dv_x [m/s],dv_y [m/s],dv_z [m/s]\n";
+  // The last number cut short still reads as a number: only the missing line end tells.
+  test::write_file(path, header + "0.01,0,0,0,0,0,0.0980665\n0.02,0,0,0,0,0,0.098");
+  CHECK_THAT(read_error(LogFormat::native_format(path, 100.0)),
+             Contains("imu.csv:3: truncated line"));
+  test::write_file(path, header + "0.01,0,0,0,0,0,0.0980665\n0.02,0,0,0,0,0,0.098\n");
+  CHECK(read_error(LogFormat::native_format(path, 100.0)) == "no error");
+  // A foreign log may lack the last line end (hand-written files often do).
+  test::write_file(dir + "/s.ini",
+                   "[log]\nfile = f.txt\nformat = custom\ncolumns = t gx gy gz ax ay az\n");
+  test::write_file(dir + "/f.txt", "0.01,0,0,0,0,0,0.098\n0.02,0,0,0,0,0,0.098");
+  CHECK(read_error(LogFormat::from_ini(IniFile(dir + "/s.ini"), dir, 100.0)) == "no error");
+}
+
+TEST_CASE("Plan: a bad rotation axis is named as written", "[input][plan]") {
+  const std::string rot =
+      "[plan]\ntype = rotations\nrotation_acceleration = 10\n"
+      "[start]\nheading = 0\npitch = 0\nroll = 0\ndwell = 10\n"
+      "[rotations]\nangle = 90\nduration = 9\naxes = +y ";
+  for (const char* axis : {"+w", "y", "+outer2", "-", "+"}) {
+    CAPTURE(axis);
+    CHECK_THAT(plan_error(rot + axis + "\n"),
+               Contains("p.ini:12: 'rotations.axes': axis '" + std::string(axis) + "'"));
+  }
+  CHECK(plan_error(rot + "-inner\n") == "no error");
 }
