@@ -517,7 +517,7 @@ new plot-monitor-bad-line; cp "$base/mini/monitor.jsonl" "$d/"; sed -i '2s/.*/{"
 fixed 2 "monitor.jsonl:2:" S plot-convergence --monitor monitor.jsonl --out out/c.png
 new plot-monitor-empty; : > "$d/monitor.jsonl"
 fixed 2 "monitor.jsonl: no monitor records" S plot-convergence --monitor monitor.jsonl --out out/c.png
-new plot-monitor-time-not-increasing; cp "$base/mini/monitor.jsonl" "$d/"; sed -n '1p' "$d/monitor.jsonl" >> "$d/monitor.jsonl"
+new plot-monitor-time-not-increasing; cp "$base/mini/monitor.jsonl" "$d/"; sed -n '1p' "$base/mini/monitor.jsonl" >> "$d/monitor.jsonl"
 fixed 2 "monitor.jsonl:$(wc -l < "$d/monitor.jsonl"):|does not increase" S plot-convergence --monitor monitor.jsonl --out out/c.png
 new plot-monitor-unknown-coefficient; cp "$base/mini/monitor.jsonl" "$d/"; sed -i '1s/"gyro.bias.x"/"gyro.bias.w"/' "$d/monitor.jsonl"
 fixed 2 "monitor.jsonl:1:|unknown coefficient 'gyro.bias.w'" S plot-convergence --monitor monitor.jsonl --out out/c.png
