@@ -24,9 +24,9 @@ void StateLayoutOptions::set(const std::string& family, bool is_on) {
 StateLayout StateLayout::make(const StateLayoutOptions& o) {
   StateLayout l;
   int next = 0;
-  auto add = [&](Block& b, int size) {
-    b = Block{next, size};
-    next += size;
+  auto add = [&](Block& b, int count) {
+    b = Block{next, count};
+    next += count;
   };
   add(l.attitude, 3);
   add(l.velocity, o.vertical_velocity ? 3 : 2);

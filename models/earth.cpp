@@ -2,10 +2,36 @@
 
 #include <GeographicLib/Constants.hpp>
 #include <cmath>
+#include <cstdio>
 
 #include "models/units.hpp"
 
 namespace sinscal {
+
+namespace {
+// `value`, `lo`, `hi` in SI; `per_unit`: SI per unit of the message.
+std::string out_of_bounds(double value, double lo, double hi, double per_unit, const char* unit) {
+  if (value >= lo && value <= hi) return {};
+  char b[160];
+  std::snprintf(b, sizeof b, "must be within %g and %g %s, got %g %s", lo / per_unit, hi / per_unit,
+                unit, value / per_unit, unit);
+  return b;
+}
+}  // namespace
+
+std::string latitude_problem(double lat_rad) {
+  const double m = SiteLimits::max_latitude_deg * units::deg;
+  return out_of_bounds(lat_rad, -m, m, units::deg, "deg");
+}
+
+std::string longitude_problem(double lon_rad) {
+  const double m = SiteLimits::max_longitude_deg * units::deg;
+  return out_of_bounds(lon_rad, -m, m, units::deg, "deg");
+}
+
+std::string height_problem(double h_m) {
+  return out_of_bounds(h_m, SiteLimits::min_height_m, SiteLimits::max_height_m, 1.0, "m");
+}
 
 Earth::Earth()
     : gravity_(GeographicLib::NormalGravity::WGS84()),

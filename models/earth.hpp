@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <GeographicLib/Ellipsoid.hpp>
 #include <GeographicLib/NormalGravity.hpp>
+#include <string>
 
 namespace sinscal {
 
@@ -14,6 +15,23 @@ struct Site {
   double lon_rad = 0.0;
   double h_m = 0.0;
 };
+
+/// The sites sinscal accepts (docs/formats.md, [site]): |latitude| at most 89 deg (the
+/// North-East-Down navigation frame is singular at the poles), |longitude| at most 360 deg,
+/// height from -12 km to +100 km above the ellipsoid (the deepest ocean floor to the edge of
+/// space). Values outside are wrong input (e.g. radians or feet where degrees or metres were
+/// meant), never a place a table stands.
+struct SiteLimits {
+  static constexpr double max_latitude_deg = 89.0;
+  static constexpr double max_longitude_deg = 360.0;
+  static constexpr double min_height_m = -12000.0;
+  static constexpr double max_height_m = 100000.0;
+};
+/// Empty when the value is within SiteLimits, else the cause for a message ("must be within
+/// ..., got ..."). NaN is never within.
+std::string latitude_problem(double lat_rad);
+std::string longitude_problem(double lon_rad);
+std::string height_problem(double h_m);
 
 /// WGS-84 Earth. Stateless; evaluating it calls GeographicLib.
 class Earth {

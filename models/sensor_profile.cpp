@@ -44,24 +44,32 @@ SensorProfile SensorProfile::load(const std::string& path) {
     p.sigma_targets[f.name] = v;
   }
   using Q = QuantityKind;
+  // Noise amplitudes, quanta and measurement ranges: not negative (0 or absent: none);
+  // correlation times: positive.
+  auto amount = [&](const std::string& key, Q kind, const std::string& unit) {
+    const double v = ini.get_quantity(key, kind, unit, 0.0);
+    if (!(v >= 0.0)) throw ConfigError(ini.where(key) + "must not be negative");
+    return v;
+  };
+  auto correlation_time = [&](const std::string& key) {
+    const double v = ini.get_quantity(key, Q::Time, "s", 3600.0);
+    if (!(v > 0.0)) throw ConfigError(ini.where(key) + "must be positive");
+    return v;
+  };
   auto& g = p.noise.gyro;
-  g.white = ini.get_quantity("gyro.arw", Q::AngleRandomWalk, "deg/sqrt(h)", 0.0);
-  g.bias_instability = ini.get_quantity("gyro.bias_instability", Q::AngularRate, "deg/h", 0.0);
-  g.correlation_time = ini.get_quantity("gyro.correlation_time", Q::Time, "s", 3600.0);
-  g.random_walk =
-      ini.get_quantity("gyro.rate_random_walk", Q::RateRandomWalk, "deg/h/sqrt(h)", 0.0);
-  g.quantum = ini.get_quantity("gyro.quantum", Q::Angle, "arcsec", 0.0);
-  p.gyro_range = ini.get_quantity("gyro.range", Q::AngularRate, "deg/s", 0.0);
+  g.white = amount("gyro.arw", Q::AngleRandomWalk, "deg/sqrt(h)");
+  g.bias_instability = amount("gyro.bias_instability", Q::AngularRate, "deg/h");
+  g.correlation_time = correlation_time("gyro.correlation_time");
+  g.random_walk = amount("gyro.rate_random_walk", Q::RateRandomWalk, "deg/h/sqrt(h)");
+  g.quantum = amount("gyro.quantum", Q::Angle, "arcsec");
+  p.gyro_range = amount("gyro.range", Q::AngularRate, "deg/s");
   auto& a = p.noise.accel;
-  a.white = ini.get_quantity("accel.vrw", Q::VelocityRandomWalk, "ug/sqrt(Hz)", 0.0);
-  a.bias_instability = ini.get_quantity("accel.bias_instability", Q::Acceleration, "ug", 0.0);
-  a.correlation_time = ini.get_quantity("accel.correlation_time", Q::Time, "s", 3600.0);
-  a.random_walk = ini.get_quantity("accel.random_walk", Q::AccelRandomWalk, "ug/sqrt(h)", 0.0);
-  a.quantum = ini.get_quantity("accel.quantum", Q::Velocity, "m/s", 0.0);
-  p.accel_range = ini.get_quantity("accel.range", Q::Acceleration, "g", 0.0);
-  for (const auto* tn : {&g, &a})
-    if (tn->correlation_time <= 0.0)
-      throw ConfigError(path + ": correlation_time must be positive");
+  a.white = amount("accel.vrw", Q::VelocityRandomWalk, "ug/sqrt(Hz)");
+  a.bias_instability = amount("accel.bias_instability", Q::Acceleration, "ug");
+  a.correlation_time = correlation_time("accel.correlation_time");
+  a.random_walk = amount("accel.random_walk", Q::AccelRandomWalk, "ug/sqrt(h)");
+  a.quantum = amount("accel.quantum", Q::Velocity, "m/s");
+  p.accel_range = amount("accel.range", Q::Acceleration, "g");
   // Known keys: the noise and range keys above, and every family's profile key.
   std::map<std::string, std::vector<std::string>> allowed = {
       {"sensor", {"name", "description"}},

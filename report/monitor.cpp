@@ -175,7 +175,8 @@ std::string convergence_plot_script(const MonitorSeries& series,
   g << "set title 'converged: every sigma below its target'\nset yrange [-0.1:1.1]\n"
     << "plot $nis using 1:3 with steps lw 1.5 title 'converged'\nset autoscale y\n";
   for (std::size_t f = 0; f < families.size(); ++f) {
-    const auto& [family, members] = families[f];
+    const std::string& family = families[f].first;  // named: a lambda below captures it
+    const auto& members = families[f].second;
     const CoefficientInfo& first = coefficient_info(series.names[members.front()]);
     const std::string unit = first.unit;
     const int n = static_cast<int>(members.size());

@@ -59,7 +59,9 @@ double unit_of(const IniFile& ini, const std::string& key, const std::string& df
   }
 }
 
-TriadColumns read_triad(const IniFile& ini, const std::string& name, bool gyro,
+// `rate_hz`: the nominal rate, which turns one count of an increment into a rate for the
+// plausibility check of the scale.
+TriadColumns read_triad(const IniFile& ini, const std::string& name, bool gyro, double rate_hz,
                         bool fixed_increments = false) {
   TriadColumns c;
   const std::string p = "log." + name;
@@ -82,6 +84,17 @@ TriadColumns read_triad(const IniFile& ini, const std::string& name, bool gyro,
   const double scale = ini.get_double(p + "_scale", 1.0);
   check_nonzero(ini, p + "_scale", scale);
   c.scale *= scale;
+  // One count beyond any sensor (LogFormat::kMaxRate, kMaxSpecificForce) is a wrong scale.
+  const double limit = gyro ? LogFormat::kMaxRate : LogFormat::kMaxSpecificForce;
+  const double per_count = std::abs(c.scale) * (c.increments ? rate_hz : 1.0);
+  if (!(per_count <= limit)) {
+    char msg[200];
+    std::snprintf(msg, sizeof msg,
+                  "one count would be %g %s, beyond any sensor (limit %g %s): a wrong scale or "
+                  "unit",
+                  per_count, gyro ? "rad/s" : "m/s^2", limit, gyro ? "rad/s" : "m/s^2");
+    throw ConfigError(ini.where(ini.has(p + "_scale") ? p + "_scale" : p + "_unit") + msg);
+  }
   c.offset = ini.get_double(p + "_offset", 0.0);
   c.saturation = ini.get_double(p + "_saturation", 0.0);
   if (c.saturation < 0.0) throw ConfigError(ini.where(p + "_saturation") + "must not be negative");
@@ -127,12 +140,7 @@ std::vector<std::string> read_split_columns(const IniFile& ini, const std::strin
 
 // [log] header_lines: a whole number within 0 ... kMaxHeaderLines.
 int read_header_lines(const IniFile& ini) {
-  if (!ini.has("log.header_lines")) return 0;
-  const double v = ini.get_double("log.header_lines");
-  if (!(v >= 0.0 && v <= LogFormat::kMaxHeaderLines) || v != std::floor(v))
-    throw ConfigError(ini.where("log.header_lines") + "expected a whole number from 0 to " +
-                      std::to_string(LogFormat::kMaxHeaderLines));
-  return static_cast<int>(v);
+  return ini.get_int("log.header_lines", 0, 0, LogFormat::kMaxHeaderLines);
 }
 
 char read_delimiter(const IniFile& ini) {
@@ -146,7 +154,8 @@ char read_delimiter(const IniFile& ini) {
 
 double read_max_gap(const IniFile& ini, double dflt) {
   const double g = ini.get_double("log.max_gap", dflt);
-  if (!(g >= 1.0)) throw ConfigError(ini.where("log.max_gap") + "must be at least 1 (samples)");
+  if (!(g >= 1.0 && g <= LogFormat::kMaxGap))
+    throw ConfigError(ini.where("log.max_gap") + "must be from 1 to 1000 (samples)");
   return g;
 }
 
@@ -306,8 +315,8 @@ LogFormat LogFormat::from_ini(const IniFile& ini, const std::string& base_dir, d
                           "give both table-angle columns, outer and inner");
       if (outer) f.table_scale = unit_of(ini, "log.table_unit", "deg", QuantityKind::Angle);
     }
-    f.gyro = read_triad(ini, "gyro", true);
-    f.accel = read_triad(ini, "accel", false);
+    f.gyro = read_triad(ini, "gyro", true, rate_hz);
+    f.accel = read_triad(ini, "accel", false, rate_hz);
     for (const char* c : {"gx", "gy", "gz", "ax", "ay", "az"})
       if (!split && !std::count(f.columns.begin(), f.columns.end(), c))
         throw ConfigError(ini.where("log.columns") + "column '" + c +
@@ -326,8 +335,8 @@ LogFormat LogFormat::from_ini(const IniFile& ini, const std::string& base_dir, d
                           std::string(k).substr(4) +
                           "', the increment per count of the IMU inside (the receiver's raw "
                           "IMU scale factors table)");
-    f.gyro = read_triad(ini, "gyro", true, true);
-    f.accel = read_triad(ini, "accel", false, true);
+    f.gyro = read_triad(ini, "gyro", true, rate_hz, true);
+    f.accel = read_triad(ini, "accel", false, rate_hz, true);
     if (ini.has("log.status_mask")) {
       std::string m = ini.get_string("log.status_mask");
       if (m.size() > 2 && m[0] == '0' && (m[1] == 'x' || m[1] == 'X')) m = m.substr(2);
@@ -523,7 +532,14 @@ bool LogReader::next(ImuSample& s) {
   if (!f_.segments.empty()) return next_segment_sample(s);
   for (;;) {
     try {
-      if (!read_record()) return false;
+      if (!read_record()) {
+        if (count_ == 0 && !segment_child_)  // (a file per dwell: the parent names its dwell)
+          fail(skipped_count_ == 0
+                   ? std::string("no samples: the log ends after its header and comments")
+                   : "no good samples: all " + std::to_string(skipped_count_) +
+                         " samples were bad and skipped");
+        return false;
+      }
       return make_sample(s);
     } catch (const BadSampleError& e) {
       if (!on_skip_) throw;
@@ -544,6 +560,7 @@ bool LogReader::next_segment_sample(ImuSample& s) {
       one.segments.clear();
       one.file = seg.file;
       segment_ = std::make_unique<LogReader>(one);
+      segment_->segment_child_ = true;
       if (on_skip_) segment_->skip_bad_samples(on_skip_);
       segment_count_ = 0;
     }
@@ -577,6 +594,10 @@ bool LogReader::read_record() {
   loc_ = &main_;
   bool nl = true;
   if (!read_data_line(main_, text_, nl)) return false;
+  // sinscal writes a line end after every sample: a last line without one was cut (its last
+  // number may be cut short and still read as a number).
+  if (f_.native && !nl)
+    fail("truncated line: the last line has no line end (the file was cut while being written?)");
   split_fields(text_, nl, f_.columns.size(), fields_);
   return true;
 }
@@ -784,6 +805,9 @@ bool LogReader::make_sample(ImuSample& s) {
   const double nominal_dt = 1.0 / f_.rate_hz;
   const double t = col_t_ >= 0 ? fields_[static_cast<std::size_t>(col_t_)] * f_.time_scale
                                : static_cast<double>(count_ + skipped_count_ + 1) * nominal_dt;
+  if (!(std::abs(t) <= LogFormat::kMaxTime))
+    bad_sample("time t = " + format_number(t) +
+               " s is beyond 1e10 s: not a time (a wrong time_unit or time column?)");
   double dt = nominal_dt;
   if (count_ > 0) {
     dt = t - t_prev_;
@@ -822,6 +846,21 @@ bool LogReader::make_sample(ImuSample& s) {
                    " reads " + format_number(raw) + " (limit " + format_number(c.saturation) + ")");
       }
       v(static_cast<Eigen::Index>(i)) = c.sign[i] * (raw - c.offset) * c.scale;
+      // An increment covers the sample's interval (one nominal interval after a skip).
+      const double rate = std::abs(v(static_cast<Eigen::Index>(i))) /
+                          (c.increments ? (skipped_ ? nominal_dt : dt) : 1.0);
+      const bool gyro = name[0] == 'g';
+      const double limit = gyro ? LogFormat::kMaxRate : LogFormat::kMaxSpecificForce;
+      if (!(rate <= limit)) {
+        loc_ = where;
+        char msg[300];
+        std::snprintf(msg, sizeof msg,
+                      "%s log axis %c reads %s: %g %s, beyond any sensor (limit %g %s): a wrong "
+                      "unit or scale, or a damaged value",
+                      name, char('x' + c.axis[i]), format_number(raw).c_str(), rate,
+                      gyro ? "rad/s" : "m/s^2", limit, gyro ? "rad/s" : "m/s^2");
+        bad_sample(msg);
+      }
     }
     // After a skipped sample, hold this sample's rate over the whole interval since the last
     // good one (increments cover one nominal interval only).
@@ -834,6 +873,10 @@ bool LogReader::make_sample(ImuSample& s) {
   if (s.has_table) {
     s.table_outer = fields_[static_cast<std::size_t>(col_outer_)] * f_.table_scale;
     s.table_inner = fields_[static_cast<std::size_t>(col_inner_)] * f_.table_scale;
+    for (const double a : {s.table_outer, s.table_inner})
+      if (!(std::abs(a) <= LogFormat::kMaxTableAngle))
+        bad_sample("table angle " + format_number(a) +
+                   " rad is beyond 1e6 rad: a wrong table_unit or a damaged value");
   }
   s.t = t;
   s.dt = dt;

@@ -67,6 +67,17 @@ struct LogFormat {
   static constexpr std::size_t kMaxLine = 65536;
   /// Most header lines a format may skip.
   static constexpr int kMaxHeaderLines = 100000;
+  /// Largest `max_gap` (samples).
+  static constexpr double kMaxGap = 1000.0;
+  /// Plausibility bounds of a sample (docs/formats.md): beyond them a value is not a measurement
+  /// (a wrong unit or scale, a damaged field) and the sample is bad. Angular rate (an angle
+  /// increment over its interval): 1e6 rad/s; specific force (a velocity increment over its
+  /// interval): 1e6 m/s^2 (about 100,000 g); time: within 1e10 s of 0 (GPS and Unix seconds are
+  /// about 1e9 s); table angles: within 1e6 rad (about 160,000 turns).
+  static constexpr double kMaxRate = 1e6;           // rad/s
+  static constexpr double kMaxSpecificForce = 1e6;  // m/s^2
+  static constexpr double kMaxTime = 1e10;          // s
+  static constexpr double kMaxTableAngle = 1e6;     // rad
 
   std::string file;  // path of the data file (split and segmented logs: a
                      // description naming their files, for messages)
@@ -194,6 +205,7 @@ class LogReader : public SampleSource {
   bool skipped_ = false;  // a sample was skipped since the last good one
   std::size_t skipped_count_ = 0;
   std::size_t skipped_run_ = 0;  // consecutive skipped samples before the next good one
+  bool segment_child_ = false;   // one file of a log in one file per dwell (the parent checks)
 };
 
 }  // namespace sinscal

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -23,13 +24,25 @@ std::string days(double seconds) {
   return b;
 }
 
+// N of a section [PREFIX.N]: digits only (no sign, no leading zero), 1 to 100,000,000. The
+// message names the section's first key's line when it has keys.
 int section_number(const IniFile& ini, const std::string& section, const std::string& prefix) {
   const std::string tail = section.substr(prefix.size());
-  char* end = nullptr;
-  const long n = std::strtol(tail.c_str(), &end, 10);
-  if (tail.empty() || *end != '\0' || n < 1 || n > 100000000)
-    throw ConfigError(ini.path() + ": section [" + section + "]: expected [" + prefix +
-                      "N], N = 1, 2, ...");
+  const bool digits =
+      !tail.empty() && tail.size() <= 9 && tail[0] != '0' &&
+      std::all_of(tail.begin(), tail.end(), [](char c) { return c >= '0' && c <= '9'; });
+  const long n = digits ? std::stol(tail) : 0;  // at most 9 digits: no overflow
+  if (!digits || n > 100000000) {
+    std::string where = ini.path() + ": ";
+    for (const auto& key : ini.keys())
+      if (key.size() > section.size() && key.compare(0, section.size(), section) == 0 &&
+          key[section.size()] == '.') {
+        where = ini.path() + ":" + std::to_string(ini.line_of(key)) + ": ";
+        break;
+      }
+    throw ConfigError(where + "section [" + section + "]: expected [" + prefix +
+                      "N], N = 1, 2, ... (digits only, at most 100000000)");
+  }
   return static_cast<int>(n);
 }
 
@@ -91,19 +104,19 @@ Eigen::Vector3d read_vector(const IniFile& ini, const std::string& key,
 RotationStep parse_axis(const IniFile& ini, const std::string& key, const std::string& text) {
   RotationStep st;
   st.axis_name = text;
-  if (text.size() < 2 || (text[0] != '+' && text[0] != '-'))
+  const std::string name = text.size() < 2 ? std::string() : text.substr(1);
+  const bool body = name == "x" || name == "y" || name == "z";
+  const bool table = name == "outer" || name == "inner";
+  if ((text[0] != '+' && text[0] != '-') || !(body || table))
     throw ConfigError(ini.where(key) + "axis '" + text +
                       "': expected +x, -x, +y, -y, +z, -z, +outer, -outer, +inner or -inner");
   const double sign = text[0] == '-' ? -1.0 : 1.0;
-  const std::string name = text.substr(1);
-  if (name == "x" || name == "y" || name == "z") {
+  if (body) {
     st.kind = RotationStep::Axis::Body;
     st.axis_b = sign * Eigen::Vector3d::Unit(name[0] - 'x');
-  } else if (name == "outer" || name == "inner") {
+  } else {
     st.kind = name == "outer" ? RotationStep::Axis::Outer : RotationStep::Axis::Inner;
     st.sign = sign;
-  } else {
-    return parse_axis(ini, key, "");
   }
   return st;
 }
@@ -175,7 +188,24 @@ std::vector<double> per_turn(const IniFile& ini, const std::string& one, const s
 
 }  // namespace
 
+Site read_site(const IniFile& ini) {
+  Site site;
+  site.lat_rad = ini.get_quantity("site.latitude", Q::Angle, "deg");
+  site.lon_rad = ini.get_quantity("site.longitude", Q::Angle, "deg", 0.0);
+  site.h_m = ini.get_quantity("site.height", Q::Length, "m", 0.0);
+  auto check = [&](const std::string& key, const std::string& problem) {
+    if (!problem.empty()) throw ConfigError(ini.where(key) + problem);
+  };
+  check("site.latitude", latitude_problem(site.lat_rad));
+  check("site.longitude", longitude_problem(site.lon_rad));
+  check("site.height", height_problem(site.h_m));
+  return site;
+}
+
 Plan Plan::load(const std::string& path) {
+  if (path.empty()) throw ConfigError("plan: no file name given");
+  if (std::filesystem::is_directory(path))
+    throw ConfigError(path + ": is a directory, not a plan file");
   std::ifstream in(path);
   if (!in) throw ConfigError(path + ": cannot open plan file");
   std::stringstream buffer;
@@ -202,11 +232,10 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
   const PlanLimits& limits = p.limits;
   if (ini.has("site.latitude")) {
     p.has_site = true;
-    p.site.lat_rad = ini.get_quantity("site.latitude", Q::Angle, "deg");
-    p.site.lon_rad = ini.get_quantity("site.longitude", Q::Angle, "deg", 0.0);
-    p.site.h_m = ini.get_quantity("site.height", Q::Length, "m", 0.0);
-    if (std::abs(p.site.lat_rad) > 89.0 * units::deg)
-      throw ConfigError(ini.where("site.latitude") + "must be within +-89 deg");
+    p.site = read_site(ini);
+  } else if (ini.has("site.longitude") || ini.has("site.height")) {
+    throw ConfigError(ini.where(ini.has("site.longitude") ? "site.longitude" : "site.height") +
+                      "[site] without 'latitude'");
   }
   ini.check_keys("site", {"latitude", "longitude", "height"});
   // Table geometry; the default mounting makes table angles zero equal plan angles zero.

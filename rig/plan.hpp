@@ -89,6 +89,13 @@ struct TableErrors {
   std::uint64_t seed = 0;
 };
 
+class IniFile;
+
+/// The [site] section of a plan or session: `latitude` (required), `longitude`, `height`
+/// (default 0), each within SiteLimits (models/earth.hpp); an error is a ConfigError naming the
+/// file, line and key.
+Site read_site(const IniFile& ini);
+
 /// The motion a plan commands at `site`; with table errors, the truth differs from the plan.
 Motion build_motion(const Plan& plan, const Site& site, const TableErrors& errors = {});
 

@@ -22,31 +22,66 @@ std::string directory_of(const std::string& path) {
 std::string resolve(const std::string& dir, const std::string& file) {
   return file.empty() || file.front() == '/' ? file : dir + "/" + file;
 }
+
+// Session::load's limits (docs/formats.md): a nominal rate up to 100 kHz, a time offset within
+// 1e10 s either way (GPS or Unix seconds are about 1e9 s).
+constexpr double kMaxRateHz = 100000.0;
+constexpr double kMaxTimeOffset = 1e10;
+
+// A file named by `key` (a path relative to the session's directory): not empty, and (when
+// `must_exist`) an existing regular file. Empty when the key is absent.
+std::string named_file(const IniFile& ini, const std::string& dir, const std::string& key,
+                       bool must_exist) {
+  if (!ini.has(key)) return {};
+  const std::string value = ini.get_string(key);
+  if (value.empty()) throw ConfigError(ini.where(key) + "no file name given");
+  const std::string file = resolve(dir, value);
+  if (must_exist && !std::filesystem::is_regular_file(file))
+    throw ConfigError(ini.where(key) + "'" + value + "': no such file (" + file + ")");
+  return file;
+}
 }  // namespace
 
 Session Session::load(const std::string& path) {
   const IniFile ini(path);
+  for (const auto& section : ini.sections())
+    if (section != "session" && section != "site" && section != "log") {
+      std::string where = path + ": ";
+      for (const auto& key : ini.keys())
+        if (key.compare(0, section.size() + 1, section + ".") == 0) {
+          where = ini.where(key);
+          break;
+        }
+      throw ConfigError(where + "unknown section [" + section + "] (known: session, site, log)");
+    }
+  ini.check_keys("session", {"name", "rate", "time_offset", "plan", "truth", "sensor"});
+  ini.check_keys("site", {"latitude", "longitude", "height"});
   Session s;
   s.path = path;
   s.dir = directory_of(path);
   s.name = ini.get_string("session.name", "session");
   s.rate_hz = ini.get_quantity("session.rate", QuantityKind::Frequency, "Hz");
-  if (!(s.rate_hz > 0.0)) throw ConfigError(ini.where("session.rate") + "must be positive");
+  if (!(s.rate_hz > 0.0 && s.rate_hz <= kMaxRateHz))
+    throw ConfigError(ini.where("session.rate") + "must be above 0 and at most 100 kHz");
   s.time_offset = ini.get_quantity("session.time_offset", QuantityKind::Time, "s", 0.0);
-  s.plan = Plan::load(resolve(s.dir, ini.get_string("session.plan")));
-  s.truth_file = resolve(s.dir, ini.get_string("session.truth", ""));
-  s.sensor_file = resolve(s.dir, ini.get_string("session.sensor", ""));
-  ini.check_keys("session", {"name", "rate", "time_offset", "plan", "truth", "sensor"});
+  if (!(std::abs(s.time_offset) <= kMaxTimeOffset))
+    throw ConfigError(ini.where("session.time_offset") + "must be within -1e10 and 1e10 s");
+  if (!ini.has("session.plan"))
+    throw ConfigError(path + ": [session] has no 'plan' (the plan the data follow)");
+  s.plan = Plan::load(named_file(ini, s.dir, "session.plan", true));
+  s.truth_file = named_file(ini, s.dir, "session.truth", true);
+  s.sensor_file = named_file(ini, s.dir, "session.sensor", true);
   if (ini.has("site.latitude")) {
-    s.site.lat_rad = ini.get_quantity("site.latitude", QuantityKind::Angle, "deg");
-    s.site.lon_rad = ini.get_quantity("site.longitude", QuantityKind::Angle, "deg", 0.0);
-    s.site.h_m = ini.get_quantity("site.height", QuantityKind::Length, "m", 0.0);
+    s.site = read_site(ini);
+  } else if (ini.has("site.longitude") || ini.has("site.height")) {
+    throw ConfigError(ini.where(ini.has("site.longitude") ? "site.longitude" : "site.height") +
+                      "[site] without 'latitude' (give the whole site, or none to take the "
+                      "plan's)");
   } else if (s.plan.has_site) {
     s.site = s.plan.site;
   } else {
     throw ConfigError(path + ": no [site] latitude in the session or its plan");
   }
-  ini.check_keys("site", {"latitude", "longitude", "height"});
   s.log = LogFormat::from_ini(ini, s.dir, s.rate_hz);
   return s;
 }

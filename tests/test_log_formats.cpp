@@ -379,7 +379,8 @@ TEST_CASE("NovAtel: the CRC-32 of the documented example logs", "[log][novatel]"
       "109817,ea57fe00,329394068,-2396829,4481425,321199,257329,-936077*cf9c035d"};
   const std::string dir = test::temp_dir("h2_novatel_examples");
   test::write_file(dir + "/s.ini",
-                   "[log]\nfile = x.asc\nformat = novatel\ngyro_scale = 1\naccel_scale = 1\n");
+                   "[log]\nfile = x.asc\nformat = novatel\ngyro_scale = 9.5367431640625e-07\n"
+                   "accel_scale = 1.52587890625e-06\n");  // 2^-20 rad, 0.05 * 2^-15 m/s
   for (const auto& line : examples) {
     CAPTURE(line);
     test::write_file(dir + "/x.asc", line + "\r\n");
@@ -400,7 +401,7 @@ TEST_CASE("NovAtel: the CRC-32 of the documented example logs", "[log][novatel]"
   test::write_file(dir + "/x.asc", examples[2] + "\r\n");
   test::write_file(dir + "/s.ini",
                    "[log]\nfile = x.asc\nformat = novatel\n"
-                   "gyro_scale = 1\naccel_scale = 1.52587890625e-06\n");
+                   "gyro_scale = 9.5367431640625e-07\naccel_scale = 1.52587890625e-06\n");
   LogReader r(LogFormat::from_ini(IniFile(dir + "/s.ini"), dir, 200.0));
   ImuSample s;
   REQUIRE(r.next(s));
@@ -408,9 +409,10 @@ TEST_CASE("NovAtel: the CRC-32 of the documented example logs", "[log][novatel]"
   CHECK(s.dv_b.z() / 0.005 == Approx(9.67).margin(0.005));
   CHECK(s.dv_b.y() == Approx(-617 * 1.52587890625e-06));
   CHECK(s.dv_b.x() == Approx(378 * 1.52587890625e-06));
-  CHECK(s.dtheta_b.z() == 1536.0);
-  CHECK(s.dtheta_b.y() == -15615.0);
-  CHECK(s.dtheta_b.x() == -7680.0);
+  const double rad_per_count = 9.5367431640625e-07;  // 2^-20: products exact
+  CHECK(s.dtheta_b.z() == 1536.0 * rad_per_count);
+  CHECK(s.dtheta_b.y() == -15615.0 * rad_per_count);
+  CHECK(s.dtheta_b.x() == -7680.0 * rad_per_count);
 }
 
 TEST_CASE("NovAtel: RAWIMUSXA across a GPS week, other logs skipped, bad lines", "[log][novatel]") {

@@ -1,0 +1,612 @@
+#!/usr/bin/env bash
+# The bad-input corpus, end to end: every command (simulate, navigate, calibrate --method
+# closed-form and kf, compare, plot-convergence) and every input file type (plan, sensor profile,
+# session.ini, native log, custom log, split, one file per dwell, NovAtel, result JSON, monitor
+# JSONL). Each case is one bad input, made in its own folder from small bundled ones, and must end
+# with the documented exit code (2: data, 1: usage), a message on standard error holding the cause,
+# the file's name and :LINE where there is a line, and every input file unchanged (sha256sum of
+# the case's folder before and after; outputs go to its out/ subfolder).
+#
+# Controls (the same files without the fault, which must work) show that each case fails for its
+# own fault. Cases whose fix belongs outside the input readers are in the KNOWN section at the end:
+# their failures print "known (not fixed yet)" and do not fail the run; a KNOWN case that passes
+# prints "known case now passes: move it" and fails the run, so the list cannot rot.
+#
+# Usage: bad_input_test.sh SINSCAL_BINARY SOURCE_DIR WORK_DIR
+set -u
+bin=$(cd "$(dirname "$1")" && pwd)/$(basename "$1"); src=$(cd "$2" && pwd); work=$3
+rm -rf "$work"; mkdir -p "$work/base" "$work/c"; work=$(cd "$work" && pwd)
+S() { "$bin" "$@"; }
+die() { echo "bad_input_test: setup failed: $*" >&2; exit 1; }
+
+fixed_ok=0; fixed_failed=0; known_open=0; known_passing=0; controls_ok=0; controls_failed=0
+failures=()
+
+# new NAME: a fresh folder for one case; $d is its path, outputs go to $d/out.
+new() { cur=$1; d=$work/c/$1; [ -e "$d" ] && die "case name $1 used twice"; mkdir -p "$d/out"; POST=""; }
+sums() { (cd "$d" && find . -path ./out -prune -o -type f -print0 | LC_ALL=C sort -z | xargs -0 -r sha256sum); }
+# lno FILE REGEX: line number of the first line matching
+lno() { grep -n -m1 -E -- "$2" "$1" | cut -d: -f1; }
+# set_key FILE KEY VALUE: replaces the first line 'KEY = ...' of FILE; L = its line number.
+set_key() {
+  L=$(lno "$1" "^$2 *=") || true
+  [ -n "$L" ] || die "$cur: no key $2 in $1"
+  awk -v n="$L" -v t="$2 = $3" 'NR == n { $0 = t } { print }' "$1" > "$1.tmp" && mv "$1.tmp" "$1"
+}
+# add_line FILE TEXT: appends a line; L = its line number.
+add_line() { printf '%s\n' "$2" >> "$1"; L=$(wc -l < "$1"); }
+# set_field FILE LINE FIELD VALUE: replaces a comma-separated field of one line.
+set_field() {
+  awk -F, -v OFS=, -v n="$2" -v f="$3" -v v="$4" 'NR == n { $f = v } { print }' "$1" > "$1.tmp" &&
+    mv "$1.tmp" "$1"
+}
+
+row() { printf '%-40s %-58s %-30s %s\n' "$1" "$2" "$3" "$4"; }
+
+# run KIND CODES SUBSTRINGS COMMAND...: KIND control | fixed | known; CODES e.g. "2" or "0,1,2";
+# SUBSTRINGS separated by '|', each must appear on standard error. $POST, when set, is a further
+# check run in the case folder.
+run() {
+  local kind=$1 codes=$2 subs=$3; shift 3
+  local before after got problems="" s verdict parts=()
+  before=$(sums)
+  (cd "$d" && "$@") > "$d/out/stdout" 2> "$d/out/stderr"
+  got=$?
+  after=$(sums)
+  case ",$codes," in *",$got,"*) ;; *) problems+="exit $got; " ;; esac
+  if [ -n "$subs" ]; then
+    IFS='|' read -r -a parts <<< "$subs"
+    for s in "${parts[@]}"; do
+      grep -qF -- "$s" "$d/out/stderr" || problems+="no '$s'; "
+    done
+  fi
+  [ "$before" == "$after" ] || problems+="an input file changed; "
+  if [ -n "$POST" ] && ! (cd "$d" && eval "$POST") > /dev/null 2>&1; then
+    problems+="check failed: $POST; "
+  fi
+  case $kind in
+    control | fixed)
+      if [ -z "$problems" ]; then
+        verdict=ok
+        if [ "$kind" == control ]; then controls_ok=$((controls_ok + 1)); else fixed_ok=$((fixed_ok + 1)); fi
+      else
+        verdict=FAIL
+        if [ "$kind" == control ]; then controls_failed=$((controls_failed + 1)); else fixed_failed=$((fixed_failed + 1)); fi
+        failures+=("$cur")
+      fi ;;
+    known)
+      if [ -z "$problems" ]; then
+        verdict="known case now passes: move it"; known_passing=$((known_passing + 1)); failures+=("$cur")
+      else
+        verdict="known (not fixed yet)"; known_open=$((known_open + 1))
+      fi ;;
+  esac
+  local expected="$codes${subs:+: $subs}"
+  [ ${#expected} -gt 58 ] && expected="${expected:0:55}..."
+  row "$cur" "$expected" "$got${problems:+ ($problems)}" "$verdict"
+  if [ "$verdict" == FAIL ] || [ "$verdict" == "known case now passes: move it" ]; then
+    sed -n '1,3s/^/      stderr: /p' "$d/out/stderr"
+  fi
+}
+control() { run control "$@"; }
+fixed() { run fixed "$@"; }
+known() { run known "$@"; }
+
+# ---------------------------------------------------------------------------------------------
+# Small bundled inputs: a 3-orientation plan at 10 Hz (98 s), seed8 at 10 Hz (1489 s), and logs
+# in every format made from them.
+cd "$work/base" || die "cd"
+cat > mini.ini <<'EOF'
+[plan]
+name = mini
+type = orientations
+move_rate = 30 deg/s
+move_acceleration = 30 deg/s^2
+
+[site]
+latitude = 55.75 deg
+longitude = 37.62 deg
+height = 150 m
+
+[orientation.1]
+heading = 0 deg
+pitch = 0 deg
+roll = 0 deg
+dwell = 30 s
+
+[orientation.2]
+heading = 90 deg
+pitch = 0 deg
+roll = 0 deg
+dwell = 30 s
+
+[orientation.3]
+heading = 0 deg
+pitch = 0 deg
+roll = 90 deg
+dwell = 30 s
+EOF
+fog=$src/config/sensors/nav-fog.ini
+S simulate --plan mini.ini --sensor "$fog" --out mini --rate 10 > /dev/null || die "simulate mini"
+S simulate --plan mini.ini --sensor "$fog" --out mini_t --rate 10 --table-angles > /dev/null ||
+  die "simulate mini --table-angles"
+S simulate --plan "$src/config/plans/seed8.ini" --sensor "$fog" --out s8 --rate 10 > /dev/null ||
+  die "simulate seed8"
+S navigate --session mini/session.ini --out mini/nav.csv > /dev/null || die "navigate mini"
+S calibrate --method closed-form --session s8/session.ini --out s8/cf.json > /dev/null ||
+  die "closed form s8"
+S calibrate --method kf --session mini/session.ini --out mini/kf.json --monitor mini/monitor.jsonl \
+  > /dev/null 2>&1 || die "kf mini"
+# Custom: rates in deg/s and g, accelerometers first, one header line.
+awk -F, 'BEGIN { pi = atan2(0, -1); print "time,ax,ay,az,gx,gy,gz" }
+  NR > 3 { printf "%.10g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n", $1, $5 * 10 / 9.80665,
+           $6 * 10 / 9.80665, $7 * 10 / 9.80665, $2 * 1800 / pi, $3 * 1800 / pi, $4 * 1800 / pi }' \
+  mini/imu.csv > imu.txt
+# Split (imu_tk style): t x y z per triad, whitespace.
+awk -F, 'NR > 1 { print $1, $2, $3, $4 }' imu.txt > acc.txt
+awk -F, 'NR > 1 { print $1, $5, $6, $7 }' imu.txt > gyr.txt
+# One file per dwell: the samples of each dwell (times from navigate's output), native format.
+for k in 1 2 3; do
+  read -r t0 t1 < <(awk -F, -v k="$k" '$1 == k { if (!n++) a = $2; b = $2 } END { print a, b }' mini/nav.csv)
+  { head -n 3 mini/imu.csv
+    awk -F, -v a="$t0" -v b="$t1" 'NR > 3 && $1 > a + 0.01 && $1 <= b + 0.01' mini/imu.csv; } > "pos$k.csv"
+done
+cp "$src/tests/data/novatel/rawimusxa.asc" imu.asc
+
+base=$work/base
+mini() { cp "$base"/mini/{session.ini,plan.ini,sensor.ini,truth.json,imu.csv} "$d/"; }
+mini_t() { cp "$base"/mini_t/{session.ini,plan.ini,sensor.ini,truth.json,imu.csv} "$d/"; }
+s8() { cp "$base"/s8/{session.ini,plan.ini,sensor.ini,truth.json,imu.csv} "$d/"; }
+custom() {
+  cp "$base"/mini/{plan.ini,sensor.ini} "$base/imu.txt" "$d/"
+  printf '%s\n' "[session]" "name = custom" "rate = 10 Hz" "plan = plan.ini" "sensor = sensor.ini" "" \
+    "[log]" "file = imu.txt" "format = custom" "header_lines = 1" "columns = t ax ay az gx gy gz" \
+    "gyro = rate" "gyro_unit = deg/s" "accel = rate" "accel_unit = g" > "$d/session.ini"
+}
+split() {
+  cp "$base"/mini/{plan.ini,sensor.ini} "$base/acc.txt" "$base/gyr.txt" "$d/"
+  printf '%s\n' "[session]" "name = split" "rate = 10 Hz" "plan = plan.ini" "sensor = sensor.ini" "" \
+    "[log]" "format = custom" "accel_file = acc.txt" "gyro_file = gyr.txt" "delimiter = whitespace" \
+    "gyro = rate" "gyro_unit = deg/s" "accel = rate" "accel_unit = g" > "$d/session.ini"
+}
+segments() {
+  cp "$base"/mini/{plan.ini,sensor.ini} "$base"/pos{1,2,3}.csv "$d/"
+  printf '%s\n' "[session]" "name = segments" "rate = 10 Hz" "plan = plan.ini" "sensor = sensor.ini" "" \
+    "[log]" "format = sinscal" "files = pos1.csv pos2.csv pos3.csv" "dwells = 1 2 3" > "$d/session.ini"
+}
+novatel() {
+  cp "$base"/mini/{plan.ini,sensor.ini} "$base/imu.asc" "$d/"
+  printf '%s\n' "[session]" "name = novatel" "rate = 100 Hz" "plan = plan.ini" "time_offset = 604799.96 s" "" \
+    "[log]" "file = imu.asc" "format = novatel" "gyro_scale = 1e-9" "accel_scale = 0.001" \
+    "accel_unit = mm/s" > "$d/session.ini"
+}
+nav() { S navigate --session session.ini --out out/nav.csv; }
+cf() { S calibrate --method closed-form --session session.ini --out out/result.json "$@"; }
+kf() { S calibrate --method kf --session session.ini --out out/result.json "$@"; }
+sim() { S simulate --plan plan.ini --sensor sensor.ini --out out/sim --rate 10 "$@"; }
+
+echo "bad-input corpus: $bin"
+row "case" "expected (exit: message parts)" "got" "ok"
+
+# --- controls: the unaltered inputs work ------------------------------------------------------
+new control-simulate; cp "$base/mini.ini" "$d/plan.ini"; cp "$fog" "$d/sensor.ini"
+control 0 "" sim
+new control-navigate-native; mini; control 0 "" nav
+new control-navigate-table-angles; mini_t; control 0 "" nav
+new control-navigate-custom; custom; control 0 "" nav
+new control-navigate-split; split; control 0 "" nav
+new control-navigate-segments; segments; control 0 "" nav
+new control-closed-form; s8; control 0 "" cf
+new control-kf; mini; control 0 "" kf
+new control-compare; cp "$base/s8/cf.json" "$d/a.json"; cp "$base/s8/cf.json" "$d/b.json"
+control 0 "" S compare a.json b.json
+new control-plot; cp "$base/mini/monitor.jsonl" "$d/"
+control 0 "" S plot-convergence --monitor monitor.jsonl --out out/conv.png
+# NovAtel: the bundled lines read; the run then stops on the plan (a few samples of a 98 s plan).
+new control-novatel; novatel; control 2 "plan does not match the data" nav
+
+# --- plan INI (simulate) ----------------------------------------------------------------------
+plan_case() { new "$1"; cp "$src/config/plans/seed8.ini" "$d/plan.ini"; cp "$fog" "$d/sensor.ini"; }
+plan_case plan-latitude-90; set_key "$d/plan.ini" latitude "90 deg"
+fixed 2 "plan.ini:$L: 'site.latitude'|within -89 and 89 deg" sim
+plan_case plan-latitude-1000-deg; set_key "$d/plan.ini" latitude "1000 deg"
+fixed 2 "plan.ini:$L: 'site.latitude'|got 1000 deg" sim
+plan_case plan-latitude-in-rad; set_key "$d/plan.ini" latitude "55.75 rad"
+fixed 2 "plan.ini:$L: 'site.latitude'|within -89 and 89 deg" sim
+plan_case plan-height-1e9; set_key "$d/plan.ini" height "1e9 m"
+fixed 2 "plan.ini:$L: 'site.height'|-12000 and 100000 m" sim
+plan_case plan-longitude-1e6; set_key "$d/plan.ini" longitude "1e6 deg"
+fixed 2 "plan.ini:$L: 'site.longitude'" sim
+plan_case plan-site-without-latitude; awk '!/^latitude/' "$d/plan.ini" > "$d/p" && mv "$d/p" "$d/plan.ini"
+L=$(lno "$d/plan.ini" "^longitude")
+fixed 2 "plan.ini:$L: 'site.longitude'|without 'latitude'" sim
+plan_case plan-section-plus-sign; L=$(( $(lno "$d/plan.ini" '^\[orientation.8\]') + 1 ))
+sed -i 's/^\[orientation.8\]/[orientation.+8]/' "$d/plan.ini"
+fixed 2 "plan.ini:$L: section [orientation.+8]|expected [orientation.N]" sim
+plan_case plan-section-huge-number; L=$(( $(lno "$d/plan.ini" '^\[orientation.8\]') + 1 ))
+sed -i 's/^\[orientation.8\]/[orientation.99999999999]/' "$d/plan.ini"
+fixed 2 "plan.ini:$L: section [orientation.99999999999]" sim
+plan_case plan-section-gap; sed -i 's/^\[orientation.8\]/[orientation.9]/' "$d/plan.ini"
+fixed 2 "plan.ini|missing [orientation.8]" sim
+plan_case plan-unknown-section; add_line "$d/plan.ini" "[orientations.9]"; add_line "$d/plan.ini" "dwell = 5 s"
+fixed 2 "plan.ini:$L: 'orientations.9.dwell'|unknown section" sim
+plan_case plan-duplicate-key; L=$(( $(lno "$d/plan.ini" '^dwell') + 1 ))
+awk -v n="$L" 'NR == n { print "dwell = 10 s" } { print }' "$d/plan.ini" > "$d/p" && mv "$d/p" "$d/plan.ini"
+fixed 2 "plan.ini:$L: key 'dwell'|given twice" sim
+plan_case plan-key-before-section; { echo "name = x"; cat "$src/config/plans/seed8.ini"; } > "$d/plan.ini"
+fixed 2 "plan.ini:1: key 'name' before the first [section]" sim
+plan_case plan-dwell-nan; set_key "$d/plan.ini" dwell "nan s"
+fixed 2 "plan.ini:$L: 'orientation.1.dwell'|not a finite number" sim
+plan_case plan-dwell-zero; set_key "$d/plan.ini" dwell "0 s"
+fixed 2 "plan.ini:$L: 'orientation.1.dwell'|must be positive" sim
+plan_case plan-heading-1000-deg; set_key "$d/plan.ini" heading "1000 deg"
+fixed 2 "plan.ini:$L: 'orientation.1.heading'|within -360 and 360 deg" sim
+plan_case plan-unknown-type; set_key "$d/plan.ini" type circles
+fixed 2 "plan.ini:$L: 'plan.type'|expected 'orientations' or 'rotations'" sim
+plan_case plan-dwell-wrong-unit; set_key "$d/plan.ini" dwell "180 deg"
+fixed 2 "plan.ini:$L: 'orientation.1.dwell'|unit 'deg'" sim
+plan_case plan-dwell-8-days; set_key "$d/plan.ini" dwell "192 h"
+fixed 2 "plan.ini:$L: 'orientation.1.dwell'|plan limit of 7 days" sim
+new plan-rotations-start-dwell-negative; cp "$src/config/plans/rot19.ini" "$d/plan.ini"; cp "$fog" "$d/sensor.ini"
+set_key "$d/plan.ini" dwell "-10 s"
+fixed 2 "plan.ini:$L: 'start.dwell'|must be positive" sim
+new plan-rotations-pause-negative; cp "$src/config/plans/rot19.ini" "$d/plan.ini"; cp "$fog" "$d/sensor.ini"
+set_key "$d/plan.ini" pause "-20 s"
+fixed 2 "plan.ini:$L: 'rotations.pause'|must not be negative" sim
+new plan-rotations-bad-axis; cp "$src/config/plans/rot19.ini" "$d/plan.ini"; cp "$fog" "$d/sensor.ini"
+set_key "$d/plan.ini" axes "+y +w"
+fixed 2 "plan.ini:$L: 'rotations.axes'|axis '+w'" sim
+new plan-missing; cp "$fog" "$d/sensor.ini"
+fixed 2 "nope.ini: cannot open plan file" S simulate --plan nope.ini --sensor sensor.ini --out out/sim
+new plan-is-a-directory; cp "$fog" "$d/sensor.ini"; mkdir -p "$d/dir.ini"
+fixed 2 "dir.ini: is a directory" S simulate --plan dir.ini --sensor sensor.ini --out out/sim
+
+# --- sensor profile (simulate, calibrate --method kf) -------------------------------------------
+sensor_case() { new "$1"; cp "$base/mini.ini" "$d/plan.ini"; cp "$fog" "$d/sensor.ini"; }
+sensor_case sensor-arw-negative; set_key "$d/sensor.ini" arw "-0.001 deg/sqrt(h)"
+fixed 2 "sensor.ini:$L: 'gyro.arw'|must not be negative" sim
+sensor_case sensor-gyro-range-negative; set_key "$d/sensor.ini" range "-400 deg/s"
+fixed 2 "sensor.ini:$L: 'gyro.range'|must not be negative" sim
+sensor_case sensor-vrw-negative; set_key "$d/sensor.ini" vrw "-10 ug/sqrt(Hz)"
+fixed 2 "sensor.ini:$L: 'accel.vrw'|must not be negative" sim
+sensor_case sensor-correlation-time-zero; add_line "$d/sensor.ini" "correlation_time = 0 s"
+fixed 2 "sensor.ini:$L: 'accel.correlation_time'|must be positive" sim
+sensor_case sensor-unknown-key; add_line "$d/sensor.ini" "bais = 100 ug"
+fixed 2 "sensor.ini:$L: 'accel.bais': unknown key in [accel]" sim
+sensor_case sensor-wrong-unit; set_key "$d/sensor.ini" bias "0.1 0.3 m/s"
+fixed 2 "sensor.ini:$L: 'gyro.bias'|unit 'm/s'" sim
+sensor_case sensor-range-reversed; set_key "$d/sensor.ini" bias "0.3 0.1 deg/h"
+fixed 2 "sensor.ini:$L: 'gyro.bias'|0 <= lo <= hi" sim
+sensor_case sensor-unknown-section; add_line "$d/sensor.ini" "[magnetometer]"; add_line "$d/sensor.ini" "bias = 1"
+fixed 2 "sensor.ini:$L: 'magnetometer.bias'|unknown section" sim
+sensor_case sensor-target-zero; add_line "$d/sensor.ini" "[targets]"; add_line "$d/sensor.ini" "gyro.bias = 0 deg/h"
+fixed 2 "sensor.ini:$L: 'targets.gyro.bias'|must be positive" sim
+new kf-session-sensor-arw-negative; mini; set_key "$d/sensor.ini" arw "-0.001 deg/sqrt(h)"
+fixed 2 "sensor.ini:$L: 'gyro.arw'|must not be negative" kf
+new simulate-rate-negative; cp "$base/mini.ini" "$d/plan.ini"; cp "$fog" "$d/sensor.ini"
+fixed 1 "--rate must be positive" S simulate --plan plan.ini --sensor sensor.ini --out out/sim --rate -5
+
+# --- session.ini (navigate, calibrate, plot-convergence) ----------------------------------------
+new session-latitude-90; mini; set_key "$d/session.ini" latitude "90 deg"
+fixed 2 "session.ini:$L: 'site.latitude'|within -89 and 89 deg" nav
+new session-latitude-1000-deg; mini; set_key "$d/session.ini" latitude "1000 deg"
+fixed 2 "session.ini:$L: 'site.latitude'|got 1000 deg" nav
+new session-latitude-in-rad; mini; set_key "$d/session.ini" latitude "55.75 rad"
+fixed 2 "session.ini:$L: 'site.latitude'" cf
+new session-height-1e9; mini; set_key "$d/session.ini" height "1e9 m"
+fixed 2 "session.ini:$L: 'site.height'|-12000 and 100000 m" kf
+new session-site-without-latitude; mini; awk '!/^latitude/' "$d/session.ini" > "$d/s" && mv "$d/s" "$d/session.ini"
+L=$(lno "$d/session.ini" "^longitude")
+fixed 2 "session.ini:$L: 'site.longitude'|without 'latitude'" nav
+new session-unknown-section; mini; add_line "$d/session.ini" "[extra]"; add_line "$d/session.ini" "note = x"
+fixed 2 "session.ini:$L: 'extra.note'|unknown section [extra]" nav
+new session-unknown-empty-section; mini; add_line "$d/session.ini" "[sites]"
+fixed 2 "session.ini|unknown section [sites]" nav
+new session-plan-empty; mini; set_key "$d/session.ini" plan ""
+fixed 2 "session.ini:$L: 'session.plan'|no file name given" nav
+new session-plan-missing; mini; set_key "$d/session.ini" plan "nope.ini"
+fixed 2 "session.ini:$L: 'session.plan'|'nope.ini': no such file" cf
+new session-truth-missing; mini; set_key "$d/session.ini" truth "nope.json"
+fixed 2 "session.ini:$L: 'session.truth'|no such file" nav
+new session-sensor-empty; mini; set_key "$d/session.ini" sensor ""
+fixed 2 "session.ini:$L: 'session.sensor'|no file name given" kf
+new session-no-plan-key; mini; awk '!/^plan/' "$d/session.ini" > "$d/s" && mv "$d/s" "$d/session.ini"
+fixed 2 "session.ini|no 'plan'" nav
+new session-rate-zero; mini; set_key "$d/session.ini" rate "0 Hz"
+fixed 2 "session.ini:$L: 'session.rate'|must be above 0" nav
+new session-rate-1e9; mini; set_key "$d/session.ini" rate "1e9 Hz"
+fixed 2 "session.ini:$L: 'session.rate'|100 kHz" nav
+new session-rate-wrong; mini; set_key "$d/session.ini" rate "4 Hz"
+fixed 2 "imu.csv:5: samples 0.100000 s apart|wrong rate" nav
+new session-time-offset-1e300; mini; add_line "$d/session.ini" "[session]"; add_line "$d/session.ini" "time_offset = 1e300 s"
+fixed 2 "session.ini:$L: 'session.time_offset'" nav
+new session-unknown-key; mini; add_line "$d/session.ini" "colour = red"
+fixed 2 "session.ini:$L: 'log.colour': unknown key in [log]" nav
+new session-duplicate-key; mini; add_line "$d/session.ini" "file = imu.csv"
+fixed 2 "session.ini:$L: key 'file'|given twice" nav
+new session-log-format-unknown; mini; set_key "$d/session.ini" format csv
+fixed 2 "session.ini:$L: 'log.format'|expected 'sinscal', 'custom' or 'novatel'" nav
+new session-max-gap-1e300; mini; add_line "$d/session.ini" "max_gap = 1e300"
+fixed 2 "session.ini:$L: 'log.max_gap'|1 to 1000" nav
+new session-log-missing; mini; set_key "$d/session.ini" file nope.csv
+fixed 2 "nope.csv:0: cannot open log file" nav
+new plot-session-latitude-90; mini; cp "$base/mini/monitor.jsonl" "$d/"; set_key "$d/session.ini" latitude "90 deg"
+fixed 2 "session.ini:$L: 'site.latitude'" S plot-convergence --monitor monitor.jsonl --session session.ini --out out/c.png
+# The fuzzing run's reproducers (tests/fuzz/crashes/fuzz_session), with their log.
+for f in log-time-unit-error-without-file log-table-unit-error-without-file empty-plan-key-error-without-file; do
+  new "fuzz-$f"; mini; cp "$src/tests/fuzz/crashes/fuzz_session/$f.ini" "$d/session.ini"
+  case $f in
+    log-time*) fixed 2 "session.ini:$(lno "$d/session.ini" '^time_unit'): 'log.time_unit'|parsec" nav ;;
+    log-table*) fixed 2 "session.ini:$(lno "$d/session.ini" '^table_unit'): 'log.table_unit'|furlong" nav ;;
+    *) fixed 2 "session.ini:$(lno "$d/session.ini" '^plan'): 'session.plan'|no file name given" nav ;;
+  esac
+done
+
+# --- native log -------------------------------------------------------------------------------
+new log-gyro-1e300; mini; set_field "$d/imu.csv" 100 3 1e300
+fixed 2 "imu.csv:100: gyro log axis y reads 1e+300|beyond any sensor" nav
+new log-accel-1e300; mini; set_field "$d/imu.csv" 100 6 -1e300
+fixed 2 "imu.csv:100: accel log axis y|beyond any sensor" cf
+new log-gyro-1e300-kf; mini; set_field "$d/imu.csv" 100 2 1e300
+POST='test -s out/result.json'  # the estimates up to there are written
+fixed 2 "input stopped: ./imu.csv:100: gyro log axis x|beyond any sensor" kf
+new log-time-1e300; mini; set_field "$d/imu.csv" 100 1 1e300
+fixed 2 "imu.csv:100: time t = 1e+300 s is beyond 1e10 s" nav
+new log-first-time-1e300; mini; set_field "$d/imu.csv" 4 1 1e300
+fixed 2 "imu.csv:4: time t = 1e+300 s" kf
+new log-nan; mini; set_field "$d/imu.csv" 200 3 nan
+fixed 2 "imu.csv:200: field 3 is NaN" nav
+new log-infinite; mini; set_field "$d/imu.csv" 200 5 -inf
+fixed 2 "imu.csv:200: field 5 is infinite" cf
+new log-not-a-number; mini; set_field "$d/imu.csv" 200 4 oops
+fixed 2 "imu.csv:200: field 4 'oops' is not a number" nav
+new log-time-backwards; mini; set_field "$d/imu.csv" 200 1 5
+fixed 2 "imu.csv:200: time goes backwards" kf
+new log-time-repeats; mini; set_field "$d/imu.csv" 200 1 19.6
+fixed 2 "imu.csv:200: time repeats" nav
+new log-gap; mini; sed -i '200,220d' "$d/imu.csv"
+fixed 2 "imu.csv:200: gap in the data" nav
+new log-extra-field; mini; set_field "$d/imu.csv" 300 8 0
+fixed 2 "imu.csv:300: expected 7 fields, found 8" nav
+new log-truncated; mini; head -c -20 "$base/mini/imu.csv" > "$d/imu.csv"
+fixed 2 "imu.csv:$(wc -l < "$base/mini/imu.csv"): truncated line" nav
+new log-header-only; mini; head -n 3 "$base/mini/imu.csv" > "$d/imu.csv"
+POST='! grep -q "e+300" out/stderr'
+fixed 2 "imu.csv:3: no samples" nav
+new log-header-only-kf; mini; head -n 3 "$base/mini/imu.csv" > "$d/imu.csv"
+POST='! grep -q "e+300" out/stderr'
+fixed 2 "imu.csv:3: no samples" kf
+new log-header-only-closed-form; mini; head -n 3 "$base/mini/imu.csv" > "$d/imu.csv"
+fixed 2 "imu.csv:3: no samples" cf
+new log-empty-file; mini; : > "$d/imu.csv"
+fixed 2 "imu.csv:0: file ends before the column header" nav
+new log-wrong-header; mini; sed -i '3s/dv_z/dv_w/' "$d/imu.csv"
+fixed 2 "imu.csv:3: not a sinscal log" nav
+new log-long-line; mini; { head -n 3 "$base/mini/imu.csv"; head -c 70000 /dev/zero | tr '\0' '1'; echo; } > "$d/imu.csv"
+fixed 2 "imu.csv:4: line longer than 65536 bytes" nav
+new log-ends-early; mini; head -n 400 "$base/mini/imu.csv" > "$d/imu.csv"
+fixed 2 "imu.csv: the log ends at t = 39.7 s|plan does not match the data" kf
+new log-table-angle-1e300; mini_t; set_field "$d/imu.csv" 100 8 1e300
+fixed 2 "imu.csv:100: table angle|beyond 1e6 rad" kf
+
+# --- custom log -------------------------------------------------------------------------------
+new custom-gyro-1e300; custom; set_field "$d/imu.txt" 50 5 1e300
+fixed 2 "imu.txt:50: gyro log axis x reads 1e+300|beyond any sensor" nav
+new custom-time-reaches-infinity; custom; add_line "$d/session.ini" "time_unit = h"
+awk -F, -v OFS=, 'NR == 2 { $1 = 1e-6 } NR == 3 { $1 = 1.7e308 } NR <= 3' "$base/imu.txt" > "$d/imu.txt"
+fixed 2 "imu.txt:3: time t = inf s" nav
+new custom-header-only; custom; head -n 1 "$base/imu.txt" > "$d/imu.txt"
+fixed 2 "imu.txt:1: no samples" kf
+new custom-all-bad-skipped; custom; awk -F, -v OFS=, 'NR == 1 { print; next } NR <= 5 { $2 = "x"; print }' "$base/imu.txt" > "$d/imu.txt"
+fixed 2 "imu.txt:5: no good samples: all 4 samples were bad" kf --on-bad-sample skip
+new custom-header-lines-negative; custom; set_key "$d/session.ini" header_lines -1
+fixed 2 "session.ini:$L: 'log.header_lines'|out of range" nav
+new custom-header-lines-fraction; custom; set_key "$d/session.ini" header_lines 1.5
+fixed 2 "session.ini:$L: 'log.header_lines'|whole number" nav
+new custom-header-lines-past-end; custom; set_key "$d/session.ini" header_lines 100000
+fixed 2 "imu.txt:$(wc -l < "$base/imu.txt"): file ends inside the 100000 header lines" nav
+new custom-time-unit-unknown; custom; add_line "$d/session.ini" "time_unit = parsec"
+fixed 2 "session.ini:$L: 'log.time_unit'|'parsec'" nav
+new custom-table-unit-unknown; custom; set_key "$d/session.ini" columns "t ax ay az gx gy gz outer inner"
+add_line "$d/session.ini" "table_unit = furlong"
+fixed 2 "session.ini:$L: 'log.table_unit'|'furlong'" nav
+new custom-gyro-axes-four; custom; add_line "$d/session.ini" "gyro_axes = x y z w"
+fixed 2 "session.ini:$L: 'log.gyro_axes'|expected three axes" nav
+new custom-accel-axes-repeated; custom; add_line "$d/session.ini" "accel_axes = x -x z"
+fixed 2 "session.ini:$L: 'log.accel_axes'|permutation" nav
+new custom-gyro-scale-1e300; custom; add_line "$d/session.ini" "gyro_scale = 1e300"
+fixed 2 "session.ini:$L: 'log.gyro_scale'|beyond any sensor" nav
+new custom-accel-scale-zero; custom; add_line "$d/session.ini" "accel_scale = 0"
+fixed 2 "session.ini:$L: 'log.accel_scale'|must not be zero" nav
+new custom-gyro-offset-1e300; custom; add_line "$d/session.ini" "gyro_offset = 1e300"
+fixed 2 "imu.txt:2: gyro log axis x|beyond any sensor" nav
+new custom-saturated; custom; add_line "$d/session.ini" "gyro_saturation = 10"
+fixed 2 "imu.txt:|saturated sample: gyro log axis" nav
+new custom-unknown-column; custom; set_key "$d/session.ini" columns "t ax ay az gx gy gq"
+fixed 2 "session.ini:$L: 'log.columns'|unknown column 'gq'" nav
+new custom-column-missing; custom; set_key "$d/session.ini" columns "t ax ay az gx gy"
+fixed 2 "session.ini:$L: 'log.columns'|column 'gz' missing" nav
+new custom-delimiter-unknown; custom; add_line "$d/session.ini" "delimiter = pipe"
+fixed 2 "session.ini:$L: 'log.delimiter'" nav
+new custom-rate-unit-for-increments; custom; set_key "$d/session.ini" gyro increment
+fixed 2 "session.ini:$(lno "$d/session.ini" '^gyro_unit'): 'log.gyro_unit'|'deg/s'" nav
+new custom-field-count; custom; set_field "$d/imu.txt" 40 8 1
+fixed 2 "imu.txt:40: expected 7 fields, found 8" nav
+
+# --- split log (one file per triad) -----------------------------------------------------------
+new split-different-lengths; split; sed -i '$d' "$d/gyr.txt"
+fixed 2 "acc.txt:$(wc -l < "$base/acc.txt"): the files of a split log have different lengths|gyr.txt" nav
+new split-times-differ; split; awk 'NR == 30 { $1 = $1 + 0.05 } { print }' "$base/gyr.txt" > "$d/gyr.txt"
+fixed 2 "acc.txt:30:|gyr.txt:30: the files' times differ" nav
+new split-gyro-1e300; split; awk 'NR == 30 { $3 = "1e300" } { print }' "$base/gyr.txt" > "$d/gyr.txt"
+fixed 2 "gyr.txt:30: gyro log axis y reads 1e+300" nav
+new split-gyro-file-missing; split; set_key "$d/session.ini" gyro_file nope.txt
+fixed 2 "nope.txt:0: cannot open log file" nav
+new split-with-columns; split; add_line "$d/session.ini" "columns = t gx gy gz ax ay az"
+fixed 2 "session.ini:$L: 'log.columns'|accel_columns and gyro_columns" nav
+new split-unknown-column; split; add_line "$d/session.ini" "accel_columns = t x y q"
+fixed 2 "session.ini:$L: 'log.accel_columns'|unknown column 'q'" nav
+new split-time-tolerance-negative; split; add_line "$d/session.ini" "time_tolerance = -1 ms"
+fixed 2 "session.ini:$L: 'log.time_tolerance'|must not be negative" nav
+
+# --- one file per dwell -----------------------------------------------------------------------
+new segments-dwell-not-in-plan; segments; set_key "$d/session.ini" dwells "1 2 5"
+fixed 2 "session.ini:$L: 'log.dwells'|assigned to dwell 5|has 3 dwells" nav
+new segments-two-files-one-dwell; segments; set_key "$d/session.ini" dwells "1 2 2"
+fixed 2 "session.ini:$L: 'log.dwells'|both assigned to dwell 2" nav
+new segments-count-mismatch; segments; set_key "$d/session.ini" dwells "1 2"
+fixed 2 "session.ini:$L: 'log.dwells'|2 dwells for 3 files" nav
+new segments-file-and-files; segments; add_line "$d/session.ini" "file = pos1.csv"
+fixed 2 "session.ini:$L: 'log.file'|not both" nav
+new segments-file-missing; segments; set_key "$d/session.ini" files "pos1.csv nope.csv pos3.csv"
+fixed 2 "session.ini:$L: 'log.files'|'nope.csv': no such file" nav
+new segments-empty-file; segments; : > "$d/pos2.csv"
+fixed 2 "pos2.csv:0: file ends before the column header" nav
+new segments-file-past-dwell; segments; { cat "$base/pos1.csv"; tail -n +4 "$base/pos1.csv" | awk -F, -v OFS=, '{ $1 = $1 + 30; print }'; } > "$d/pos1.csv"
+fixed 2 "pos1.csv:304: this file's data reach|past the end of dwell 1" nav
+new segments-gyro-1e300; segments; set_field "$d/pos2.csv" 10 4 1e300
+fixed 2 "pos2.csv:10: gyro log axis z reads 1e+300" nav
+new segments-kf-jump; segments
+fixed 2 "the data jump from t =" kf
+
+# --- NovAtel ----------------------------------------------------------------------------------
+new novatel-crc-mismatch; novatel; sed -i '2s/,3000,/,3009,/' "$d/imu.asc"
+fixed 2 "imu.asc:2: CRC-32 mismatch" nav
+new novatel-scale-missing; novatel; awk '!/^gyro_scale/' "$d/session.ini" > "$d/s" && mv "$d/s" "$d/session.ini"
+fixed 2 "session.ini: [log] format = novatel: missing 'gyro_scale'" nav
+new novatel-gyro-scale-1e300; novatel; set_key "$d/session.ini" gyro_scale 1e300
+fixed 2 "session.ini:$L: 'log.gyro_scale'|beyond any sensor" nav
+new novatel-status-mask-not-hex; novatel; add_line "$d/session.ini" "status_mask = 0xzz"
+fixed 2 "session.ini:$L: 'log.status_mask'|hexadecimal" nav
+new novatel-no-raw-imu-log; novatel; grep -v RAWIMU "$base/imu.asc" > "$d/imu.asc"
+fixed 2 "imu.asc:$(grep -vc RAWIMU "$base/imu.asc"): no RAWIMUSA" nav
+new novatel-unknown-key; novatel; add_line "$d/session.ini" "columns = t gx gy gz ax ay az"
+fixed 2 "session.ini:$L: 'log.columns': unknown key in [log]" nav
+
+# --- calibrate: options -----------------------------------------------------------------------
+new calibrate-unknown-method; mini
+fixed 1 "--method must be closed-form or kf" S calibrate --method magic --session session.ini --out out/r.json
+new calibrate-channels-one; s8
+fixed 1 "--channels needs at least north,east" cf --channels north
+new calibrate-stream-closed-form; mini
+fixed 1 "--stream needs --method kf" cf --stream
+new calibrate-passes-zero; mini
+fixed 1 "--passes must be 1 to 20" kf --passes 0
+new calibrate-kf-without-sensor; mini; awk '!/^sensor/' "$d/session.ini" > "$d/s" && mv "$d/s" "$d/session.ini"
+fixed 1 "session.ini: --method kf needs the session's sensor profile" kf
+new calibrate-min-dwell-too-long; mini
+fixed 2 "shorter than the 300" cf --min-dwell 300
+
+# --- compare (result JSON) --------------------------------------------------------------------
+new compare-missing-file; cp "$base/s8/cf.json" "$d/a.json"
+fixed 2 "nope.json: cannot open" S compare a.json nope.json
+new compare-not-json; cp "$base/s8/cf.json" "$d/a.json"; echo "not json" > "$d/b.json"
+fixed 2 "b.json: not a sinscal result file" S compare a.json b.json
+new compare-no-coefficients-key; cp "$base/s8/cf.json" "$d/a.json"; echo '{"x": 1}' > "$d/b.json"
+fixed 2 "b.json: not a sinscal result file" S compare a.json b.json
+new compare-value-not-a-number; cp "$base/s8/cf.json" "$d/a.json"
+sed 's/"value": [-0-9.e]*/"value": "abc"/' "$base/s8/cf.json" > "$d/b.json"
+fixed 2 "b.json: not a sinscal result file" S compare a.json b.json
+new compare-one-file; cp "$base/s8/cf.json" "$d/a.json"
+fixed 1 "give two result files" S compare a.json
+
+# --- plot-convergence (monitor JSONL) -----------------------------------------------------------
+new plot-monitor-missing
+fixed 2 "nope.jsonl: cannot open" S plot-convergence --monitor nope.jsonl --out out/c.png
+new plot-monitor-bad-line; cp "$base/mini/monitor.jsonl" "$d/"; sed -i '2s/.*/{"t": oops}/' "$d/monitor.jsonl"
+fixed 2 "monitor.jsonl:2:" S plot-convergence --monitor monitor.jsonl --out out/c.png
+new plot-monitor-empty; : > "$d/monitor.jsonl"
+fixed 2 "monitor.jsonl: no monitor records" S plot-convergence --monitor monitor.jsonl --out out/c.png
+new plot-monitor-time-not-increasing; cp "$base/mini/monitor.jsonl" "$d/"; sed -n '1p' "$base/mini/monitor.jsonl" >> "$d/monitor.jsonl"
+fixed 2 "monitor.jsonl:$(wc -l < "$d/monitor.jsonl"):|does not increase" S plot-convergence --monitor monitor.jsonl --out out/c.png
+new plot-monitor-unknown-coefficient; cp "$base/mini/monitor.jsonl" "$d/"; sed -i '1s/"gyro.bias.x"/"gyro.bias.w"/' "$d/monitor.jsonl"
+fixed 2 "monitor.jsonl:1:|unknown coefficient 'gyro.bias.w'" S plot-convergence --monitor monitor.jsonl --out out/c.png
+new plot-family-unknown; cp "$base/mini/monitor.jsonl" "$d/"
+fixed 2 "family 'gyro.colour'" S plot-convergence --monitor monitor.jsonl --out out/c.png --family gyro.colour
+new plot-width-too-small; cp "$base/mini/monitor.jsonl" "$d/"
+fixed 1 "--width must be at least 200" S plot-convergence --monitor monitor.jsonl --out out/c.png --width 10
+
+# =============================================================================================
+# KNOWN: bad input still accepted or mishandled; the fix belongs to apps/, filter/ or the result
+# and compare code. Each line says the behaviour it needs.
+echo "--- KNOWN (fixes outside the input readers; they do not fail the run until they pass) ---"
+# The closed form ignores its own stage-1 chi2 per dof (tens of thousands here): it must stop,
+# exit 2, naming the log and the dwell whose chi2 says the data do not fit the plan.
+new known-closed-form-constant-data; s8
+awk -F, -v OFS=, 'NR <= 3 { print; next } { print $1, 0, 0, 0, 0, 0, -0.980665 }' "$base/s8/imu.csv" > "$d/imu.csv"
+known 2 "imu.csv|chi2" cf
+new known-closed-form-flipped-accel-axis; s8
+awk -F, -v OFS=, 'NR > 3 { $6 = -$6 } { print }' "$base/s8/imu.csv" > "$d/imu.csv"
+known 2 "imu.csv|chi2" cf
+new known-closed-form-wrong-plan; s8
+awk '/^\[orientation.2\]/ { o = 1 } /^\[orientation.3\]/ { o = 0 }
+     o && /^heading/ { $0 = "heading = 270 deg" } o && /^pitch/ { $0 = "pitch = 315 deg" } { print }' \
+  "$base/s8/plan.ini" > "$d/plan.ini"
+known 2 "imu.csv|chi2" cf
+# Velocity increments in mm/s declared as m/s; gyro increments in rad declared as deg.
+new known-closed-form-mm-per-s-as-m-per-s; s8
+awk -F, -v OFS=, 'NR > 3 { $5 *= 1000; $6 *= 1000; $7 *= 1000; print }' "$base/s8/imu.csv" > "$d/imu.txt"
+printf '%s\n' "[log]" "file = imu.txt" "format = custom" "columns = t gx gy gz ax ay az" "accel_unit = m/s" \
+  > "$d/log.part"
+awk '/^\[log\]/ { exit } { print }' "$base/s8/session.ini" > "$d/session.ini"; cat "$d/log.part" >> "$d/session.ini"; rm "$d/log.part"
+known 2 "imu.txt|chi2" cf
+new known-closed-form-rad-as-deg; s8
+awk -F, -v OFS=, 'NR > 3' "$base/s8/imu.csv" > "$d/imu.txt"
+awk '/^\[log\]/ { exit } { print }' "$base/s8/session.ini" > "$d/session.ini"
+printf '%s\n' "[log]" "file = imu.txt" "format = custom" "columns = t gx gy gz ax ay az" "gyro_unit = deg" >> "$d/session.ini"
+known 2 "imu.txt|chi2" cf
+# Clipped data (every sample at the profile's 0.6 g range): samples at the sensor profile's range
+# must be saturated samples (exit 2, naming the log and line), not coefficients with exit 0.
+new known-closed-form-clipped; sed 's/^range = 20 g/range = 0.6 g/' "$fog" > "$d/clip.ini"
+S simulate --plan "$src/config/plans/seed8.ini" --sensor "$d/clip.ini" --out "$d/s" --rate 10 > /dev/null
+rm "$d/clip.ini"
+known 2 "imu.csv:|saturated" S calibrate --method closed-form --session s/session.ini --out out/r.json
+# An output that is an input: refuse before writing (exit 1, naming the file).
+new known-calibrate-out-is-the-log; mini
+known 1 "imu.csv" S calibrate --method closed-form --session session.ini --out imu.csv
+new known-calibrate-out-is-session-ini; mini
+known 1 "session.ini" S calibrate --method kf --session session.ini --out session.ini
+new known-calibrate-monitor-is-the-log; mini
+known 1 "imu.csv" S calibrate --method kf --session session.ini --out out/r.json --monitor imu.csv
+new known-navigate-out-is-the-log; mini
+known 1 "imu.csv" S navigate --session session.ini --out imu.csv
+new known-plot-out-is-the-monitor; cp "$base/mini/monitor.jsonl" "$d/"
+known 1 "monitor.jsonl" S plot-convergence --monitor monitor.jsonl --out monitor.jsonl
+# A batch: x/a, y/a and z/a-2 must give three result files (y/a and z/a-2 both write a-2.json).
+new known-batch-result-names-collide
+for s in x/a y/a z/a-2; do mkdir -p "$d/runs/$s"; cp "$base"/mini/{session.ini,plan.ini,sensor.ini,truth.json,imu.csv} "$d/runs/$s/"; done
+POST='test "$(ls out/batch/*.json | wc -l)" -eq 3'
+known 0 "" S calibrate --method closed-form --session runs/x/a --session runs/y/a --session runs/z/a-2 --out out/batch
+# A monitor file name with a newline must not put a command into the gnuplot script.
+new known-plot-monitor-name-with-newline; nl_name=$'m\nsystem "touch pwned"\n#.jsonl'
+cp "$base/mini/monitor.jsonl" "$d/$nl_name"
+POST='! grep -q "^system" out/conv.gp && ! test -e pwned'
+known "0,1,2" "" S plot-convergence --monitor "$nl_name" --out out/conv.png
+# compare: a negative sigma is not a result (exit 2 naming the file); two files without a single
+# known coefficient name have nothing in common (exit 2).
+new known-compare-negative-sigma; cp "$base/s8/cf.json" "$d/a.json"
+sed '0,/"sigma": [0-9.e-]*/s//"sigma": -1/' "$base/s8/cf.json" > "$d/b.json"
+known 2 "b.json|sigma" S compare a.json b.json --max-sigma 3
+new known-compare-no-known-coefficients
+echo '{"coefficients": {"foo": {"value": 1, "sigma": 1}}}' > "$d/a.json"; cp "$d/a.json" "$d/b.json"
+known 2 "no known coefficient" S compare a.json b.json --max-sigma 3
+# Options a method does not use must be refused (exit 1), not silently ignored.
+new known-kf-arw-vrw-ignored; mini
+known 1 "--arw" kf --arw 0.5 --vrw 50
+new known-closed-form-static-from-data-ignored; s8
+known 1 "--static-from" cf --static-from data
+# A plan/log mismatch in navigate and the closed form must name the log (the Kalman filter does).
+new known-navigate-mismatch-names-the-log; mini; head -n 400 "$base/mini/imu.csv" > "$d/imu.csv"
+known 2 "imu.csv|plan does not match the data" nav
+new known-closed-form-mismatch-names-the-log; mini; head -n 400 "$base/mini/imu.csv" > "$d/imu.csv"
+known 2 "imu.csv|plan does not match the data" cf
+
+echo
+echo "bad-input corpus: $fixed_ok of $((fixed_ok + fixed_failed)) cases pass, $controls_ok of" \
+  "$((controls_ok + controls_failed)) controls pass; KNOWN: $known_open not fixed yet," \
+  "$known_passing now pass (move them)"
+if [ ${#failures[@]} -gt 0 ]; then
+  echo "FAILED: ${failures[*]}"
+  exit 1
+fi
+exit 0
