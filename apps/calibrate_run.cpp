@@ -15,24 +15,6 @@ namespace sinscal::cli {
 
 namespace {
 
-// Every file a session reads: an output must be none of them.
-std::vector<std::pair<std::string, std::string>> session_inputs(const Session& s) {
-  std::vector<std::pair<std::string, std::string>> in = {{"session", s.path},
-                                                         {"plan", s.plan.path},
-                                                         {"sensor profile", s.sensor_file},
-                                                         {"truth", s.truth_file}};
-  const LogFormat& log = s.log;
-  if (log.split()) {
-    in.emplace_back("accelerometer log", log.accel_file);
-    in.emplace_back("gyro log", log.gyro_file);
-  } else if (!log.segments.empty()) {
-    for (const auto& seg : log.segments) in.emplace_back("log", seg.file);
-  } else {
-    in.emplace_back("log", log.file);
-  }
-  return in;
-}
-
 CalibratorOptions kalman_options(const CalibrateOptions& o, const Session& session,
                                  const SensorProfile& profile) {
   CalibratorOptions ko = calibrator_options_from_profile(profile, o.prior_scale);
@@ -164,7 +146,7 @@ SessionSummary calibrate_session(const CalibrateOptions& o, const std::string& s
                                  const std::string& out_path, const std::string& monitor_path,
                                  bool verbose, bool live) {
   const Session session = Session::load(session_path);
-  check_outputs(session_inputs(session), {{"--out", out_path}, {"--monitor", monitor_path}});
+  refuse_overwrite(session_inputs(session), {{"--out", out_path}, {"--monitor", monitor_path}});
   return o.method == Method::Kf ? calibrate_kf(o, session, out_path, monitor_path, verbose, live)
                                 : calibrate_closed_form(o, session, out_path, verbose);
 }

@@ -6,6 +6,8 @@
 #include <iostream>
 #include <sstream>
 
+#include "report/output.hpp"
+
 namespace sinscal::cli {
 
 std::optional<po::variables_map> parse(const std::vector<std::string>& args,
@@ -29,6 +31,32 @@ std::optional<po::variables_map> parse(const std::vector<std::string>& args,
   }
   po::notify(vm);
   return vm;
+}
+
+void refuse_overwrite(const std::vector<std::pair<std::string, std::string>>& inputs,
+                      const std::vector<std::pair<std::string, std::string>>& outputs) {
+  try {
+    check_outputs(inputs, outputs);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+}
+
+std::vector<std::pair<std::string, std::string>> session_inputs(const Session& s) {
+  std::vector<std::pair<std::string, std::string>> in = {{"session", s.path},
+                                                         {"plan", s.plan.path},
+                                                         {"sensor profile", s.sensor_file},
+                                                         {"truth", s.truth_file}};
+  const LogFormat& log = s.log;
+  if (log.split()) {
+    in.emplace_back("accelerometer log", log.accel_file);
+    in.emplace_back("gyro log", log.gyro_file);
+  } else if (!log.segments.empty()) {
+    for (const auto& seg : log.segments) in.emplace_back("log", seg.file);
+  } else {
+    in.emplace_back("log", log.file);
+  }
+  return in;
 }
 
 std::string fmt(const char* format, double v) {

@@ -12,6 +12,7 @@
 
 #include "filter/closed_form.hpp"
 #include "filter/kalman_calibrator.hpp"
+#include "rig/session.hpp"
 
 namespace sinscal::cli {
 
@@ -30,6 +31,12 @@ struct UsageError : std::runtime_error {
 std::optional<po::variables_map> parse(
     const std::vector<std::string>& args, const po::options_description& desc,
     const std::string& usage, const po::positional_options_description* positional = nullptr);
+
+/// Refuses (a usage error naming both) an output that is one of the inputs or another output.
+void refuse_overwrite(const std::vector<std::pair<std::string, std::string>>& inputs,
+                      const std::vector<std::pair<std::string, std::string>>& outputs);
+/// Every file a session reads (session.ini, plan, sensor profile, truth, the log's files).
+std::vector<std::pair<std::string, std::string>> session_inputs(const Session& session);
 
 /// printf-style formatting of one number.
 std::string fmt(const char* format, double v);

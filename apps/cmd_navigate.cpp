@@ -68,12 +68,12 @@ int cmd_navigate(const std::vector<std::string>& args) {
     return 0;
   if (!(interval >= 0.0 && interval < 1e6)) throw UsageError("--interval must be 0 to 1e6 s");
   const Session session = Session::load(session_path);
-  check_outputs({{"session", session_path}, {"log", session.log.file}, {"plan", session.plan.path}},
-                {{"--out", out_path}});
+  refuse_overwrite(session_inputs(session), {{"--out", out_path}});
   const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
   DwellNavOptions opt;
   opt.output_interval = interval;
   opt.time_offset = session.time_offset;
+  opt.input = session.log.file;
   opt.strapdown.vertical_held = vertical == Vertical::Held;
   DwellNavigation run(timeline.dwells, session.site, opt);
   LogReader reader(session.log);

@@ -35,7 +35,7 @@ int cmd_plot_convergence(const std::vector<std::string>& args) {
     return 0;
   if (o.width_px < 200 || o.row_height_px < 80 || o.width_px > 20000 || o.row_height_px > 5000)
     throw UsageError("--width must be 200 to 20000 px and --row-height 80 to 5000 px");
-  check_outputs(
+  refuse_overwrite(
       {{"monitor file", monitor_path}, {"session", session_path}, {"sensor profile", sensor_path}},
       {{"--out", out_path}, {"gnuplot script", convergence_script_path(out_path)}});
   const MonitorSeries series = read_monitor(monitor_path);

@@ -79,7 +79,7 @@ int cmd_simulate(const std::vector<std::string>& args) {
   std::vector<std::pair<std::string, std::string>> outputs;
   for (const char* f : {"imu.csv", "session.ini", "plan.ini", "sensor.ini", "truth.json"})
     outputs.emplace_back("output", out_dir + "/" + f);
-  check_outputs({{"plan", spec.plan_path}, {"sensor profile", spec.data_sensor_path}}, outputs);
+  refuse_overwrite({{"plan", spec.plan_path}, {"sensor profile", spec.data_sensor_path}}, outputs);
   const auto t0 = std::chrono::steady_clock::now();
   const SimulatedSession sim = simulate_session(out_dir, spec);
   print_simulation(sim, spec, out_dir,

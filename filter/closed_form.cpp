@@ -75,7 +75,7 @@ std::array<bool, 6> ChannelSet::inputs() const {
 
 std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector<PlanDwell>& dwells,
                                          const Site& site, const Stage1Options& o,
-                                         double time_offset) {
+                                         double time_offset, const std::string& input) {
   if (!(o.arw > 0.0) || !(o.vrw > 0.0))
     throw std::invalid_argument(
         "stage 1 needs the gyro and accelerometer white-noise densities (arw, vrw) for its weights "
@@ -98,6 +98,7 @@ std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector
   DwellNavOptions nav_opt;
   nav_opt.output_interval = 0.0;
   nav_opt.time_offset = time_offset;
+  nav_opt.input = input;
   nav_opt.strapdown = o.strapdown;
   DwellNavigation nav(dwells, site, nav_opt);
   nav.run(source, [&](const DwellNavRow& r) {
@@ -457,7 +458,8 @@ ClosedFormReport run_closed_form(const Session& session, const Stage1Options& st
   r.stage1_options = stage1;
   const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
   LogReader reader(session.log);
-  r.stage1 = run_stage1(reader, timeline.dwells, session.site, stage1, session.time_offset);
+  r.stage1 = run_stage1(reader, timeline.dwells, session.site, stage1, session.time_offset,
+                        session.log.file);
   r.stage2_options.table = table;
   r.stage2 = solve_stage2(r.stage1, session.site, r.stage2_options);
   // The paper's literal closed forms, when the plan is its 8-orientation table.

@@ -74,7 +74,8 @@ struct EquivalentInputs {
 /// from the log) or std::invalid_argument (dwell shorter than min_dwell, no noise densities).
 std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector<PlanDwell>& dwells,
                                          const Site& site, const Stage1Options& options,
-                                         double time_offset = 0.0);
+                                         double time_offset = 0.0,
+                                         const std::string& input = "the log");
 
 /// The coefficients stage 2 solves for: the base families of the family table
 /// (models/coefficient_families.hpp), as catalog indices in catalog order.

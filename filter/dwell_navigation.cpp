@@ -44,8 +44,8 @@ void DwellNavigation::run(SampleSource& source,
     if (!active && start >= dwells_[d].t_start - eps && end <= dwells_[d].t_end + eps) {
       if (start > dwells_[d].t_start + 1.5 * s.dt) {
         std::ostringstream m;
-        m << "the log starts after dwell " << dwells_[d].index << " (" << dwells_[d].label
-          << ") begins at plan time " << dwells_[d].t_start << " s";
+        m << options_.input << ": the log starts after dwell " << dwells_[d].index << " ("
+          << dwells_[d].label << ") begins at plan time " << dwells_[d].t_start << " s";
         throw PlanMismatch(m.str());
       }
       nav.reset(NavState::at_rest(dwells_[d].C_b_n_known, site_));
@@ -72,9 +72,9 @@ void DwellNavigation::run(SampleSource& source,
     finish(t_last);
   if (d < dwells_.size()) {
     std::ostringstream m;
-    m << "the log ends at t = " << t_last << " s but dwell " << dwells_[d].index << " ("
-      << dwells_[d].label << ") needs data until " << dwells_[d].t_end + options_.time_offset
-      << " s: the plan does not match the data";
+    m << options_.input << ": the log ends at t = " << t_last << " s but dwell " << dwells_[d].index
+      << " (" << dwells_[d].label << ") needs data until "
+      << dwells_[d].t_end + options_.time_offset << " s: the plan does not match the data";
     throw PlanMismatch(m.str());
   }
 }

@@ -22,8 +22,9 @@ class PlanMismatch : public std::runtime_error {
 
 struct DwellNavOptions {
   StrapdownOptions strapdown;
-  double output_interval = 1.0;  // s between output rows (0: every sample)
-  double time_offset = 0.0;      // s: log time at which the plan starts
+  double output_interval = 1.0;   // s between output rows (0: every sample)
+  double time_offset = 0.0;       // s: log time at which the plan starts
+  std::string input = "the log";  // the log's name in messages (its file)
 };
 
 struct DwellNavRow {

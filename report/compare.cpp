@@ -77,7 +77,8 @@ std::vector<CoefficientComparison> compare_results(const ResultCoefficients& a,
   for (const auto& c : out) common = common || (a.count(c.name) && b.count(c.name));
   if (!common)
     throw std::invalid_argument(
-        "the two results have no coefficient of sinscal's catalog in common: nothing to compare");
+        "no known coefficient in both results (no coefficient name of sinscal's catalog): nothing "
+        "to compare");
   return out;
 }
 

@@ -284,7 +284,7 @@ fixed 2 "sensor.ini:$L: 'targets.gyro.bias'|must be positive" sim
 new kf-session-sensor-arw-negative; mini; set_key "$d/sensor.ini" arw "-0.001 deg/sqrt(h)"
 fixed 2 "sensor.ini:$L: 'gyro.arw'|must not be negative" kf
 new simulate-rate-negative; cp "$base/mini.ini" "$d/plan.ini"; cp "$fog" "$d/sensor.ini"
-fixed 1 "--rate must be positive" S simulate --plan plan.ini --sensor sensor.ini --out out/sim --rate -5
+fixed 1 "--rate must be above 0" S simulate --plan plan.ini --sensor sensor.ini --out out/sim --rate -5
 
 # --- session.ini (navigate, calibrate, plot-convergence) ----------------------------------------
 new session-latitude-90; mini; set_key "$d/session.ini" latitude "90 deg"
@@ -485,11 +485,11 @@ fixed 2 "session.ini:$L: 'log.columns': unknown key in [log]" nav
 
 # --- calibrate: options -----------------------------------------------------------------------
 new calibrate-unknown-method; mini
-fixed 1 "--method must be closed-form or kf" S calibrate --method magic --session session.ini --out out/r.json
+fixed 1 "--method' must be closed-form | kf, not 'magic'" S calibrate --method magic --session session.ini --out out/r.json
 new calibrate-channels-one; s8
-fixed 1 "--channels needs at least north,east" cf --channels north
+fixed 1 "--channels' must be a list with at least north,east" cf --channels north
 new calibrate-stream-closed-form; mini
-fixed 1 "--stream needs --method kf" cf --stream
+fixed 1 "--stream acts in --method kf only" cf --stream
 new calibrate-passes-zero; mini
 fixed 1 "--passes must be 1 to 20" kf --passes 0
 new calibrate-kf-without-sensor; mini; awk '!/^sensor/' "$d/session.ini" > "$d/s" && mv "$d/s" "$d/session.ini"
@@ -524,7 +524,49 @@ fixed 2 "monitor.jsonl:1:|unknown coefficient 'gyro.bias.w'" S plot-convergence 
 new plot-family-unknown; cp "$base/mini/monitor.jsonl" "$d/"
 fixed 2 "family 'gyro.colour'" S plot-convergence --monitor monitor.jsonl --out out/c.png --family gyro.colour
 new plot-width-too-small; cp "$base/mini/monitor.jsonl" "$d/"
-fixed 1 "--width must be at least 200" S plot-convergence --monitor monitor.jsonl --out out/c.png --width 10
+fixed 1 "--width must be 200 to 20000 px" S plot-convergence --monitor monitor.jsonl --out out/c.png --width 10
+
+# --- outputs and options (apps/, report/) -----------------------------------------------------
+# An output that is an input: refuse before writing (exit 1, naming the file).
+new calibrate-out-is-the-log; mini
+fixed 1 "imu.csv" S calibrate --method closed-form --session session.ini --out imu.csv
+new calibrate-out-is-session-ini; mini
+fixed 1 "session.ini" S calibrate --method kf --session session.ini --out session.ini
+new calibrate-monitor-is-the-log; mini
+fixed 1 "imu.csv" S calibrate --method kf --session session.ini --out out/r.json --monitor imu.csv
+new navigate-out-is-the-log; mini
+fixed 1 "imu.csv" S navigate --session session.ini --out imu.csv
+new plot-out-is-the-monitor; cp "$base/mini/monitor.jsonl" "$d/"
+fixed 1 "monitor.jsonl" S plot-convergence --monitor monitor.jsonl --out monitor.jsonl
+# A batch: x/a, y/a and z/a-2 must give three result files (y/a and z/a-2 both write a-2.json).
+new batch-result-names-collide
+for s in x/a y/a z/a-2; do mkdir -p "$d/runs/$s"; cp "$base"/mini/{session.ini,plan.ini,sensor.ini,truth.json,imu.csv} "$d/runs/$s/"; done
+POST='test "$(ls out/batch/*.json | wc -l)" -eq 3'
+fixed 0 "" S calibrate --method closed-form --session runs/x/a --session runs/y/a --session runs/z/a-2 --out out/batch
+# A monitor file name with a newline must not put a command into the gnuplot script.
+new plot-monitor-name-with-newline; nl_name=$'m\nsystem "touch pwned"\n#.jsonl'
+cp "$base/mini/monitor.jsonl" "$d/$nl_name"
+POST='! grep -q "^system" out/conv.gp && ! test -e pwned'
+fixed "0,1,2" "" S plot-convergence --monitor "$nl_name" --out out/conv.png
+# compare: a negative sigma is not a result (exit 2 naming the file); two files without a single
+# known coefficient name have nothing in common (exit 2).
+new compare-negative-sigma; cp "$base/s8/cf.json" "$d/a.json"
+sed '0,/"sigma": [0-9.e-]*/s//"sigma": -1/' "$base/s8/cf.json" > "$d/b.json"
+fixed 2 "b.json|sigma" S compare a.json b.json --max-sigma 3
+new compare-no-known-coefficients
+echo '{"coefficients": {"foo": {"value": 1, "sigma": 1}}}' > "$d/a.json"; cp "$d/a.json" "$d/b.json"
+fixed 2 "no known coefficient" S compare a.json b.json --max-sigma 3
+# Options a method does not use must be refused (exit 1), not silently ignored.
+new kf-arw-vrw-ignored; mini
+fixed 1 "--arw" kf --arw 0.5 --vrw 50
+new closed-form-static-from-data-ignored; s8
+fixed 1 "--static-from" cf --static-from data
+# A plan/log mismatch in navigate and the closed form must name the log (the Kalman filter does).
+new navigate-mismatch-names-the-log; mini; head -n 400 "$base/mini/imu.csv" > "$d/imu.csv"
+fixed 2 "imu.csv|plan does not match the data" nav
+new closed-form-mismatch-names-the-log; mini; head -n 400 "$base/mini/imu.csv" > "$d/imu.csv"
+fixed 2 "imu.csv|plan does not match the data" cf
+
 
 # =============================================================================================
 # KNOWN: bad input still accepted or mishandled; the fix belongs to apps/, filter/ or the result
@@ -561,46 +603,6 @@ new known-closed-form-clipped; sed 's/^range = 20 g/range = 0.6 g/' "$fog" > "$d
 S simulate --plan "$src/config/plans/seed8.ini" --sensor "$d/clip.ini" --out "$d/s" --rate 10 > /dev/null
 rm "$d/clip.ini"
 known 2 "imu.csv:|saturated" S calibrate --method closed-form --session s/session.ini --out out/r.json
-# An output that is an input: refuse before writing (exit 1, naming the file).
-new known-calibrate-out-is-the-log; mini
-known 1 "imu.csv" S calibrate --method closed-form --session session.ini --out imu.csv
-new known-calibrate-out-is-session-ini; mini
-known 1 "session.ini" S calibrate --method kf --session session.ini --out session.ini
-new known-calibrate-monitor-is-the-log; mini
-known 1 "imu.csv" S calibrate --method kf --session session.ini --out out/r.json --monitor imu.csv
-new known-navigate-out-is-the-log; mini
-known 1 "imu.csv" S navigate --session session.ini --out imu.csv
-new known-plot-out-is-the-monitor; cp "$base/mini/monitor.jsonl" "$d/"
-known 1 "monitor.jsonl" S plot-convergence --monitor monitor.jsonl --out monitor.jsonl
-# A batch: x/a, y/a and z/a-2 must give three result files (y/a and z/a-2 both write a-2.json).
-new known-batch-result-names-collide
-for s in x/a y/a z/a-2; do mkdir -p "$d/runs/$s"; cp "$base"/mini/{session.ini,plan.ini,sensor.ini,truth.json,imu.csv} "$d/runs/$s/"; done
-POST='test "$(ls out/batch/*.json | wc -l)" -eq 3'
-known 0 "" S calibrate --method closed-form --session runs/x/a --session runs/y/a --session runs/z/a-2 --out out/batch
-# A monitor file name with a newline must not put a command into the gnuplot script.
-new known-plot-monitor-name-with-newline; nl_name=$'m\nsystem "touch pwned"\n#.jsonl'
-cp "$base/mini/monitor.jsonl" "$d/$nl_name"
-POST='! grep -q "^system" out/conv.gp && ! test -e pwned'
-known "0,1,2" "" S plot-convergence --monitor "$nl_name" --out out/conv.png
-# compare: a negative sigma is not a result (exit 2 naming the file); two files without a single
-# known coefficient name have nothing in common (exit 2).
-new known-compare-negative-sigma; cp "$base/s8/cf.json" "$d/a.json"
-sed '0,/"sigma": [0-9.e-]*/s//"sigma": -1/' "$base/s8/cf.json" > "$d/b.json"
-known 2 "b.json|sigma" S compare a.json b.json --max-sigma 3
-new known-compare-no-known-coefficients
-echo '{"coefficients": {"foo": {"value": 1, "sigma": 1}}}' > "$d/a.json"; cp "$d/a.json" "$d/b.json"
-known 2 "no known coefficient" S compare a.json b.json --max-sigma 3
-# Options a method does not use must be refused (exit 1), not silently ignored.
-new known-kf-arw-vrw-ignored; mini
-known 1 "--arw" kf --arw 0.5 --vrw 50
-new known-closed-form-static-from-data-ignored; s8
-known 1 "--static-from" cf --static-from data
-# A plan/log mismatch in navigate and the closed form must name the log (the Kalman filter does).
-new known-navigate-mismatch-names-the-log; mini; head -n 400 "$base/mini/imu.csv" > "$d/imu.csv"
-known 2 "imu.csv|plan does not match the data" nav
-new known-closed-form-mismatch-names-the-log; mini; head -n 400 "$base/mini/imu.csv" > "$d/imu.csv"
-known 2 "imu.csv|plan does not match the data" cf
-
 echo
 echo "bad-input corpus: $fixed_ok of $((fixed_ok + fixed_failed)) cases pass, $controls_ok of" \
   "$((controls_ok + controls_failed)) controls pass; KNOWN: $known_open not fixed yet," \
