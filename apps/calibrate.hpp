@@ -27,6 +27,7 @@ struct CalibrateOptions {
   std::string lever_arm_reference;  // x | y | z | empty
   bool no_table_angles = false, no_zero_velocity = false, no_position = false;
   bool no_motion_zero_velocity = false, stream = false;
+  bool force = false;  // run even when the plausibility gate fails (recorded in the result)
   int passes = 1;
   std::string terms;
 };

@@ -4,9 +4,11 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "apps/calibrate.hpp"
 #include "apps/print.hpp"
+#include "filter/plausibility.hpp"
 #include "models/units.hpp"
 #include "report/monitor.hpp"
 #include "report/output.hpp"
@@ -30,12 +32,39 @@ CalibratorOptions kalman_options(const CalibrateOptions& o, const Session& sessi
   } catch (const std::invalid_argument& e) {
     throw UsageError(std::string("--terms: ") + e.what());
   }
-  if (!o.lever_arm_reference.empty()) set_lever_arm_reference(ko.layout, o.lever_arm_reference);
+  if (!o.lever_arm_reference.empty()) {
+    if (!ko.layout.on("accel.lever_arm"))
+      throw UsageError(
+          "--lever-arm-reference: the lever arms are not estimated (the profile or "
+          "--terms leaves them out)");
+    set_lever_arm_reference(ko.layout, o.lever_arm_reference);
+  }
   ko.static_from = o.static_from;
   ko.detector.window = o.static_window;
   ko.detector.min_duration = o.static_min;
   ko.detector.rate_threshold = o.static_rate * units::deg_per_s;
   return ko;
+}
+
+// The plausibility gate (filter/plausibility.hpp) before any estimate: a failure stops with the
+// checks' messages (exit 2) unless --force, which runs anyway and records them in the result.
+// Standard input cannot be read twice: a streamed log is checked by the filter's own alarms.
+PlausibilityReport plausibility_gate(const CalibrateOptions& o, const Session& session,
+                                     const PlausibilityLimits& limits) {
+  if (o.stream) return {};
+  const bool dwells_from_plan =
+      o.method != Method::Kf || o.static_from == CalibratorOptions::StaticFrom::Plan;
+  PlausibilityReport report = check_plausibility(session, limits, dwells_from_plan);
+  enforce(report, o.force);
+  return report;
+}
+
+void record_gate(nlohmann::ordered_json& sections, const PlausibilityReport& report) {
+  if (report.checks.empty()) return;
+  nlohmann::ordered_json checks = nlohmann::ordered_json::array();
+  for (const auto& c : report.checks)
+    checks.push_back({{"check", c.name}, {"passed", c.passed}, {"detail", c.detail}});
+  sections["plausibility"] = {{"passed", report.passed()}, {"checks", checks}};
 }
 
 SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
@@ -46,6 +75,8 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
                      ": --method kf needs the session's sensor profile ([session] sensor =)");
   const SensorProfile profile = SensorProfile::load(session.sensor_file);
   const CalibratorOptions ko = kalman_options(o, session, profile);
+  const PlausibilityReport gate =
+      plausibility_gate(o, session, PlausibilityLimits::from_profile(&profile));
   KalmanRunOptions run;
   run.skip_bad_samples = o.on_bad_sample == OnBadSample::Skip;
   run.passes = o.passes;
@@ -77,7 +108,9 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const ResultCoefficients coefficients = result_coefficients(kr);
-  write_result_json(out_path, coefficients, result_sections(kr));
+  auto sections = result_sections(kr);
+  record_gate(sections, gate);
+  write_result_json(out_path, coefficients, sections);
   const ResultCoefficients truth = load_truth(session, kr.accel_triad_frame, o.lever_arm_reference);
   SessionSummary row{session.path,
                      session.name,
@@ -108,11 +141,14 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
   o.model = co.model;
   o.channels = co.channels;
   o.min_dwell = co.min_dwell;
+  std::optional<SensorProfile> profile;
   if (!session.sensor_file.empty()) {
-    const SensorProfile p = SensorProfile::load(session.sensor_file);
-    o.arw = p.noise.gyro.white;
-    o.vrw = p.noise.accel.white;
+    profile = SensorProfile::load(session.sensor_file);
+    o.arw = profile->noise.gyro.white;
+    o.vrw = profile->noise.accel.white;
   }
+  const PlausibilityLimits limits = PlausibilityLimits::from_profile(profile ? &*profile : nullptr);
+  PlausibilityReport gate = plausibility_gate(co, session, limits);
   if (co.arw > 0.0) o.arw = co.arw * units::deg_per_sqrt_h;
   if (co.vrw > 0.0) o.vrw = co.vrw * units::ug_per_sqrt_hz;
   const auto t0 = std::chrono::steady_clock::now();
@@ -120,8 +156,12 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
       run_closed_form(session, o, TableAttitudeError{co.table_sigma * units::arcsec});
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  gate.checks.push_back(check_stage1_fit(r.stage1, limits, session.log.file));
+  enforce(gate, co.force);
   const ResultCoefficients coefficients = result_coefficients(r);
-  write_result_json(out_path, coefficients, result_sections(r));
+  auto sections = result_sections(r);
+  record_gate(sections, gate);
+  write_result_json(out_path, coefficients, sections);
   const ResultCoefficients truth = load_truth(session);
   SessionSummary row{session.path, session.name,
                      out_path,     "ok",

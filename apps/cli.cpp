@@ -135,7 +135,6 @@ std::string name_of(const ChannelSet& c) {
 namespace sinscal {
 
 using cli::choose;
-using cli::invalid;
 namespace po = boost::program_options;
 
 void validate(boost::any& v, const std::vector<std::string>& values,

@@ -20,6 +20,8 @@ void add_options(po::options_description& d, CalibrateOptions& o) {
   d.add_options()
       ("method", po::value(&o.method)->default_value(Method::ClosedForm, "closed-form"),
        "closed-form | kf (error-state Kalman filter)")
+      ("force", "run even when the plausibility gate fails (static gravity and Earth rate, gravity "
+       "direction against the plan, saturation, stage-1 fit); the failed checks go in the result")
       ("table-sigma", po::value(&o.table_sigma)->default_value(2.5),
        "table attitude error per orientation and axis, 1-sigma [arcsec]")
       ("stage1", po::value(&o.stage1)->default_value(Stage1Method::Fit, "fit"),
@@ -109,6 +111,11 @@ void check_method_options(const po::variables_map& vm, const CalibrateOptions& o
   if (!o.lever_arm_reference.empty() && o.lever_arm_reference != "x" &&
       o.lever_arm_reference != "y" && o.lever_arm_reference != "z")
     throw UsageError("--lever-arm-reference must be x, y or z");
+  if (!o.lever_arm_reference.empty() && !(o.no_motion_zero_velocity && o.no_position))
+    throw UsageError(
+        "--lever-arm-reference is for zero velocity at rest only (--no-motion-zero-velocity "
+        "--no-position), where a common shift of the lever arms is unobservable; otherwise the "
+        "arms are observable and fixing one would bias the others");
   if (!o.terms.empty()) try {  // checked before any session runs
       StateLayoutOptions check;
       apply_terms(check, o.terms);
@@ -202,6 +209,7 @@ int cmd_calibrate(const std::vector<std::string>& args) {
       "Batch (several sessions): OUT_DIR/NAME.json per session and OUT_DIR/summary.csv.");
   if (!vm) return 0;
   o.stream = vm->count("stream") > 0;
+  o.force = vm->count("force") > 0;
   o.no_position = vm->count("no-position") > 0;
   o.no_motion_zero_velocity = vm->count("no-motion-zero-velocity") > 0;
   o.no_table_angles = vm->count("no-table-angles") > 0;

@@ -18,7 +18,9 @@ const char* kUsage =
     "             (closed-form method or Kalman filter)\n"
     "  compare    two results side by side, difference over its sigma\n"
     "  plot-convergence\n"
-    "             estimates and sigmas over time from a Kalman monitor file, to PNG (gnuplot)\n";
+    "             estimates and sigmas over time from a Kalman monitor file, to PNG (gnuplot)\n"
+    "  diagnose   what the calibrated model misses on a table session: the effect, its\n"
+    "             magnitude and the gain of adding it (model discovery)\n";
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -35,6 +37,7 @@ int main(int argc, char** argv) {
     if (command == "calibrate") return cmd_calibrate(args);
     if (command == "compare") return cmd_compare(args);
     if (command == "plot-convergence") return cmd_plot_convergence(args);
+    if (command == "diagnose") return cmd_diagnose(args);
     std::cerr << "sinscal: unknown command '" << command << "'\n" << kUsage;
     return kUsageError;
   } catch (const po::error& e) {

@@ -160,6 +160,65 @@ AllanFit fit_allan(const std::vector<AllanPoint>& pts, bool fit_quantization) {
   return best;
 }
 
+namespace {
+
+// Cluster sizes m (in samples) up to max_fraction of the record: octaves, or log-spaced.
+std::vector<std::size_t> cluster_sizes(std::size_t n, const AllanOptions& o) {
+  const auto m_max = static_cast<std::size_t>(o.max_fraction * static_cast<double>(n));
+  std::vector<std::size_t> ms;
+  if (o.points_per_decade == 0) {
+    for (std::size_t m = 1; m <= m_max; m *= 2) ms.push_back(m);
+  } else {
+    for (int k = 0;; ++k) {
+      const auto m = static_cast<std::size_t>(
+          std::llround(std::pow(10.0, static_cast<double>(k) / o.points_per_decade)));
+      if (m > m_max) break;
+      if (ms.empty() || m != ms.back()) ms.push_back(m);
+    }
+  }
+  if (ms.size() < 2) throw AllanError("Allan deviation: the record is too short");
+  return ms;
+}
+
+// The term of `fit` with the largest Allan variance at tau.
+AllanTerm dominant_term(const AllanFit& fit, double tau) {
+  double top = -1.0;
+  AllanTerm dominant = AllanTerm::White;
+  for (AllanTerm t : {AllanTerm::Quantization, AllanTerm::White, AllanTerm::BiasInstability,
+                      AllanTerm::RandomWalk}) {
+    const double v = fit.term_variance(t, tau);
+    if (v > top) {
+      top = v;
+      dominant = t;
+    }
+  }
+  return dominant;
+}
+
+// Fit with white-noise degrees of freedom, then with those of each point's dominant term. A
+// record the model does not describe (a drift, an exact sequence) keeps white-noise edf.
+AllanFit fit_with_dominant_edf(std::vector<AllanPoint>& pts, double N, bool fit_quantization) {
+  try {
+    AllanFit fit = fit_allan(pts, fit_quantization);
+    for (int pass = 0; pass < 2; ++pass) {
+      for (auto& p : pts) {
+        p.dominant = dominant_term(fit, p.tau);
+        p.edf = edf(p.dominant, N, static_cast<double>(p.m));
+      }
+      fit = fit_allan(pts, fit_quantization);
+    }
+    return fit;
+  } catch (const AllanError&) {
+    for (auto& p : pts) {
+      p.dominant = AllanTerm::White;
+      p.edf = edf(p.dominant, N, static_cast<double>(p.m));
+    }
+    return AllanFit{};
+  }
+}
+
+}  // namespace
+
 std::vector<AllanPoint> allan_deviation(const std::vector<double>& rates, double tau0,
                                         const AllanOptions& o, AllanFit* fit_out) {
   if (!(tau0 > 0.0)) throw AllanError("Allan deviation: the sample interval must be positive");
@@ -180,23 +239,9 @@ std::vector<AllanPoint> allan_deviation(const std::vector<double>& rates, double
   theta[0] = 0.0;
   for (std::size_t k = 0; k < n; ++k) theta[k + 1] = theta[k] + (rates[k] - mean) * tau0;
 
-  const auto m_max = static_cast<std::size_t>(o.max_fraction * static_cast<double>(n));
-  std::vector<std::size_t> ms;
-  if (o.points_per_decade == 0) {
-    for (std::size_t m = 1; m <= m_max; m *= 2) ms.push_back(m);
-  } else {
-    for (int k = 0;; ++k) {
-      const auto m = static_cast<std::size_t>(
-          std::llround(std::pow(10.0, static_cast<double>(k) / o.points_per_decade)));
-      if (m > m_max) break;
-      if (ms.empty() || m != ms.back()) ms.push_back(m);
-    }
-  }
-  if (ms.size() < 2) throw AllanError("Allan deviation: the record is too short");
-
   std::vector<AllanPoint> pts;
   std::vector<double> avar;
-  for (std::size_t m : ms) {
+  for (std::size_t m : cluster_sizes(n, o)) {
     double sum = 0.0;
     for (std::size_t k = 0; k + 2 * m < N; ++k) {
       const double d = theta[k + 2 * m] - 2.0 * theta[k + m] + theta[k];
@@ -212,33 +257,7 @@ std::vector<AllanPoint> allan_deviation(const std::vector<double>& rates, double
     p.edf = edf(p.dominant, static_cast<double>(N), static_cast<double>(m));
     pts.push_back(p);
   }
-  // Fit with white-noise degrees of freedom, then with those of each point's dominant term. A
-  // record the model does not describe (a drift, an exact sequence) keeps white-noise edf.
-  AllanFit fit;
-  try {
-    fit = fit_allan(pts, o.fit_quantization);
-    for (int pass = 0; pass < 2; ++pass) {
-      for (auto& p : pts) {
-        double top = -1.0;
-        for (AllanTerm t : {AllanTerm::Quantization, AllanTerm::White, AllanTerm::BiasInstability,
-                            AllanTerm::RandomWalk}) {
-          const double v = fit.term_variance(t, p.tau);
-          if (v > top) {
-            top = v;
-            p.dominant = t;
-          }
-        }
-        p.edf = edf(p.dominant, static_cast<double>(N), static_cast<double>(p.m));
-      }
-      fit = fit_allan(pts, o.fit_quantization);
-    }
-  } catch (const AllanError&) {
-    fit = AllanFit{};
-    for (auto& p : pts) {
-      p.dominant = AllanTerm::White;
-      p.edf = edf(p.dominant, static_cast<double>(N), static_cast<double>(p.m));
-    }
-  }
+  const AllanFit fit = fit_with_dominant_edf(pts, static_cast<double>(N), o.fit_quantization);
   for (std::size_t i = 0; i < pts.size(); ++i) set_bounds(pts[i], avar[i], o.confidence);
   if (fit_out) *fit_out = fit;
   return pts;

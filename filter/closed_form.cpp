@@ -73,9 +73,9 @@ std::array<bool, 6> ChannelSet::inputs() const {
   return in;
 }
 
-std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector<PlanDwell>& dwells,
-                                         const Site& site, const Stage1Options& o,
-                                         double time_offset, const std::string& input) {
+namespace {
+
+void check_stage1(const std::vector<PlanDwell>& dwells, const Stage1Options& o) {
   if (!(o.arw > 0.0) || !(o.vrw > 0.0))
     throw std::invalid_argument(
         "stage 1 needs the gyro and accelerometer white-noise densities (arw, vrw) for its weights "
@@ -85,8 +85,15 @@ std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector
       throw std::invalid_argument("dwell " + std::to_string(d.index) + " (" + d.label + ") lasts " +
                                   std::to_string(d.t_end - d.t_start) + " s, shorter than the " +
                                   std::to_string(o.min_dwell) + " s stage 1 needs");
+}
+
+// Navigates through every dwell and accumulates, per dwell and channel row, the sums of the
+// one-step error-dynamics residuals (delta = x1 - Phi x0) and of the input rows (Gamma).
+std::map<int, DwellAccumulator> accumulate_dwells(SampleSource& source,
+                                                  const std::vector<PlanDwell>& dwells,
+                                                  const Site& site, const Stage1Options& o,
+                                                  double time_offset, const std::string& input) {
   const Earth& earth = Earth::wgs84();
-  const double R_N = earth.radius_meridian(site.lat_rad) + site.h_m;
   const InsErrorModel model = InsErrorModel::at(site, o.model, earth);
   const Eigen::Vector3d f_n = -earth.gravity_n(site.lat_rad, site.h_m);
   const std::vector<int> rows = rows_of(o.channels);
@@ -144,95 +151,115 @@ std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector
     a.prev = r.error;
   });
 
+  return acc;
+}
+
+// The paper's eq. 5 (uncoupled Schuler solutions at one time t).
+void point_inputs(const DwellAccumulator& a, const Stage1Options& o, const Site& site,
+                  EquivalentInputs& e) {
+  const Earth& earth = Earth::wgs84();
   const double g = earth.gravity_n(site.lat_rad, site.h_m).norm();
+  const double R_N = earth.radius_meridian(site.lat_rad) + site.h_m;
   const double R_E = earth.radius_transverse(site.lat_rad) + site.h_m;
+  const NavError& x = a.at_point;
+  const double t = x.t;
+  auto channel = [&](double R, double& cot_half, double& ws) {
+    ws = std::sqrt(g / R);
+    cot_half = 0.5 * ws * std::sin(ws * t) / (1.0 - std::cos(ws * t));
+  };
+  double k_n, ws_n, k_e, ws_e;
+  channel(R_N, k_n, ws_n);
+  channel(R_E, k_e, ws_e);
+  const double dtheta = x.phi_n.y(), dgamma = x.phi_n.x();
+  // north: dfn = -g/2 dtheta + k dVn;  dwe(paper) = ws^2/(2g) dVn + k dtheta
+  e.u(kDfN) = -0.5 * g * dtheta + k_n * x.dv_n.x();
+  e.u(kDwE) = -(0.5 * ws_n * ws_n / g * x.dv_n.x() + k_n * dtheta);
+  // east: dfe = g/2 dgamma + k dVe;  dwn(paper) = -ws^2/(2g) dVe + k dgamma
+  e.u(kDfE) = 0.5 * g * dgamma + k_e * x.dv_n.y();
+  e.u(kDwN) = -(-0.5 * ws_e * ws_e / g * x.dv_n.y() + k_e * dgamma);
+  e.u(kDfD) = x.dv_n.z() / t;
+  e.u(kDwD) = -x.phi_n.z() / t;
+  // Sigma: the errors at t carry random walks of variance VRW^2 t and ARW^2 t.
+  const double vv = o.vrw * o.vrw * t, va = o.arw * o.arw * t;
+  e.cov(kDfN, kDfN) = 0.25 * g * g * va + k_n * k_n * vv;
+  e.cov(kDwE, kDwE) = std::pow(0.5 * ws_n * ws_n / g, 2) * vv + k_n * k_n * va;
+  e.cov(kDfN, kDwE) = e.cov(kDwE, kDfN) = -(-0.5 * g * k_n * va + k_n * 0.5 * ws_n * ws_n / g * vv);
+  e.cov(kDfE, kDfE) = 0.25 * g * g * va + k_e * k_e * vv;
+  e.cov(kDwN, kDwN) = std::pow(0.5 * ws_e * ws_e / g, 2) * vv + k_e * k_e * va;
+  e.cov(kDfE, kDwN) = e.cov(kDwN, kDfE) = -(0.5 * g * k_e * va - k_e * 0.5 * ws_e * ws_e / g * vv);
+  e.cov(kDfD, kDfD) = o.vrw * o.vrw / t;
+  e.cov(kDwD, kDwD) = o.arw * o.arw / t;
+}
+
+// Weighted least squares of the inputs over the whole dwell, with the residual chi-square.
+void fit_inputs(const DwellAccumulator& a, const Stage1Options& o, EquivalentInputs& e) {
   const std::array<bool, 6> sel = o.channels.inputs();
+  const double T = e.duration;
+  Matrix6d N = Matrix6d::Zero();
+  Vector6d b = Vector6d::Zero();
+  const double h = T / static_cast<double>(std::max<std::size_t>(a.steps, 1));
+  auto weight = [&](int row) {
+    return 1.0 / ((is_velocity_row(row) ? o.vrw * o.vrw : o.arw * o.arw) * h);
+  };
+  for (auto& [row, s] : a.rows) {
+    N += weight(row) * s.gg;
+    b += weight(row) * s.gd;
+  }
+  std::vector<int> idx;
+  for (int i = 0; i < 6; ++i)
+    if (sel[i]) idx.push_back(i);
+  const int m = static_cast<int>(idx.size());
+  Eigen::MatrixXd Ns(m, m);
+  Eigen::VectorXd bs(m);
+  for (int i = 0; i < m; ++i) {
+    bs(i) = b(idx[i]);
+    for (int j = 0; j < m; ++j) Ns(i, j) = N(idx[i], idx[j]);
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(Ns);
+  const Eigen::VectorXd us = ldlt.solve(bs);
+  const Eigen::MatrixXd cs = ldlt.solve(Eigen::MatrixXd::Identity(m, m));
+  for (int i = 0; i < m; ++i) {
+    e.u(idx[i]) = us(i);
+    for (int j = 0; j < m; ++j) e.cov(idx[i], idx[j]) = cs(i, j);
+  }
+  double chi2 = 0.0, ssv = 0.0, ssa = 0.0;
+  std::size_t nv = 0, na = 0;
+  for (auto& [row, s] : a.rows) {
+    const double rss = std::max(0.0, s.dd - 2.0 * e.u.dot(s.gd) + e.u.dot(s.gg * e.u));
+    chi2 += weight(row) * rss;
+    if (is_velocity_row(row)) {
+      ssv += rss;
+      nv += a.steps;
+    } else {
+      ssa += rss;
+      na += a.steps;
+    }
+  }
+  e.rms_velocity = nv ? std::sqrt(ssv / static_cast<double>(nv)) : 0.0;
+  e.rms_attitude = na ? std::sqrt(ssa / static_cast<double>(na)) : 0.0;
+  const double dof = static_cast<double>(nv + na) - m;
+  e.chi2_per_dof = dof > 0 ? chi2 / dof : 0.0;
+}
+
+}  // namespace
+
+std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector<PlanDwell>& dwells,
+                                         const Site& site, const Stage1Options& o,
+                                         double time_offset, const std::string& input) {
+  check_stage1(dwells, o);
+  const std::map<int, DwellAccumulator> acc =
+      accumulate_dwells(source, dwells, site, o, time_offset, input);
   std::vector<EquivalentInputs> out;
-  for (auto& [index, a] : acc) {
+  for (const auto& [index, a] : acc) {
     EquivalentInputs e;
     e.dwell = a.dwell;
     e.duration = a.prev.t;
     e.samples = a.steps;
-    e.estimated = sel;
-    const double T = e.duration;
-    if (o.method == Stage1Method::Point) {
-      // The paper's eq. 5 (uncoupled Schuler solutions at one time t).
-      const NavError& x = a.at_point;
-      const double t = x.t;
-      auto channel = [&](double R, double& cot_half, double& ws) {
-        ws = std::sqrt(g / R);
-        cot_half = 0.5 * ws * std::sin(ws * t) / (1.0 - std::cos(ws * t));
-      };
-      double k_n, ws_n, k_e, ws_e;
-      channel(R_N, k_n, ws_n);
-      channel(R_E, k_e, ws_e);
-      const double dtheta = x.phi_n.y(), dgamma = x.phi_n.x();
-      // north: dfn = -g/2 dtheta + k dVn;  dwe(paper) = ws^2/(2g) dVn + k dtheta
-      e.u(kDfN) = -0.5 * g * dtheta + k_n * x.dv_n.x();
-      e.u(kDwE) = -(0.5 * ws_n * ws_n / g * x.dv_n.x() + k_n * dtheta);
-      // east: dfe = g/2 dgamma + k dVe;  dwn(paper) = -ws^2/(2g) dVe + k dgamma
-      e.u(kDfE) = 0.5 * g * dgamma + k_e * x.dv_n.y();
-      e.u(kDwN) = -(-0.5 * ws_e * ws_e / g * x.dv_n.y() + k_e * dgamma);
-      e.u(kDfD) = x.dv_n.z() / t;
-      e.u(kDwD) = -x.phi_n.z() / t;
-      // Sigma: the errors at t carry random walks of variance VRW^2 t and ARW^2 t.
-      const double vv = o.vrw * o.vrw * t, va = o.arw * o.arw * t;
-      e.cov(kDfN, kDfN) = 0.25 * g * g * va + k_n * k_n * vv;
-      e.cov(kDwE, kDwE) = std::pow(0.5 * ws_n * ws_n / g, 2) * vv + k_n * k_n * va;
-      e.cov(kDfN, kDwE) = e.cov(kDwE, kDfN) =
-          -(-0.5 * g * k_n * va + k_n * 0.5 * ws_n * ws_n / g * vv);
-      e.cov(kDfE, kDfE) = 0.25 * g * g * va + k_e * k_e * vv;
-      e.cov(kDwN, kDwN) = std::pow(0.5 * ws_e * ws_e / g, 2) * vv + k_e * k_e * va;
-      e.cov(kDfE, kDwN) = e.cov(kDwN, kDfE) =
-          -(0.5 * g * k_e * va - k_e * 0.5 * ws_e * ws_e / g * vv);
-      e.cov(kDfD, kDfD) = o.vrw * o.vrw / t;
-      e.cov(kDwD, kDwD) = o.arw * o.arw / t;
-    } else {
-      Matrix6d N = Matrix6d::Zero();
-      Vector6d b = Vector6d::Zero();
-      const double h = T / static_cast<double>(std::max<std::size_t>(a.steps, 1));
-      auto weight = [&](int row) {
-        return 1.0 / ((is_velocity_row(row) ? o.vrw * o.vrw : o.arw * o.arw) * h);
-      };
-      for (auto& [row, s] : a.rows) {
-        N += weight(row) * s.gg;
-        b += weight(row) * s.gd;
-      }
-      std::vector<int> idx;
-      for (int i = 0; i < 6; ++i)
-        if (sel[i]) idx.push_back(i);
-      const int m = static_cast<int>(idx.size());
-      Eigen::MatrixXd Ns(m, m);
-      Eigen::VectorXd bs(m);
-      for (int i = 0; i < m; ++i) {
-        bs(i) = b(idx[i]);
-        for (int j = 0; j < m; ++j) Ns(i, j) = N(idx[i], idx[j]);
-      }
-      const Eigen::LDLT<Eigen::MatrixXd> ldlt(Ns);
-      const Eigen::VectorXd us = ldlt.solve(bs);
-      const Eigen::MatrixXd cs = ldlt.solve(Eigen::MatrixXd::Identity(m, m));
-      for (int i = 0; i < m; ++i) {
-        e.u(idx[i]) = us(i);
-        for (int j = 0; j < m; ++j) e.cov(idx[i], idx[j]) = cs(i, j);
-      }
-      double chi2 = 0.0, ssv = 0.0, ssa = 0.0;
-      std::size_t nv = 0, na = 0;
-      for (auto& [row, s] : a.rows) {
-        const double rss = std::max(0.0, s.dd - 2.0 * e.u.dot(s.gd) + e.u.dot(s.gg * e.u));
-        chi2 += weight(row) * rss;
-        if (is_velocity_row(row)) {
-          ssv += rss;
-          nv += a.steps;
-        } else {
-          ssa += rss;
-          na += a.steps;
-        }
-      }
-      e.rms_velocity = nv ? std::sqrt(ssv / static_cast<double>(nv)) : 0.0;
-      e.rms_attitude = na ? std::sqrt(ssa / static_cast<double>(na)) : 0.0;
-      const double dof = static_cast<double>(nv + na) - m;
-      e.chi2_per_dof = dof > 0 ? chi2 / dof : 0.0;
-    }
+    e.estimated = o.channels.inputs();
+    if (o.method == Stage1Method::Point)
+      point_inputs(a, o, site, e);
+    else
+      fit_inputs(a, o, e);
     out.push_back(e);
   }
   return out;
@@ -248,17 +275,32 @@ std::vector<int> stage2_parameters() {
 
 Eigen::Matrix<double, 6, Eigen::Dynamic> equivalent_input_map(const Eigen::Matrix3d& C,
                                                               const Site& site,
-                                                              const std::vector<int>& parameters) {
+                                                              const std::vector<int>& parameters,
+                                                              double t) {
   const Earth& earth = Earth::wgs84();
   KinematicSample k;
   k.f_ib_b = -(C.transpose() * earth.gravity_n(site.lat_rad, site.h_m));
   k.omega_ib_b = C.transpose() * earth.omega_ie_n(site.lat_rad);
+  k.t = t;
   ImuErrorModel::JacobianColumns J;
   ImuErrorModel{}.jacobian(k, Eigen::Vector3d::Zero(), parameters, J);
   Eigen::Matrix<double, 6, Eigen::Dynamic> H(6, J.cols());
   H.middleRows<3>(ins_input::kAccel.index) = C * J.bottomRows<3>();
   H.middleRows<3>(ins_input::kGyro.index) = C * J.topRows<3>();
   return H;
+}
+
+Matrix6d stage2_input_covariance(const EquivalentInputs& in, const Site& site,
+                                 const TableAttitudeError& table) {
+  const Earth& earth = Earth::wgs84();
+  const Eigen::Vector3d f_n = -earth.gravity_n(site.lat_rad, site.h_m);
+  const Eigen::Vector3d w_ie = earth.omega_ie_n(site.lat_rad);
+  // A table attitude error eps (truth relative to the plan) aliases into the inputs as
+  // df_n += f_n x eps, dw_n += omega_ie_n x eps.
+  Eigen::Matrix<double, 6, 3> S;
+  S.middleRows<3>(ins_input::kAccel.index) = skew(f_n);
+  S.middleRows<3>(ins_input::kGyro.index) = skew(w_ie);
+  return in.cov + S * table.covariance_n() * S.transpose();
 }
 
 Eigen::VectorXd parameter_vector(const ImuErrorModel& model, const std::vector<int>& parameters) {
@@ -282,19 +324,11 @@ struct NormalEquations {
 NormalEquations stage2_normal_equations(const std::vector<EquivalentInputs>& inputs,
                                         const Site& site, const Stage2Options& o) {
   const int n = static_cast<int>(o.parameters.size());
-  const Earth& earth = Earth::wgs84();
-  const Eigen::Vector3d f_n = -earth.gravity_n(site.lat_rad, site.h_m);
-  const Eigen::Vector3d w_ie = earth.omega_ie_n(site.lat_rad);
-  // A table attitude error eps (truth relative to the plan) aliases into the inputs as
-  // df_n += f_n x eps, dw_n += omega_ie_n x eps.
-  Eigen::Matrix<double, 6, 3> S;
-  S.middleRows<3>(ins_input::kAccel.index) = skew(f_n);
-  S.middleRows<3>(ins_input::kGyro.index) = skew(w_ie);
-  const Matrix6d R_table = S * o.table.covariance_n() * S.transpose();
   NormalEquations ne{Eigen::MatrixXd::Zero(n, n), Eigen::VectorXd::Zero(n)};
   for (const auto& in : inputs) {
-    const auto H = equivalent_input_map(in.dwell.C_b_n_known, site, o.parameters);
-    const Matrix6d R = in.cov + R_table;
+    const auto H = equivalent_input_map(in.dwell.C_b_n_known, site, o.parameters,
+                                        0.5 * (in.dwell.t_start + in.dwell.t_end));
+    const Matrix6d R = stage2_input_covariance(in, site, o.table);
     std::vector<int> idx;
     for (int i = 0; i < 6; ++i)
       if (in.estimated[static_cast<std::size_t>(i)]) idx.push_back(i);

@@ -84,9 +84,15 @@ std::vector<int> stage2_parameters();
 /// u = H theta at a static attitude (theta in SI, `parameters` catalog indices): the error
 /// model's Jacobian (models/imu_error_model.hpp) at the static inputs f_b = -C^T g_n and
 /// omega_ib_b = C^T omega_ie_n, rotated to NED: df_n = C J_accel theta, dw_n = C J_gyro theta.
+/// `t` (s since the start of the plan; a dwell's middle) for the time-dependent terms.
 Eigen::Matrix<double, 6, Eigen::Dynamic> equivalent_input_map(const Eigen::Matrix3d& C_b_n,
                                                               const Site& site,
-                                                              const std::vector<int>& parameters);
+                                                              const std::vector<int>& parameters,
+                                                              double t = 0.0);
+/// The covariance stage 2 gives a dwell's equivalent inputs: stage 1's plus the table's attitude
+/// error aliased into them (df_n += f_n x eps, dw_n += omega_ie_n x eps).
+Matrix6d stage2_input_covariance(const EquivalentInputs& in, const Site& site,
+                                 const TableAttitudeError& table);
 /// The stage-2 parameters of a model (SI), in the order of `parameters`.
 Eigen::VectorXd parameter_vector(const class ImuErrorModel& model,
                                  const std::vector<int>& parameters);

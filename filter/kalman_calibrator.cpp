@@ -185,7 +185,7 @@ void Calibrator::inject_error(const Eigen::VectorXd& dx) {
 Eigen::Matrix3d Calibrator::dwell_attitude(const PlanDwell& dwell) {
   if (!current_.has_table || !o_.use_table_angles) return dwell.C_b_n_known;
   // The attitude the table's angles give, checked against the plan's orientation.
-  const Eigen::Matrix3d C_table = table_.C_b_n({current_.table_outer, current_.table_inner});
+  Eigen::Matrix3d C_table = table_.C_b_n({current_.table_outer, current_.table_inner});
   const double apart = rotvec_from_dcm(C_table * dwell.C_b_n_known.transpose()).norm();
   if (apart > o_.table_plan_tolerance) {
     std::ostringstream m;

@@ -44,6 +44,7 @@ StateLayout StateLayout::make(const StateLayoutOptions& o) {
     if (it == cat.end())
       throw std::invalid_argument("state layout: no coefficient '" + name + "' to fix");
     const int c = static_cast<int>(it - cat.begin());
+    if (!o.on(it->family)) continue;  // a family not estimated has nothing to fix
     if (std::find(l.fixed.begin(), l.fixed.end(), c) == l.fixed.end()) l.fixed.push_back(c);
   }
   std::sort(l.fixed.begin(), l.fixed.end());

@@ -296,92 +296,149 @@ struct PoseData {
   double n;
 };
 
-}  // namespace
+using Kind = TableFreeError::Kind;
 
-const TableFreeCoefficient& TableFreeResult::at(const std::string& name) const {
-  for (const auto& c : coefficients)
-    if (c.name == name) return c;
-  throw std::invalid_argument("table-free result has no coefficient '" + name + "'");
-}
+// Turns: from the last reading of pose p's trimmed stretch to the first of pose p+1's.
+struct Turn {
+  std::size_t k0, k1;
+  Eigen::Matrix<double, 3, 2> E;
+  double inv_sigma;
+};
 
-TableFreeResult calibrate_table_free(const std::vector<ImuReading>& r,
-                                     const std::vector<Pose>& poses, const TableFreeOptions& o) {
-  using Kind = TableFreeError::Kind;
-  TableFreeResult out;
-  // Gravity and Earth rate.
-  if (o.gravity > 0.0) {
-    out.gravity = o.gravity;
-  } else if (o.site) {
-    out.gravity = Earth::wgs84().gravity_n(o.site->lat_rad, o.site->h_m).norm();
-  } else {
-    throw TableFreeError(Kind::BadInput,
-                         "table-free calibration: give the local gravity or the site");
+// The index of each catalog coefficient in the block vector [accel(9), gyro bias(3), gyro lin(9)],
+// in catalog order: gyro bias, scale, misalignment; accel bias, scale, misalignment.
+struct Slot {
+  const char* name;
+  int index;  // -1: fixed by convention
+};
+constexpr Slot kSlots[24] = {
+    {"gyro.bias.x", 9},
+    {"gyro.bias.y", 10},
+    {"gyro.bias.z", 11},
+    {"gyro.scale.x", 12},
+    {"gyro.scale.y", 13},
+    {"gyro.scale.z", 14},
+    {"gyro.misalignment.xy", 15},
+    {"gyro.misalignment.xz", 16},
+    {"gyro.misalignment.yx", 17},
+    {"gyro.misalignment.yz", 18},
+    {"gyro.misalignment.zx", 19},
+    {"gyro.misalignment.zy", 20},
+    {"accel.bias.x", 0},
+    {"accel.bias.y", 1},
+    {"accel.bias.z", 2},
+    {"accel.scale.x", 3},
+    {"accel.scale.y", 4},
+    {"accel.scale.z", 5},
+    {"accel.misalignment.xy", -1},
+    {"accel.misalignment.xz", -1},
+    {"accel.misalignment.yx", 6},
+    {"accel.misalignment.yz", -1},
+    {"accel.misalignment.zx", 7},
+    {"accel.misalignment.zy", 8},
+};
+
+// The three stages of the table-free calibration over one record and its poses: the
+// accelerometers from the gravity magnitude, the gyros from the turns, then the joint
+// maximum-likelihood refinement with per-pose gravity directions.
+class TableFreeSolver {
+ public:
+  TableFreeSolver(const std::vector<ImuReading>& r, const TableFreeOptions& o, TableFreeResult& out)
+      : r_(r), o_(o), out_(out) {}
+
+  void solve(const std::vector<Pose>& poses) {
+    set_earth();
+    check_readings();
+    pose_data(poses);
+    check_directions();
+    pooled_noise();
+    solve_accelerometers();
+    make_turns();
+    solve_gyros();
+    solve_joint();
+    pose_fits();
   }
-  const double g = out.gravity;
-  const double Omega = Earth::wgs84().rate();
-  const double omega_v = o.site ? Omega * std::sin(o.site->lat_rad) : 0.0;
-  const double omega_h = o.site ? Omega * std::cos(o.site->lat_rad) : 0.0;
-  if (!(o.edge_trim >= 0.0) || !(o.min_pose > 0.0) || o.min_poses < 10 || o.max_iterations < 1)
-    throw TableFreeError(Kind::BadInput,
-                         "table-free calibration: options out of range (min_poses must be at "
-                         "least 10: 9 accelerometer unknowns and one residual)");
 
-  for (std::size_t k = 0; k < r.size(); ++k) {
-    if (!r[k].accel.allFinite() || !r[k].gyro.allFinite() || !std::isfinite(r[k].t))
-      throw TableFreeError(Kind::BadInput, "table-free calibration: reading " +
-                                               std::to_string(k + 1) + " is not finite");
-    if (k > 0 && !(r[k].t > r[k - 1].t))
+ private:
+  void set_earth() {
+    if (o_.gravity > 0.0) {
+      out_.gravity = o_.gravity;
+    } else if (o_.site) {
+      out_.gravity = Earth::wgs84().gravity_n(o_.site->lat_rad, o_.site->h_m).norm();
+    } else {
       throw TableFreeError(Kind::BadInput,
-                           "table-free calibration: times do not increase at "
-                           "reading " +
-                               std::to_string(k + 1));
-  }
-  // Poses: in order, inside the record, trimmed, long enough.
-  if (static_cast<int>(poses.size()) < o.min_poses) {
-    std::ostringstream m;
-    m << "table-free calibration needs at least " << o.min_poses
-      << " static poses (the accelerometer triad has 9 unknowns, one equation per pose); found "
-      << poses.size();
-    throw TableFreeError(Kind::TooFewPoses, m.str());
-  }
-  std::vector<PoseData> pd;
-  std::ostringstream too_short;
-  for (std::size_t p = 0; p < poses.size(); ++p) {
-    const Pose& ps = poses[p];
-    if (ps.last >= r.size() || ps.last <= ps.first || (p > 0 && ps.first <= poses[p - 1].last))
-      throw TableFreeError(Kind::BadInput,
-                           "table-free calibration: pose " + std::to_string(ps.index) +
-                               " is outside the readings or overlaps the previous one");
-    std::size_t a = ps.first, b = ps.last;
-    while (a < b && r[a].t < r[ps.first].t + o.edge_trim) ++a;
-    while (b > a && r[b].t > r[ps.last].t - o.edge_trim) --b;
-    if (r[b].t - r[a].t < o.min_pose) {
-      too_short << (too_short.tellp() > 0 ? ", " : "") << ps.index << " ("
-                << r[ps.last].t - r[ps.first].t << " s)";
-      continue;
+                           "table-free calibration: give the local gravity or the site");
     }
-    PoseData d;
-    d.pose = &ps;
-    d.first = a;
-    d.last = b;
-    d.n = static_cast<double>(b - a + 1);
-    reading_statistics(r, a, b, d.accel, d.gyro, d.accel_std, d.gyro_std);
-    pd.push_back(d);
+    g_ = out_.gravity;
+    Omega_ = Earth::wgs84().rate();
+    omega_v_ = o_.site ? Omega_ * std::sin(o_.site->lat_rad) : 0.0;
+    omega_h_ = o_.site ? Omega_ * std::cos(o_.site->lat_rad) : 0.0;
+    if (!(o_.edge_trim >= 0.0) || !(o_.min_pose > 0.0) || o_.min_poses < 10 ||
+        o_.max_iterations < 1)
+      throw TableFreeError(Kind::BadInput,
+                           "table-free calibration: options out of range (min_poses must be at "
+                           "least 10: 9 accelerometer unknowns and one residual)");
   }
-  if (too_short.tellp() > 0) {
-    std::ostringstream m;
-    m << "table-free calibration: poses too short for their means (need " << o.min_pose
-      << " s after cutting " << o.edge_trim << " s at each end): " << too_short.str();
-    throw TableFreeError(Kind::PoseTooShort, m.str());
+
+  void check_readings() const {
+    for (std::size_t k = 0; k < r_.size(); ++k) {
+      if (!r_[k].accel.allFinite() || !r_[k].gyro.allFinite() || !std::isfinite(r_[k].t))
+        throw TableFreeError(Kind::BadInput, "table-free calibration: reading " +
+                                                 std::to_string(k + 1) + " is not finite");
+      if (k > 0 && !(r_[k].t > r_[k - 1].t))
+        throw TableFreeError(
+            Kind::BadInput,
+            "table-free calibration: times do not increase at reading " + std::to_string(k + 1));
+    }
   }
-  const std::size_t P = pd.size();
+
+  // Poses: in order, inside the record, trimmed, long enough.
+  void pose_data(const std::vector<Pose>& poses) {
+    if (static_cast<int>(poses.size()) < o_.min_poses) {
+      std::ostringstream m;
+      m << "table-free calibration needs at least " << o_.min_poses
+        << " static poses (the accelerometer triad has 9 unknowns, one equation per pose); found "
+        << poses.size();
+      throw TableFreeError(Kind::TooFewPoses, m.str());
+    }
+    std::ostringstream too_short;
+    for (std::size_t p = 0; p < poses.size(); ++p) {
+      const Pose& ps = poses[p];
+      if (ps.last >= r_.size() || ps.last <= ps.first || (p > 0 && ps.first <= poses[p - 1].last))
+        throw TableFreeError(Kind::BadInput,
+                             "table-free calibration: pose " + std::to_string(ps.index) +
+                                 " is outside the readings or overlaps the previous one");
+      std::size_t a = ps.first, b = ps.last;
+      while (a < b && r_[a].t < r_[ps.first].t + o_.edge_trim) ++a;
+      while (b > a && r_[b].t > r_[ps.last].t - o_.edge_trim) --b;
+      if (r_[b].t - r_[a].t < o_.min_pose) {
+        too_short << (too_short.tellp() > 0 ? ", " : "") << ps.index << " ("
+                  << r_[ps.last].t - r_[ps.first].t << " s)";
+        continue;
+      }
+      PoseData d;
+      d.pose = &ps;
+      d.first = a;
+      d.last = b;
+      d.n = static_cast<double>(b - a + 1);
+      reading_statistics(r_, a, b, d.accel, d.gyro, d.accel_std, d.gyro_std);
+      pd_.push_back(d);
+    }
+    if (too_short.tellp() > 0) {
+      std::ostringstream m;
+      m << "table-free calibration: poses too short for their means (need " << o_.min_pose
+        << " s after cutting " << o_.edge_trim << " s at each end): " << too_short.str();
+      throw TableFreeError(Kind::PoseTooShort, m.str());
+    }
+  }
+
   // The accelerometer triad is observable only if gravity points along every axis in some pose:
   // directions all near one plane leave the scale factor normal to it undetermined.
-  {
+  void check_directions() const {
     Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
-    for (const auto& d : pd) {
+    for (const auto& d : pd_) {
       const Eigen::Vector3d u0 = d.accel.normalized();
-      S += u0 * u0.transpose() / static_cast<double>(P);
+      S += u0 * u0.transpose() / static_cast<double>(pd_.size());
     }
     const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(S).eigenvalues()(0);
     if (smallest < 1e-3) {
@@ -395,236 +452,237 @@ TableFreeResult calibrate_table_free(const std::vector<ImuReading>& r,
   }
 
   // Noise per reading, pooled over the poses; rate noise density from the sample interval.
-  Eigen::Vector3d va = Eigen::Vector3d::Zero(), vg = Eigen::Vector3d::Zero();
-  double dof_sum = 0.0, t_sum = 0.0;
-  for (const auto& d : pd) {
-    va += (d.n - 1.0) * d.accel_std.cwiseAbs2();
-    vg += (d.n - 1.0) * d.gyro_std.cwiseAbs2();
-    dof_sum += d.n - 1.0;
-    t_sum += r[d.last].t - r[d.first].t;
-  }
-  va /= dof_sum;
-  vg /= dof_sum;
-  // Quantized noise-free data may rest without any variance: floor at rounding level.
-  for (int i = 0; i < 3; ++i) {
-    va(i) = std::max(va(i), 1e-30 + 1e-24 * g * g);
-    vg(i) = std::max(vg(i), 1e-30);
-  }
-  out.accel_noise = va.cwiseSqrt();
-  out.gyro_noise = vg.cwiseSqrt();
-  const double dt_mean = t_sum / dof_sum;
-  const double rate_psd = vg.mean() * dt_mean;  // rad^2/s: per-axis angle variance per second
-
-  double a[kAccel] = {0.0};
-  double gb[kGyroBias] = {0.0};
-  double gl[kGyroLin] = {0.0};
-  std::vector<Eigen::Vector3d> u(P);
-
-  // Stage 1: accelerometers from the gravity magnitude.
-  {
-    ceres::Problem problem;
-    for (const auto& d : pd) {
-      const Eigen::Vector3d dir = d.accel.normalized();
-      const double sigma = std::sqrt(dir.cwiseAbs2().dot(va) / d.n);
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GravityMagnitudeCost, 1, kAccel>(
-                                   new GravityMagnitudeCost{d.accel, g, 1.0 / sigma}),
-                               nullptr, a);
+  void pooled_noise() {
+    va_ = Eigen::Vector3d::Zero();
+    vg_ = Eigen::Vector3d::Zero();
+    double dof_sum = 0.0, t_sum = 0.0;
+    for (const auto& d : pd_) {
+      va_ += (d.n - 1.0) * d.accel_std.cwiseAbs2();
+      vg_ += (d.n - 1.0) * d.gyro_std.cwiseAbs2();
+      dof_sum += d.n - 1.0;
+      t_sum += r_[d.last].t - r_[d.first].t;
     }
-    out.accel_stage = run(problem, o.max_iterations, "accelerometer");
+    va_ /= dof_sum;
+    vg_ /= dof_sum;
+    // Quantized noise-free data may rest without any variance: floor at rounding level.
+    for (int i = 0; i < 3; ++i) {
+      va_(i) = std::max(va_(i), 1e-30 + 1e-24 * g_ * g_);
+      vg_(i) = std::max(vg_(i), 1e-30);
+    }
+    out_.accel_noise = va_.cwiseSqrt();
+    out_.gyro_noise = vg_.cwiseSqrt();
+    const double dt_mean = t_sum / dof_sum;
+    rate_psd_ = vg_.mean() * dt_mean;  // rad^2/s: per-axis angle variance per second
   }
-  TriadErrors accel_est;
-  auto accel_errors = [&]() {
-    TriadErrors e;
-    e.bias = Eigen::Vector3d(a[0], a[1], a[2]);
-    e.scale = Eigen::Vector3d(a[3], a[4], a[5]);
-    e.misalignment(1, 0) = a[6];
-    e.misalignment(2, 0) = a[7];
-    e.misalignment(2, 1) = a[8];
-    return e;
-  };
-  accel_est = accel_errors();
-  for (std::size_t p = 0; p < P; ++p)
-    u[p] = accel_est.invert_step(pd[p].accel, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero())
-               .normalized();
 
-  // Turns: from the last reading of pose p's trimmed stretch to the first of pose p+1's.
-  struct Turn {
-    std::size_t k0, k1;
-    Eigen::Matrix<double, 3, 2> E;
-    double inv_sigma;
-  };
-  std::vector<Turn> turns;
-  for (std::size_t p = 0; p + 1 < P; ++p) {
-    Turn t;
-    t.k0 = pd[p].last;
-    t.k1 = pd[p + 1].first;
-    const double T = r[t.k1].t - r[t.k0].t;
-    const double earth = o.site ? omega_h * omega_h * T * T / 2.0 : Omega * Omega * T * T / 3.0;
-    t.E = tangent_basis(u[p + 1]);
-    t.inv_sigma = 1.0 / std::sqrt(rate_psd * T + earth);
-    turns.push_back(t);
+  TriadErrors accel_errors() const {
+    TriadErrors e;
+    e.bias = Eigen::Vector3d(a_[0], a_[1], a_[2]);
+    e.scale = Eigen::Vector3d(a_[3], a_[4], a_[5]);
+    e.misalignment(1, 0) = a_[6];
+    e.misalignment(2, 0) = a_[7];
+    e.misalignment(2, 1) = a_[8];
+    return e;
   }
-  auto add_turns = [&](ceres::Problem& problem) {
-    for (std::size_t p = 0; p + 1 < P; ++p)
+
+  // Stage 1: accelerometers from the gravity magnitude; the poses' directions from them.
+  void solve_accelerometers() {
+    ceres::Problem problem;
+    for (const auto& d : pd_) {
+      const Eigen::Vector3d dir = d.accel.normalized();
+      const double sigma = std::sqrt(dir.cwiseAbs2().dot(va_) / d.n);
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GravityMagnitudeCost, 1, kAccel>(
+                                   new GravityMagnitudeCost{d.accel, g_, 1.0 / sigma}),
+                               nullptr, a_);
+    }
+    out_.accel_stage = run(problem, o_.max_iterations, "accelerometer");
+    const TriadErrors accel_est = accel_errors();
+    u_.resize(pd_.size());
+    for (std::size_t p = 0; p < pd_.size(); ++p)
+      u_[p] = accel_est.invert_step(pd_[p].accel, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero())
+                  .normalized();
+  }
+
+  void make_turns() {
+    for (std::size_t p = 0; p + 1 < pd_.size(); ++p) {
+      Turn t;
+      t.k0 = pd_[p].last;
+      t.k1 = pd_[p + 1].first;
+      const double T = r_[t.k1].t - r_[t.k0].t;
+      const double earth =
+          o_.site ? omega_h_ * omega_h_ * T * T / 2.0 : Omega_ * Omega_ * T * T / 3.0;
+      t.E = tangent_basis(u_[p + 1]);
+      t.inv_sigma = 1.0 / std::sqrt(rate_psd_ * T + earth);
+      turns_.push_back(t);
+    }
+  }
+
+  void add_turns(ceres::Problem& problem) {
+    for (std::size_t p = 0; p + 1 < pd_.size(); ++p)
       problem.AddResidualBlock(
-          new TurnCost(r, turns[p].k0, turns[p].k1, turns[p].E, turns[p].inv_sigma), nullptr, gb,
-          gl, u[p].data(), u[p + 1].data());
-  };
+          new TurnCost(r_, turns_[p].k0, turns_[p].k1, turns_[p].E, turns_[p].inv_sigma), nullptr,
+          gb_, gl_, u_[p].data(), u_[p + 1].data());
+  }
 
   // Stage 2: gyro bias from the poses' mean rates, then the gyro matrix from the turns.
-  {
+  void solve_gyros() {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     double n = 0.0;
-    for (std::size_t p = 0; p < P; ++p) {
-      sum += pd[p].n * (pd[p].gyro - omega_v * u[p]);
-      n += pd[p].n;
+    for (std::size_t p = 0; p < pd_.size(); ++p) {
+      sum += pd_[p].n * (pd_[p].gyro - omega_v_ * u_[p]);
+      n += pd_[p].n;
     }
-    for (int i = 0; i < 3; ++i) gb[i] = sum(i) / n;
+    for (int i = 0; i < 3; ++i) gb_[i] = sum(i) / n;
     ceres::Problem problem;
     add_turns(problem);
-    problem.SetParameterBlockConstant(gb);
-    for (auto& v : u) problem.SetParameterBlockConstant(v.data());
-    out.gyro_stage = run(problem, o.max_iterations, "gyro");
+    problem.SetParameterBlockConstant(gb_);
+    for (auto& v : u_) problem.SetParameterBlockConstant(v.data());
+    out_.gyro_stage = run(problem, o_.max_iterations, "gyro");
   }
 
-  // Stage 3: joint refinement.
-  ceres::Problem problem;
-  for (std::size_t p = 0; p < P; ++p) {
-    const auto& d = pd[p];
-    problem.AddResidualBlock(
-        new ceres::AutoDiffCostFunction<AccelPoseCost, 3, kAccel, 3>(
-            new AccelPoseCost{d.accel, (va / d.n).cwiseSqrt().cwiseInverse(), g}),
-        nullptr, a, u[p].data());
-    Eigen::Matrix3d cov = (vg / d.n).asDiagonal();
-    cov += o.site ? Eigen::Matrix3d(omega_h * omega_h / 2.0 *
-                                    (Eigen::Matrix3d::Identity() - u[p] * u[p].transpose()))
-                  : Eigen::Matrix3d(Omega * Omega / 3.0 * Eigen::Matrix3d::Identity());
-    const Eigen::Matrix3d L = cov.llt().matrixL();
-    problem.AddResidualBlock(
-        new ceres::AutoDiffCostFunction<GyroPoseCost, 3, kGyroBias, kGyroLin, 3>(
-            new GyroPoseCost{d.gyro, L.inverse(), omega_v}),
-        nullptr, gb, gl, u[p].data());
-  }
-  add_turns(problem);
-  for (auto& v : u) problem.SetManifold(v.data(), new ceres::SphereManifold<3>());
-  out.joint_stage = run(problem, o.max_iterations, "joint");
-  if (!out.joint_stage.converged)
-    throw TableFreeError(Kind::SolveFailed,
-                         "table-free calibration: the joint solution did not converge in " +
-                             std::to_string(o.max_iterations) +
-                             " iterations (inconsistent data: poses that are not at rest, or "
-                             "a wrong gravity?)");
-  out.iterations =
-      out.accel_stage.iterations + out.gyro_stage.iterations + out.joint_stage.iterations;
-  out.converged = true;
-  out.chi2 = out.joint_stage.chi2;
-  out.dof = out.joint_stage.residuals - out.joint_stage.parameters;
-  if (out.dof <= 0)
-    throw TableFreeError(
-        Kind::TooFewPoses,
-        "table-free calibration: no degrees of freedom left with " + std::to_string(P) + " poses");
-  out.chi2_per_dof = out.chi2 / out.dof;
-
-  // Covariance of the coefficient blocks.
-  ceres::Covariance::Options co;
-  co.algorithm_type = ceres::DENSE_SVD;
-  co.num_threads = 1;
-  ceres::Covariance covariance(co);
-  const std::vector<const double*> blocks = {a, gb, gl};
-  std::vector<std::pair<const double*, const double*>> pairs;
-  for (std::size_t i = 0; i < blocks.size(); ++i)
-    for (std::size_t j = i; j < blocks.size(); ++j) pairs.emplace_back(blocks[i], blocks[j]);
-  if (!covariance.Compute(pairs, &problem))
-    throw TableFreeError(Kind::SolveFailed,
-                         "table-free calibration: the solution's covariance is singular (the "
-                         "poses do not turn the unit about enough different axes)");
-  Eigen::Matrix<double, 21, 21, Eigen::RowMajor> C_blocks;
-  covariance.GetCovarianceMatrix(blocks, C_blocks.data());
-  C_blocks *= out.chi2_per_dof;
-
-  // Result in catalog order: gyro bias, scale, misalignment; accel bias, scale, misalignment.
-  // Index of each catalog coefficient in the block vector [accel(9), gyro bias(3), gyro lin(9)].
-  struct Slot {
-    const char* name;
-    int index;  // -1: fixed by convention
-  };
-  const Slot slots[24] = {
-      {"gyro.bias.x", 9},
-      {"gyro.bias.y", 10},
-      {"gyro.bias.z", 11},
-      {"gyro.scale.x", 12},
-      {"gyro.scale.y", 13},
-      {"gyro.scale.z", 14},
-      {"gyro.misalignment.xy", 15},
-      {"gyro.misalignment.xz", 16},
-      {"gyro.misalignment.yx", 17},
-      {"gyro.misalignment.yz", 18},
-      {"gyro.misalignment.zx", 19},
-      {"gyro.misalignment.zy", 20},
-      {"accel.bias.x", 0},
-      {"accel.bias.y", 1},
-      {"accel.bias.z", 2},
-      {"accel.scale.x", 3},
-      {"accel.scale.y", 4},
-      {"accel.scale.z", 5},
-      {"accel.misalignment.xy", -1},
-      {"accel.misalignment.xz", -1},
-      {"accel.misalignment.yx", 6},
-      {"accel.misalignment.yz", -1},
-      {"accel.misalignment.zx", 7},
-      {"accel.misalignment.zy", 8},
-  };
-  double values[21];
-  std::copy(a, a + 9, values);
-  std::copy(gb, gb + 3, values + 9);
-  std::copy(gl, gl + 9, values + 12);
-  std::vector<int> order;
-  for (const auto& s : slots) {
-    TableFreeCoefficient c;
-    c.name = s.name;
-    c.fixed_by_convention = s.index < 0;
-    if (s.index >= 0) {
-      c.value = values[s.index];
-      c.sigma = std::sqrt(C_blocks(s.index, s.index));
-      order.push_back(s.index);
-      out.covariance_names.push_back(c.name);
+  // Stage 3: joint refinement, then the covariance of the coefficient blocks (scaled by the
+  // chi-square per degree of freedom) and the result in catalog order.
+  void solve_joint() {
+    ceres::Problem problem;
+    for (std::size_t p = 0; p < pd_.size(); ++p) {
+      const auto& d = pd_[p];
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<AccelPoseCost, 3, kAccel, 3>(
+              new AccelPoseCost{d.accel, (va_ / d.n).cwiseSqrt().cwiseInverse(), g_}),
+          nullptr, a_, u_[p].data());
+      Eigen::Matrix3d cov = (vg_ / d.n).asDiagonal();
+      cov += o_.site ? Eigen::Matrix3d(omega_h_ * omega_h_ / 2.0 *
+                                       (Eigen::Matrix3d::Identity() - u_[p] * u_[p].transpose()))
+                     : Eigen::Matrix3d(Omega_ * Omega_ / 3.0 * Eigen::Matrix3d::Identity());
+      const Eigen::Matrix3d L = cov.llt().matrixL();
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<GyroPoseCost, 3, kGyroBias, kGyroLin, 3>(
+              new GyroPoseCost{d.gyro, L.inverse(), omega_v_}),
+          nullptr, gb_, gl_, u_[p].data());
     }
-    out.coefficients.push_back(c);
+    add_turns(problem);
+    for (auto& v : u_) problem.SetManifold(v.data(), new ceres::SphereManifold<3>());
+    out_.joint_stage = run(problem, o_.max_iterations, "joint");
+    if (!out_.joint_stage.converged)
+      throw TableFreeError(Kind::SolveFailed,
+                           "table-free calibration: the joint solution did not converge in " +
+                               std::to_string(o_.max_iterations) +
+                               " iterations (inconsistent data: poses that are not at rest, or "
+                               "a wrong gravity?)");
+    out_.iterations =
+        out_.accel_stage.iterations + out_.gyro_stage.iterations + out_.joint_stage.iterations;
+    out_.converged = true;
+    out_.chi2 = out_.joint_stage.chi2;
+    out_.dof = out_.joint_stage.residuals - out_.joint_stage.parameters;
+    if (out_.dof <= 0)
+      throw TableFreeError(Kind::TooFewPoses,
+                           "table-free calibration: no degrees of freedom left with " +
+                               std::to_string(pd_.size()) + " poses");
+    out_.chi2_per_dof = out_.chi2 / out_.dof;
+    store_coefficients(covariance_of_blocks(problem));
   }
-  const auto m = static_cast<Eigen::Index>(order.size());
-  out.covariance.resize(m, m);
-  for (Eigen::Index i = 0; i < m; ++i)
-    for (Eigen::Index j = 0; j < m; ++j)
-      out.covariance(i, j) =
-          C_blocks(order[static_cast<std::size_t>(i)], order[static_cast<std::size_t>(j)]);
-  for (auto& [info, ptr] : out.model.coefficient_refs())
-    for (const auto& c : out.coefficients)
-      if (c.name == info.name) *ptr = c.value;
+
+  Eigen::Matrix<double, 21, 21, Eigen::RowMajor> covariance_of_blocks(ceres::Problem& problem) {
+    ceres::Covariance::Options co;
+    co.algorithm_type = ceres::DENSE_SVD;
+    co.num_threads = 1;
+    ceres::Covariance covariance(co);
+    const std::vector<const double*> blocks = {a_, gb_, gl_};
+    std::vector<std::pair<const double*, const double*>> pairs;
+    for (std::size_t i = 0; i < blocks.size(); ++i)
+      for (std::size_t j = i; j < blocks.size(); ++j) pairs.emplace_back(blocks[i], blocks[j]);
+    if (!covariance.Compute(pairs, &problem))
+      throw TableFreeError(Kind::SolveFailed,
+                           "table-free calibration: the solution's covariance is singular (the "
+                           "poses do not turn the unit about enough different axes)");
+    Eigen::Matrix<double, 21, 21, Eigen::RowMajor> C_blocks;
+    covariance.GetCovarianceMatrix(blocks, C_blocks.data());
+    C_blocks *= out_.chi2_per_dof;
+    return C_blocks;
+  }
+
+  void store_coefficients(const Eigen::Matrix<double, 21, 21, Eigen::RowMajor>& C_blocks) {
+    double values[21];
+    std::copy(a_, a_ + 9, values);
+    std::copy(gb_, gb_ + 3, values + 9);
+    std::copy(gl_, gl_ + 9, values + 12);
+    std::vector<int> order;
+    for (const auto& s : kSlots) {
+      TableFreeCoefficient c;
+      c.name = s.name;
+      c.fixed_by_convention = s.index < 0;
+      if (s.index >= 0) {
+        c.value = values[s.index];
+        c.sigma = std::sqrt(C_blocks(s.index, s.index));
+        order.push_back(s.index);
+        out_.covariance_names.push_back(c.name);
+      }
+      out_.coefficients.push_back(c);
+    }
+    const auto m = static_cast<Eigen::Index>(order.size());
+    out_.covariance.resize(m, m);
+    for (Eigen::Index i = 0; i < m; ++i)
+      for (Eigen::Index j = 0; j < m; ++j)
+        out_.covariance(i, j) =
+            C_blocks(order[static_cast<std::size_t>(i)], order[static_cast<std::size_t>(j)]);
+    for (auto& [info, ptr] : out_.model.coefficient_refs())
+      for (const auto& c : out_.coefficients)
+        if (c.name == info.name) *ptr = c.value;
+  }
 
   // Residuals per pose, with the model's own formula.
-  const TriadErrors& A = out.model.accel;
-  const TriadErrors& G = out.model.gyro;
-  for (std::size_t p = 0; p < P; ++p) {
-    TableFreePoseFit f;
-    f.index = pd[p].pose->index;
-    f.t_start = r[pd[p].first].t;
-    f.t_end = r[pd[p].last].t;
-    f.count = pd[p].last - pd[p].first + 1;
+  void pose_fits() {
+    const TriadErrors& A = out_.model.accel;
+    const TriadErrors& G = out_.model.gyro;
     const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
-    f.gravity_error = A.invert_step(pd[p].accel, zero, zero).norm() - g;
-    f.accel_rms = std::sqrt((pd[p].accel - A.apply(g * u[p], zero)).squaredNorm() / 3.0);
-    f.gyro_rms = std::sqrt((pd[p].gyro - G.apply(omega_v * u[p], zero)).squaredNorm() / 3.0);
-    if (p > 0) {
-      double C[3][3];
-      integrate_turn(r, turns[p - 1].k0, turns[p - 1].k1, gb, gl, C);
-      Eigen::Matrix3d Cm;
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) Cm(i, j) = C[i][j];
-      const Eigen::Vector3d pred = Cm.transpose() * u[p - 1];
-      f.turn_error = std::atan2(pred.cross(u[p]).norm(), pred.dot(u[p]));
+    for (std::size_t p = 0; p < pd_.size(); ++p) {
+      TableFreePoseFit f;
+      f.index = pd_[p].pose->index;
+      f.t_start = r_[pd_[p].first].t;
+      f.t_end = r_[pd_[p].last].t;
+      f.count = pd_[p].last - pd_[p].first + 1;
+      f.gravity_error = A.invert_step(pd_[p].accel, zero, zero).norm() - g_;
+      f.accel_rms = std::sqrt((pd_[p].accel - A.apply(g_ * u_[p], zero)).squaredNorm() / 3.0);
+      f.gyro_rms = std::sqrt((pd_[p].gyro - G.apply(omega_v_ * u_[p], zero)).squaredNorm() / 3.0);
+      if (p > 0) {
+        double C[3][3];
+        integrate_turn(r_, turns_[p - 1].k0, turns_[p - 1].k1, gb_, gl_, C);
+        Eigen::Matrix3d Cm;
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) Cm(i, j) = C[i][j];
+        const Eigen::Vector3d pred = Cm.transpose() * u_[p - 1];
+        f.turn_error = std::atan2(pred.cross(u_[p]).norm(), pred.dot(u_[p]));
+      }
+      out_.poses.push_back(f);
     }
-    out.poses.push_back(f);
   }
+
+  const std::vector<ImuReading>& r_;
+  const TableFreeOptions& o_;
+  TableFreeResult& out_;
+  std::vector<PoseData> pd_;
+  double g_ = 0.0, Omega_ = 0.0, omega_v_ = 0.0, omega_h_ = 0.0;
+  Eigen::Vector3d va_, vg_;
+  double rate_psd_ = 0.0;
+  double a_[kAccel] = {0.0};
+  double gb_[kGyroBias] = {0.0};
+  double gl_[kGyroLin] = {0.0};
+  std::vector<Eigen::Vector3d> u_;
+  std::vector<Turn> turns_;
+};
+
+}  // namespace
+
+const TableFreeCoefficient& TableFreeResult::at(const std::string& name) const {
+  for (const auto& c : coefficients)
+    if (c.name == name) return c;
+  throw std::invalid_argument("table-free result has no coefficient '" + name + "'");
+}
+
+TableFreeResult calibrate_table_free(const std::vector<ImuReading>& r,
+                                     const std::vector<Pose>& poses, const TableFreeOptions& o) {
+  TableFreeResult out;
+  TableFreeSolver(r, o, out).solve(poses);
   return out;
 }
 

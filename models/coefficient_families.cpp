@@ -36,26 +36,29 @@ std::vector<CoefficientFamily> make_families() {
   std::vector<F> t;
   // Base: bias, scale factor and misalignment of each triad.
   t.push_back(F{"gyro.bias", "gyro.bias", kAxes, rate, O::Gyro, true, "", 1.0 * deg_per_h, true,
-                "gyro bias", [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias(k); }});
+                "gyro bias", [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias(k); },
+                ""});
   t.push_back(F{"gyro.scale", "gyro.scale", kAxes, ratio, O::Gyro, true, "", 300 * ppm, false,
                 "gyro scale-factor error",
-                [](ImuErrorModel& m, int k) -> double& { return m.gyro.scale(k); }});
+                [](ImuErrorModel& m, int k) -> double& { return m.gyro.scale(k); }, ""});
   t.push_back(F{"gyro.misalignment", "gyro.misalignment", kOffDiagonal, angle, O::Gyro, true, "",
                 300 * arcsec, false, "gyro misalignment (axis i towards body axis j)",
                 [](ImuErrorModel& m, int k) -> double& {
                   return m.gyro.misalignment(off_row(k), off_col(k));
-                }});
+                },
+                ""});
   t.push_back(F{"accel.bias", "accel.bias", kAxes, accel, O::Accel, true, "", 1000 * ug, true,
                 "accelerometer bias",
-                [](ImuErrorModel& m, int k) -> double& { return m.accel.bias(k); }});
+                [](ImuErrorModel& m, int k) -> double& { return m.accel.bias(k); }, ""});
   t.push_back(F{"accel.scale", "accel.scale", kAxes, ratio, O::Accel, true, "", 300 * ppm, false,
                 "accelerometer scale-factor error",
-                [](ImuErrorModel& m, int k) -> double& { return m.accel.scale(k); }});
+                [](ImuErrorModel& m, int k) -> double& { return m.accel.scale(k); }, ""});
   t.push_back(F{"accel.misalignment", "accel.misalignment", kOffDiagonal, angle, O::Accel, true, "",
                 300 * arcsec, false, "accelerometer misalignment (axis i towards body axis j)",
                 [](ImuErrorModel& m, int k) -> double& {
                   return m.accel.misalignment(off_row(k), off_col(k));
-                }});
+                },
+                ""});
   // Extended terms.
   t.push_back(F{"accel.k2",
                 "accel.k2",
@@ -67,13 +70,18 @@ std::vector<CoefficientFamily> make_families() {
                 100 * ug_per_g2,
                 false,
                 "accelerometer quadratic scale factor",
-                [](ImuErrorModel& m, int k) -> double& { return m.accel.k2(k); }});
+                [](ImuErrorModel& m, int k) -> double& { return m.accel.k2(k); },
+                "each axis horizontal and at two or more specific-force levels (e.g. along gravity "
+                "and at 45 deg): one level makes K2 look like the scale asymmetry"});
   t.push_back(F{"gyro.scale_asym", "gyro.scale_asym", kAxes, ratio, O::Gyro, false, "scale_asym",
                 300 * ppm, false, "gyro scale-factor asymmetry",
-                [](ImuErrorModel& m, int k) -> double& { return m.gyro.scale_asym(k); }});
+                [](ImuErrorModel& m, int k) -> double& { return m.gyro.scale_asym(k); },
+                "each gyro axis turned both ways at a known rate (a rotation plan)"});
   t.push_back(F{"accel.scale_asym", "accel.scale_asym", kAxes, ratio, O::Accel, false, "scale_asym",
                 300 * ppm, false, "accelerometer scale-factor asymmetry",
-                [](ImuErrorModel& m, int k) -> double& { return m.accel.scale_asym(k); }});
+                [](ImuErrorModel& m, int k) -> double& { return m.accel.scale_asym(k); },
+                "each accelerometer axis both up and down, at two or more specific-force levels "
+                "(to tell it from K2)"});
   t.push_back(
       F{"gyro.g_sensitivity",
         "gyro.g_sensitivity",
@@ -85,7 +93,8 @@ std::vector<CoefficientFamily> make_families() {
         0.1 * deg_per_h_per_g,
         false,
         "gyro g-sensitivity (gyro axis i, specific force along j)",
-        [](ImuErrorModel& m, int k) -> double& { return m.gyro_g_sensitivity(k / 3, k % 3); }});
+        [](ImuErrorModel& m, int k) -> double& { return m.gyro_g_sensitivity(k / 3, k % 3); },
+        "orientations with gravity along each axis (static), or turns"});
   t.push_back(
       F{"accel.lever_arm",
         "accel.lever_arm",
@@ -97,7 +106,8 @@ std::vector<CoefficientFamily> make_families() {
         0.1,
         false,
         "inner lever arm (accelerometer i's proof mass, component j)",
-        [](ImuErrorModel& m, int k) -> double& { return m.accel_lever_arm_b(k % 3, k / 3); }});
+        [](ImuErrorModel& m, int k) -> double& { return m.accel_lever_arm_b(k % 3, k / 3); },
+        "turns with rate and angular acceleration (a rotation plan)"});
   t.push_back(F{"time_delay",
                 "timing.time_delay",
                 {},
@@ -108,7 +118,8 @@ std::vector<CoefficientFamily> make_families() {
                 0.01,
                 false,
                 "gyro-to-accelerometer time delay (accelerometer late is positive)",
-                [](ImuErrorModel& m, int) -> double& { return m.time_delay; }});
+                [](ImuErrorModel& m, int) -> double& { return m.time_delay; },
+                "turns (a rotation plan): the delay only acts while the attitude changes"});
   t.push_back(F{"gyro.bias_drift",
                 "gyro.bias_drift",
                 kAxes,
@@ -119,7 +130,8 @@ std::vector<CoefficientFamily> make_families() {
                 1.0 * deg_per_h / hour,
                 false,
                 "gyro bias drift (linear in the time since the start of the plan)",
-                [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias_drift(k); }});
+                [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias_drift(k); },
+                "orientations revisited later in the session"});
   t.push_back(F{"accel.bias_drift",
                 "accel.bias_drift",
                 kAxes,
@@ -130,7 +142,8 @@ std::vector<CoefficientFamily> make_families() {
                 1000 * ug / hour,
                 false,
                 "accelerometer bias drift (linear in the time since the start of the plan)",
-                [](ImuErrorModel& m, int k) -> double& { return m.accel.bias_drift(k); }});
+                [](ImuErrorModel& m, int k) -> double& { return m.accel.bias_drift(k); },
+                "orientations revisited later in the session"});
   return t;
 }
 

@@ -45,6 +45,9 @@ struct CoefficientFamily {
   std::string help;  // one line: what the family is
   /// The SI value of component k inside a model.
   double& (*value)(ImuErrorModel& model, int component) = nullptr;
+  /// Extended families: the plan feature that separates the family from the base coefficients
+  /// (named by the diagnosis when a plan cannot).
+  std::string separated_by;
 
   int size() const { return components.empty() ? 1 : static_cast<int>(components.size()); }
   /// Name of component k ("gyro.bias.x"; the family's name for a single unnamed component).

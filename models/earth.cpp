@@ -104,7 +104,8 @@ void LocalEarth::expand(double lat, double h) {
 
 const EarthTerms& LocalEarth::at(double lat, double h) {
   const double dl = lat - lat0_, dh = h - h0_;
-  if (std::abs(dl) * 6.4e6 > refresh_m_ || std::abs(dh) > refresh_m_) {
+  if (std::abs(dl) * GeographicLib::Constants::WGS84_a() > refresh_m_ ||
+      std::abs(dh) > refresh_m_) {
     expand(lat, h);
     now_ = t0_;
     return now_;

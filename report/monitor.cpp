@@ -1,10 +1,5 @@
 #include "report/monitor.hpp"
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -18,8 +13,7 @@
 #include "models/imu_error_model.hpp"
 #include "models/sensor_profile.hpp"
 #include "report/output.hpp"
-
-extern char** environ;
+#include "report/plot.hpp"
 
 namespace sinscal {
 
@@ -98,11 +92,7 @@ std::string printable(const std::string& s) {
   return out;
 }
 
-std::string quoted(const std::string& s) {  // a gnuplot single-quoted string
-  std::string q = "'";
-  for (char c : printable(s)) q += c == '\'' ? std::string("''") : std::string(1, c);
-  return q + "'";
-}
+std::string quoted(const std::string& s) { return gnuplot_quoted(s); }
 
 std::string num(double v) {
   if (std::isnan(v)) return "?";
@@ -218,11 +208,7 @@ std::string convergence_plot_script(const MonitorSeries& series,
 }
 
 std::string convergence_script_path(const std::string& png_path) {
-  const auto dot = png_path.rfind('.');
-  return (dot != std::string::npos && png_path.find('/', dot) == std::string::npos
-              ? png_path.substr(0, dot)
-              : png_path) +
-         ".gp";
+  return gnuplot_script_path(png_path);
 }
 
 ConvergencePlot plot_convergence(const MonitorSeries& series, const ConvergencePlotOptions& options,
@@ -231,45 +217,7 @@ ConvergencePlot plot_convergence(const MonitorSeries& series, const ConvergenceP
   const std::string script = convergence_plot_script(series, options, png_path, &plot);
   plot.script = convergence_script_path(png_path);
   write_atomically(plot.script, [&](std::ostream& out) { out << script; });
-  // gnuplot draws into a temporary file renamed over the PNG when it succeeded.
-  const std::string temp_png = png_path + ".tmp-" + std::to_string(::getpid());
-  const std::string set_output = "output = " + quoted(temp_png);
-  const std::string log = plot.script + ".log";
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  std::vector<char*> argv = {const_cast<char*>(options.gnuplot.c_str()), const_cast<char*>("-e"),
-                             const_cast<char*>(set_output.c_str()),
-                             const_cast<char*>(plot.script.c_str()), nullptr};
-  pid_t pid = 0;
-  const int err =
-      posix_spawnp(&pid, options.gnuplot.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (err != 0) {
-    std::remove(log.c_str());
-    throw std::runtime_error("cannot run " + options.gnuplot + ": " + std::strerror(err) +
-                             " (install the Debian package gnuplot-nox; the script is " +
-                             plot.script + ")");
-  }
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR)
-      throw std::runtime_error("waiting for gnuplot: " + std::string(std::strerror(errno)));
-  std::string messages;
-  {
-    std::ifstream in(log);
-    std::ostringstream text;
-    text << in.rdbuf();
-    messages = text.str();
-  }
-  std::remove(log.c_str());
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    std::remove(temp_png.c_str());
-    throw std::runtime_error(options.gnuplot + " failed on " + plot.script + ": " + messages);
-  }
-  if (std::rename(temp_png.c_str(), png_path.c_str()) != 0)
-    throw std::runtime_error(png_path + ": cannot replace: " + std::strerror(errno));
+  run_gnuplot(plot.script, png_path, options.gnuplot);
   return plot;
 }
 

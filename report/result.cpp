@@ -32,22 +32,26 @@ ResultCoefficients result_coefficients(const KalmanRun& run) {
   return result_coefficients(run.estimates);
 }
 
-ResultCoefficients result_coefficients(const ClosedFormReport& r) {
+ResultCoefficients result_coefficients(const Stage2Result& stage2) {
   ResultCoefficients out;
   const auto& cat = coefficient_catalog();
-  for (std::size_t k = 0; k < r.stage2.parameters.size(); ++k) {
-    const auto i = static_cast<std::size_t>(r.stage2.parameters[k]);
+  for (std::size_t k = 0; k < stage2.parameters.size(); ++k) {
+    const auto i = static_cast<std::size_t>(stage2.parameters[k]);
     const auto j = static_cast<Eigen::Index>(k);
     ResultCoefficient c;
     c.unit = cat[i].unit;
-    c.observable = r.stage2.observable[k];
+    c.observable = stage2.observable[k];
     if (c.observable) {
-      c.value = r.stage2.theta(j) / cat[i].si_per_unit;
-      c.sigma = std::sqrt(r.stage2.cov(j, j)) / cat[i].si_per_unit;
+      c.value = stage2.theta(j) / cat[i].si_per_unit;
+      c.sigma = std::sqrt(stage2.cov(j, j)) / cat[i].si_per_unit;
     }
     out[cat[i].name] = c;
   }
   return out;
+}
+
+ResultCoefficients result_coefficients(const ClosedFormReport& r) {
+  return result_coefficients(r.stage2);
 }
 
 namespace {
@@ -78,7 +82,10 @@ nlohmann::ordered_json kalman_method(const KalmanRun& r) {
       {"update_interval_s", o.update_interval},
       {"prior_scale", o.prior_scale},
       {"table_sigma_arcsec", o.attitude_sigma / units::arcsec}};
-  if (!o.layout.fixed.empty()) m["fixed_by_convention"] = o.layout.fixed;
+  std::vector<std::string> fixed;
+  for (int c : StateLayout::make(o.layout).fixed)
+    fixed.push_back(coefficient_catalog()[static_cast<std::size_t>(c)].name);
+  if (!fixed.empty()) m["fixed_by_convention"] = fixed;
   if (!r.passes.empty()) m["passes"] = r.passes_requested;
   return m;
 }
@@ -178,14 +185,14 @@ nlohmann::ordered_json result_sections(const ClosedFormReport& r) {
   d["stage1"] = dwells;
   d["identifiability"] = {{"rank", r.stage2.rank},
                           {"parameters", r.stage2.parameters.size()},
-                          {"unobservable_directions", r.stage2.unobservable_directions}};
+                          {"unobservable_directions", r.stage2.unobservable_directions},
+                          {"chi2_per_dof", r.stage2.chi2_per_dof},
+                          {"dof", r.stage2.dof}};
   return d;
 }
 
-void write_result_json(const std::string& path, const ResultCoefficients& coefficients,
-                       const nlohmann::ordered_json& extra) {
-  nlohmann::ordered_json j;
-  auto& c = j["coefficients"];
+nlohmann::ordered_json coefficients_json(const ResultCoefficients& coefficients) {
+  nlohmann::ordered_json c = nlohmann::ordered_json::object();
   for (const auto& info : coefficient_catalog()) {
     const auto it = coefficients.find(info.name);
     if (it == coefficients.end()) continue;
@@ -203,6 +210,13 @@ void write_result_json(const std::string& path, const ResultCoefficients& coeffi
     e["unit"] = it->second.unit;
     c[info.name] = e;
   }
+  return c;
+}
+
+void write_result_json(const std::string& path, const ResultCoefficients& coefficients,
+                       const nlohmann::ordered_json& extra) {
+  nlohmann::ordered_json j;
+  j["coefficients"] = coefficients_json(coefficients);
   for (const auto& [key, value] : extra.items()) j[key] = value;
   write_atomically(path, [&](std::ostream& out) { out << j.dump(2) << "\n"; });
 }

@@ -32,6 +32,10 @@ ResultCoefficients result_coefficients(const std::vector<CoefficientEstimate>& e
 /// The Kalman filter's and the closed form's coefficients.
 ResultCoefficients result_coefficients(const KalmanRun& run);
 ResultCoefficients result_coefficients(const ClosedFormReport& report);
+/// A stage-2 solution's coefficients (any parameter set, e.g. a diagnosis's extended model).
+ResultCoefficients result_coefficients(const Stage2Result& stage2);
+/// The "coefficients" object of a result file.
+nlohmann::ordered_json coefficients_json(const ResultCoefficients& coefficients);
 
 /// The sections after "coefficients" of each method's result file.
 nlohmann::ordered_json result_sections(const KalmanRun& run);

@@ -25,11 +25,6 @@ std::string format_number(double v) {
   return std::string(buf, r.ptr);
 }
 
-std::string join_path(const std::string& base, const std::string& file) {
-  if (file.empty() || file.front() == '/' || base.empty()) return file;
-  return base + "/" + file;
-}
-
 // NovAtel's 32-bit CRC of ASCII logs: polynomial 0x04C11DB7 reflected (0xEDB88320), initial value
 // 0, no final XOR, over the text between the '%' or '#' and the '*'.
 std::uint32_t novatel_crc32(const char* data, std::size_t size) {
@@ -184,14 +179,14 @@ std::vector<LogSegment> read_segments(const IniFile& ini, const std::string& bas
     throw ConfigError(ini.where("log.files") +
                       "a log in one file per dwell needs the session's plan ([session] plan) "
                       "for the dwells' times");
-  const Plan plan = Plan::load(join_path(base_dir, ini.get_string("session.plan")));
+  const Plan plan = Plan::load(path_in(base_dir, ini.get_string("session.plan")));
   const double offset = ini.get_quantity("session.time_offset", QuantityKind::Time, "s", 0.0);
   const Motion motion = build_motion(plan, Site{});
   const auto& plan_dwells = motion.dwells();
   std::vector<LogSegment> out;
   for (std::size_t i = 0; i < files.size(); ++i) {
     LogSegment seg;
-    seg.file = join_path(base_dir, files[i]);
+    seg.file = path_in(base_dir, files[i]);
     seg.dwell = dwells[i];
     if (!std::filesystem::is_regular_file(seg.file))
       throw ConfigError(ini.where("log.files") + "'" + files[i] + "': no such file (" + seg.file +
@@ -258,7 +253,7 @@ LogFormat LogFormat::from_ini(const IniFile& ini, const std::string& base_dir, d
   LogFormat f;
   if (format == "sinscal") {
     ini.check_keys("log", keys);  // table angles: from the header
-    f = native_format(segmented ? std::string() : join_path(base_dir, ini.get_string("log.file")),
+    f = native_format(segmented ? std::string() : path_in(base_dir, ini.get_string("log.file")),
                       rate_hz);
   } else if (format == "custom") {
     const bool split = ini.has("log.accel_file") || ini.has("log.gyro_file");
@@ -285,8 +280,8 @@ LogFormat LogFormat::from_ini(const IniFile& ini, const std::string& base_dir, d
     f.header_lines = read_header_lines(ini);
     f.time_scale = unit_of(ini, "log.time_unit", "s", QuantityKind::Time);
     if (split) {
-      f.accel_file = join_path(base_dir, ini.get_string("log.accel_file"));
-      f.gyro_file = join_path(base_dir, ini.get_string("log.gyro_file"));
+      f.accel_file = path_in(base_dir, ini.get_string("log.accel_file"));
+      f.gyro_file = path_in(base_dir, ini.get_string("log.gyro_file"));
       f.file = describe_files({f.accel_file, f.gyro_file});
       f.accel_columns = read_split_columns(ini, "log.accel_columns");
       f.gyro_columns = read_split_columns(ini, "log.gyro_columns");
@@ -298,7 +293,7 @@ LogFormat LogFormat::from_ini(const IniFile& ini, const std::string& base_dir, d
       f.columns = {"gx", "gy", "gz", "ax", "ay", "az"};
       if (t) f.columns.insert(f.columns.begin(), "t");
     } else {
-      if (!segmented) f.file = join_path(base_dir, ini.get_string("log.file"));
+      if (!segmented) f.file = path_in(base_dir, ini.get_string("log.file"));
       for (const auto& c : tokens_of(ini.get_string("log.columns"))) {
         static const std::vector<std::string> known = {"t",  "gx", "gy",    "gz",    "ax",
                                                        "ay", "az", "outer", "inner", "-"};
@@ -328,7 +323,7 @@ LogFormat LogFormat::from_ini(const IniFile& ini, const std::string& base_dir, d
     f.kind = Kind::NovAtel;
     f.native = false;
     f.header_lines = 0;
-    if (!segmented) f.file = join_path(base_dir, ini.get_string("log.file"));
+    if (!segmented) f.file = path_in(base_dir, ini.get_string("log.file"));
     for (const char* k : {"log.gyro_scale", "log.accel_scale"})
       if (!ini.has(k))
         throw ConfigError(ini.path() + ": [log] format = novatel: missing '" +
@@ -885,6 +880,12 @@ bool LogReader::make_sample(ImuSample& s) {
   skipped_ = false;
   skipped_run_ = 0;
   return true;
+}
+
+std::string path_in(const std::string& dir, const std::string& file) {
+  const std::filesystem::path p(file);
+  if (file.empty() || dir.empty() || p.is_absolute()) return file;
+  return (std::filesystem::path(dir) / p).string();
 }
 
 }  // namespace sinscal

@@ -61,6 +61,10 @@ struct LogSegment {
   double t_end = 0.0;    // s, log time at which it ends
 };
 
+/// `file` as seen from the current directory when it is named relative to `dir` (a session's
+/// directory): unchanged when absolute or when `dir` is empty.
+std::string path_in(const std::string& dir, const std::string& file);
+
 struct LogFormat {
   enum class Kind { Delimited, NovAtel };
   /// Longest line a reader accepts (bytes); a longer one is an error, never buffered whole.

@@ -177,7 +177,7 @@ std::vector<double> per_turn(const IniFile& ini, const std::string& one, const s
     return std::vector<double>(n, v.front());
   }
   if (ini.has(kn)) {
-    const auto v = ini.get_quantities(kn, kind, unit);
+    auto v = ini.get_quantities(kn, kind, unit);
     if (v.size() != n)
       throw ConfigError(ini.where(kn) + "expected " + std::to_string(n) +
                         " values, one per turn of 'axes', got " + std::to_string(v.size()));

@@ -16,11 +16,8 @@ namespace sinscal {
 
 namespace {
 std::string directory_of(const std::string& path) {
-  const auto slash = path.rfind('/');
-  return slash == std::string::npos ? "." : path.substr(0, slash);
-}
-std::string resolve(const std::string& dir, const std::string& file) {
-  return file.empty() || file.front() == '/' ? file : dir + "/" + file;
+  const std::string dir = std::filesystem::path(path).parent_path().string();
+  return dir.empty() ? "." : dir;
 }
 
 // Session::load's limits (docs/formats.md): a nominal rate up to 100 kHz, a time offset within
@@ -35,7 +32,7 @@ std::string named_file(const IniFile& ini, const std::string& dir, const std::st
   if (!ini.has(key)) return {};
   const std::string value = ini.get_string(key);
   if (value.empty()) throw ConfigError(ini.where(key) + "no file name given");
-  const std::string file = resolve(dir, value);
+  std::string file = path_in(dir, value);
   if (must_exist && !std::filesystem::is_regular_file(file))
     throw ConfigError(ini.where(key) + "'" + value + "': no such file (" + file + ")");
   return file;

@@ -90,13 +90,14 @@ check "unknown --terms is named" contains "$work/terms.err" "unknown term 'lever
 check "streaming exits 0" test $? -eq 0
 check "streaming equals batch" cmp -s <(grep -A1 '"time_delay"' "$work/r19/kf.json") <(grep -A1 '"time_delay"' "$work/r19/stream.json")
 check "monitor has a line per 100 s" test "$(wc -l < "$work/r19/mon.jsonl")" -eq 5
-# A session whose time offset is wrong by 5 s: with the plan's timing the log ends before the
-# plan (exit 2, named); with the static intervals detected in the data, the run is whole.
+# A session whose time offset is wrong by 5 s: with the plan's timing the plausibility gate sees
+# the unit turning in the plan's dwells (exit 2, named); with the static intervals detected in
+# the data, the run is whole.
 mkdir -p "$work/off"; cp "$work/r19/"{plan.ini,sensor.ini,truth.json} "$work/off/"; ln -s "$work/r19/imu.csv" "$work/off/imu.csv"
 sed 's/^rate = 100 Hz/rate = 100 Hz\ntime_offset = 5 s/' "$work/r19/session.ini" > "$work/off/session.ini"
 "$bin" calibrate --method kf --session "$work/off/session.ini" --out "$work/off/plan.json" > /dev/null 2> "$work/off_plan.err"
 check "wrong time offset exits 2" test $? -eq 2
-check "wrong time offset names the mismatch" contains "$work/off_plan.err" "the plan runs until 597 s: the plan does not match the data"
+check "wrong time offset names the mismatch" contains "$work/off_plan.err" "the plan's timing (or the session's time_offset) does not match the log"
 "$bin" calibrate --method kf --session "$work/off/session.ini" --static-from data --out "$work/off/data.json" > /dev/null
 check "static intervals from the data: exits 0" test $? -eq 0
 check "static intervals from the data: reported" contains "$work/off/data.json" '"static_from_data"'
@@ -180,6 +181,23 @@ printf '[gyro]\nbias = 0.1 0.3 ug\n' > "$work/badsensor.ini"
 "$bin" simulate --plan "$src/config/plans/seed8.ini" --sensor "$work/badsensor.ini" --out "$work/x" 2> "$work/unit.err"
 check "wrong unit exits 2" test $? -eq 2
 check "wrong unit names file and line" contains "$work/unit.err" "badsensor.ini:2"
+
+# diagnose: a gyro bias drift hidden in a rot19 session, calibrated with a profile without it.
+sed 's/^bias = 0.1 0.3 deg\/h$/bias = 0.1 0.3 deg\/h\nbias_drift = 0.4 0.6 deg\/h\/h/' \
+  "$src/config/sensors/nav-fog.ini" > "$work/drift.ini"
+"$bin" simulate --plan "$src/config/plans/rot19.ini" --sensor "$work/drift.ini" --out "$work/dr" \
+  --seed 4 --rate 20 > /dev/null
+cp "$src/config/sensors/nav-fog.ini" "$work/dr/sensor.ini"
+"$bin" diagnose --session "$work/dr/session.ini" --out "$work/dr/diag" > "$work/diag.txt" 2> "$work/diag.err"
+check "diagnose exits 0" test $? -eq 0
+for f in diagnosis.json report.md residuals.png; do check "diagnose writes $f" test -s "$work/dr/diag/$f"; done
+check "diagnose names the hidden drift" contains "$work/diag.txt" "Found gyro.bias_drift"
+check "diagnosis.json names it first" python3 -c "import json,sys; d=json.load(open('$work/dr/diag/diagnosis.json')); sys.exit(d['findings'][0]['effect'] != 'gyro.bias_drift')"
+check "diagnose says the lever arms are not separable" contains "$work/diag.txt" "Not separable on this plan: accel.lever_arm"
+"$bin" diagnose --session "$work/dr/session.ini" --out "$work/dr/d2" --alpha 2 2> "$work/diag2.err"
+check "diagnose --alpha out of range is a usage error" test $? -eq 1
+"$bin" diagnose --session "$work/s8/session.ini" --out "$work/s8diag" --no-plot > "$work/diag3.txt"
+check "diagnose on a clean session names nothing" contains "$work/diag3.txt" "Findings: none"
 
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0

@@ -1,0 +1,359 @@
+#include "filter/diagnosis.hpp"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
+#include <boost/math/distributions/fisher_f.hpp>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "filter/ins_error_model.hpp"
+#include "models/coefficient_families.hpp"
+#include "models/imu_error_model.hpp"
+
+namespace sinscal {
+
+namespace {
+
+// The noise model is trusted while the fit's chi-square stays within this quantile.
+constexpr double kNoiseModelLevel = 0.99;
+// Two candidates whose fits' chi-square differ by less than this explain the residual equally
+// well (a likelihood ratio below e^4.5, about 90).
+constexpr double kAmbiguityMargin = 9.0;
+
+// One dwell's estimated inputs, whitened: L^-1 u = L^-1 H theta + unit noise (R = L L^T).
+struct WhiteDwell {
+  Eigen::MatrixXd A;  // L^-1 H (rows: the dwell's estimated inputs)
+  Eigen::VectorXd y;  // L^-1 u
+  Eigen::MatrixXd H;  // H (physical units)
+  Eigen::VectorXd u;
+  std::vector<int> rows;  // which of the 6 inputs
+};
+
+class StaticDesign {
+ public:
+  StaticDesign(const std::vector<EquivalentInputs>& inputs, const Site& site,
+               const TableAttitudeError& table)
+      : inputs_(inputs), site_(site), table_(table) {}
+
+  std::vector<WhiteDwell> whiten(const std::vector<int>& parameters) const {
+    std::vector<WhiteDwell> out;
+    for (const auto& in : inputs_) {
+      const auto H6 = equivalent_input_map(in.dwell.C_b_n_known, site_, parameters,
+                                           0.5 * (in.dwell.t_start + in.dwell.t_end));
+      const Matrix6d R6 = stage2_input_covariance(in, site_, table_);
+      WhiteDwell w;
+      for (int i = 0; i < 6; ++i)
+        if (in.estimated[static_cast<std::size_t>(i)]) w.rows.push_back(i);
+      const auto m = static_cast<Eigen::Index>(w.rows.size());
+      Eigen::MatrixXd R(m, m);
+      w.H.resize(m, H6.cols());
+      w.u.resize(m);
+      for (Eigen::Index a = 0; a < m; ++a) {
+        w.H.row(a) = H6.row(w.rows[static_cast<std::size_t>(a)]);
+        w.u(a) = in.u(w.rows[static_cast<std::size_t>(a)]);
+        for (Eigen::Index b = 0; b < m; ++b)
+          R(a, b) = R6(w.rows[static_cast<std::size_t>(a)], w.rows[static_cast<std::size_t>(b)]);
+      }
+      const Eigen::LLT<Eigen::MatrixXd> llt(R);
+      if (llt.info() != Eigen::Success)
+        throw std::invalid_argument("diagnosis: the covariance of dwell " +
+                                    std::to_string(in.dwell.index) + " is not positive definite");
+      w.A = llt.matrixL().solve(w.H);
+      w.y = llt.matrixL().solve(w.u);
+      out.push_back(std::move(w));
+    }
+    return out;
+  }
+
+  const std::vector<EquivalentInputs>& inputs() const { return inputs_; }
+  const Site& site() const { return site_; }
+  const TableAttitudeError& table() const { return table_; }
+
+ private:
+  const std::vector<EquivalentInputs>& inputs_;
+  const Site& site_;
+  const TableAttitudeError& table_;
+};
+
+// The families' default priors (SI) of the parameters: a weak prior that makes every fit
+// determinate (a direction no dwell sees is predicted as zero) without pulling observed ones.
+Eigen::VectorXd prior_sigmas(const std::vector<int>& parameters) {
+  const auto& cat = coefficient_catalog();
+  Eigen::VectorXd s(static_cast<Eigen::Index>(parameters.size()));
+  for (std::size_t k = 0; k < parameters.size(); ++k)
+    s(static_cast<Eigen::Index>(k)) =
+        coefficient_family_info(cat[static_cast<std::size_t>(parameters[k])].family).default_prior;
+  return s;
+}
+
+// Regularized least squares over the dwells except `skip` (-1: none).
+Eigen::VectorXd solve_with_prior(const std::vector<WhiteDwell>& dwells, const Eigen::VectorXd& p0,
+                                 int skip) {
+  const Eigen::Index n = p0.size();
+  Eigen::MatrixXd N = p0.cwiseInverse().cwiseAbs2().asDiagonal();
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(n);
+  for (std::size_t i = 0; i < dwells.size(); ++i) {
+    if (static_cast<int>(i) == skip) continue;
+    N += dwells[i].A.transpose() * dwells[i].A;
+    b += dwells[i].A.transpose() * dwells[i].y;
+  }
+  return N.ldlt().solve(b);
+}
+
+// Fit, residuals and leave-one-dwell-out prediction of one parameter set.
+FitFigures figures(const StaticDesign& design, const std::vector<int>& parameters,
+                   bool heldout = true) {
+  FitFigures f;
+  Stage2Options o;
+  o.table = design.table();
+  o.parameters = parameters;
+  f.fit = solve_stage2(design.inputs(), design.site(), o);
+  f.chi2 = f.fit.chi2_per_dof * f.fit.dof;
+  const auto dwells = design.whiten(parameters);
+  const Eigen::VectorXd p0 = prior_sigmas(parameters);
+  const Eigen::VectorXd theta = solve_with_prior(dwells, p0, -1);
+  double sa = 0.0, sg = 0.0, ha = 0.0, hg = 0.0, hz = 0.0;
+  int na = 0, ng = 0, nha = 0, nhg = 0, nz = 0, inputs = 0;
+  for (std::size_t i = 0; i < dwells.size(); ++i) {
+    const WhiteDwell& w = dwells[i];
+    const Eigen::VectorXd r = w.u - w.H * theta;
+    const Eigen::VectorXd th = heldout ? solve_with_prior(dwells, p0, static_cast<int>(i)) : theta;
+    const Eigen::VectorXd e = w.u - w.H * th, z = w.y - w.A * th;
+    for (std::size_t a = 0; a < w.rows.size(); ++a) {
+      const bool gyro = w.rows[a] >= ins_input::kGyro.index;
+      const auto k = static_cast<Eigen::Index>(a);
+      (gyro ? sg : sa) += r(k) * r(k);
+      (gyro ? ng : na) += 1;
+      (gyro ? hg : ha) += e(k) * e(k);
+      (gyro ? nhg : nha) += 1;
+    }
+    hz += z.squaredNorm();
+    nz += static_cast<int>(z.size());
+    inputs += static_cast<int>(w.rows.size());
+  }
+  f.accel_rms = na ? std::sqrt(sa / na) : 0.0;
+  f.gyro_rms = ng ? std::sqrt(sg / ng) : 0.0;
+  f.heldout_accel = nha ? std::sqrt(ha / nha) : 0.0;
+  f.heldout_gyro = nhg ? std::sqrt(hg / nhg) : 0.0;
+  f.heldout = nz ? std::sqrt(hz / nz) : 0.0;
+  f.heldout_dwells = static_cast<int>(dwells.size());
+  f.log_likelihood = -0.5 * f.chi2;
+  f.bic = f.chi2 + f.fit.rank * std::log(std::max(1, inputs));
+  return f;
+}
+
+// One component as a candidate: separable when, added alone to the current parameters, it is
+// observable with a sigma below its family's prior / ratio.
+CandidateTest separability(const StaticDesign& design, const std::vector<int>& current,
+                           int component, const DiagnosisOptions& o) {
+  const auto& cat = coefficient_catalog();
+  CandidateTest c;
+  c.family = cat[static_cast<std::size_t>(component)].family;
+  const CoefficientFamily& info = coefficient_family_info(c.family);
+  c.separated_by = info.separated_by;
+  Stage2Options so;
+  so.table = design.table();
+  so.parameters = current;
+  so.parameters.push_back(component);
+  const Stage2Result r = solve_stage2(design.inputs(), design.site(), so);
+  const auto j = static_cast<Eigen::Index>(current.size());
+  const double sigma = std::sqrt(r.cov(j, j));
+  const bool ok =
+      r.observable.back() && std::isfinite(sigma) && sigma < info.default_prior / o.separable_ratio;
+  (ok ? c.separable : c.aliased).push_back(component);
+  const std::string& name = cat[static_cast<std::size_t>(component)].name;
+  for (const auto& d : r.unobservable_directions)
+    if (d.find(name) != std::string::npos) c.aliased_with = d;
+  return c;
+}
+
+double largest_shift(const FitFigures& before, const FitFigures& after,
+                     const std::vector<int>& base) {
+  double worst = 0.0;
+  for (std::size_t k = 0; k < base.size(); ++k) {
+    const auto i = static_cast<Eigen::Index>(k);
+    const double s = std::sqrt(before.fit.cov(i, i));
+    if (!before.fit.observable[k] || !after.fit.observable[k] || !(s > 0.0)) continue;
+    worst = std::max(worst, std::abs(after.fit.theta(i) - before.fit.theta(i)) / s);
+  }
+  return worst;
+}
+
+// Tests one separable candidate against the current fit.
+// The test of a nested extension: the chi-square test of the likelihood ratio while the noise
+// model holds (the extended fit's chi-square within its 99 % quantile), else the F test, which
+// scales the noise by the fit's own residual.
+void test_statistic(const FitFigures& now, CandidateTest& c) {
+  const double lr = std::max(0.0, now.chi2 - c.with.chi2);
+  const int dof1 = c.with.fit.dof;
+  if (c.with.chi2 <= boost::math::quantile(boost::math::chi_squared(dof1), kNoiseModelLevel)) {
+    c.test = "chi2";
+    c.likelihood_ratio = lr;
+    c.p_value = boost::math::cdf(boost::math::complement(boost::math::chi_squared(c.dof), lr));
+  } else {
+    c.test = "F";
+    c.likelihood_ratio = lr / c.with.fit.chi2_per_dof;
+    c.p_value = boost::math::cdf(
+        boost::math::complement(boost::math::fisher_f(c.dof, dof1), c.likelihood_ratio / c.dof));
+  }
+}
+
+void test_candidate(const StaticDesign& design, const std::vector<int>& current,
+                    const FitFigures& now, CandidateTest& c) {
+  std::vector<int> with = current;
+  with.insert(with.end(), c.separable.begin(), c.separable.end());
+  c.with = figures(design, with);
+  c.dof = c.with.fit.rank - now.fit.rank;
+  if (c.dof <= 0 || c.with.fit.dof <= 0) return;
+  test_statistic(now, c);
+  c.base_shift_sigma = largest_shift(now, c.with, current);
+}
+
+DwellResidual residual_of(const EquivalentInputs& in, const Site& site,
+                          const TableAttitudeError& table) {
+  DwellResidual d;
+  d.dwell = in.dwell.index;
+  d.label = in.dwell.label;
+  const Matrix6d R = stage2_input_covariance(in, site, table);
+  for (int i = 0; i < 6; ++i) d.sigma(i) = std::sqrt(R(i, i));
+  return d;
+}
+
+// Residuals of every dwell under the regularized fit of `parameters`; `after` or `before`.
+void fill_residuals(const StaticDesign& design, const std::vector<int>& parameters,
+                    std::vector<DwellResidual>& out, bool after) {
+  const auto dwells = design.whiten(parameters);
+  const Eigen::VectorXd theta = solve_with_prior(dwells, prior_sigmas(parameters), -1);
+  for (std::size_t i = 0; i < dwells.size(); ++i) {
+    const Eigen::VectorXd r = dwells[i].u - dwells[i].H * theta;
+    auto& target = after ? out[i].after : out[i].before;
+    target.setConstant(std::numeric_limits<double>::quiet_NaN());
+    for (std::size_t a = 0; a < dwells[i].rows.size(); ++a)
+      target(dwells[i].rows[a]) = r(static_cast<Eigen::Index>(a));
+  }
+}
+
+// Catalog indices of the candidate families' components not yet in the model.
+std::vector<int> candidate_components(const DiagnosisOptions& o, const std::vector<int>& current) {
+  std::vector<std::string> families = o.candidates;
+  if (families.empty())
+    for (const auto& f : coefficient_families())
+      if (!f.base) families.push_back(f.name);
+  const auto& cat = coefficient_catalog();
+  std::vector<int> out;
+  for (std::size_t k = 0; k < cat.size(); ++k) {
+    const int c = static_cast<int>(k);
+    if (std::find(families.begin(), families.end(), cat[k].family) != families.end() &&
+        std::find(current.begin(), current.end(), c) == current.end())
+      out.push_back(c);
+  }
+  return out;
+}
+
+// Marks the round's significant candidates and returns the most significant one, or nullptr.
+CandidateTest* best_of(std::vector<CandidateTest>& round, double alpha) {
+  const auto tested =
+      std::count_if(round.begin(), round.end(), [](const CandidateTest& c) { return c.dof > 0; });
+  CandidateTest* best = nullptr;
+  for (auto& c : round) {
+    c.threshold = alpha / static_cast<double>(std::max<std::ptrdiff_t>(1, tested));
+    c.significant = c.dof > 0 && c.p_value < c.threshold;
+    if (c.significant &&
+        (!best || c.p_value < best->p_value ||
+         (c.p_value == best->p_value && c.likelihood_ratio > best->likelihood_ratio)))
+      best = &c;
+  }
+  return best;
+}
+
+}  // namespace
+
+DiagnosisReport diagnose_static(const std::vector<EquivalentInputs>& inputs, const Site& site,
+                                const Stage2Options& base, const DiagnosisOptions& o) {
+  if (!(o.alpha > 0.0 && o.alpha < 1.0) || !(o.separable_ratio >= 1.0))
+    throw std::invalid_argument("diagnosis: alpha must be in (0, 1), separable_ratio >= 1");
+  DiagnosisReport rep;
+  rep.alpha = o.alpha;
+  for (const auto& in : inputs)
+    for (bool e : in.estimated) rep.inputs += e ? 1 : 0;
+  if (rep.inputs <= static_cast<int>(base.parameters.size()))
+    throw std::invalid_argument(
+        "diagnosis: " + std::to_string(inputs.size()) + " dwells give " +
+        std::to_string(rep.inputs) + " equivalent inputs, not more than the model's " +
+        std::to_string(base.parameters.size()) + " coefficients: too few dwells to test anything");
+  const StaticDesign design(inputs, site, base.table);
+  std::vector<int> current = base.parameters;
+  rep.initial_parameters = current;
+  rep.initial = figures(design, current);
+  FitFigures now = rep.initial;
+  while (static_cast<int>(rep.findings.size()) < o.max_findings) {
+    std::vector<CandidateTest> round;
+    for (int component : candidate_components(o, current)) {
+      CandidateTest c = separability(design, current, component, o);
+      if (!c.separable.empty()) test_candidate(design, current, now, c);
+      round.push_back(std::move(c));
+    }
+    // Each family's separable components together too: an effect on every axis at once shows
+    // only partly in each one alone.
+    const std::size_t singles = round.size();
+    for (std::size_t i = 0; i < singles; ++i) {
+      const bool first_of_family =
+          std::none_of(round.begin(), round.begin() + static_cast<std::ptrdiff_t>(i),
+                       [&](const CandidateTest& c) { return c.family == round[i].family; });
+      if (!first_of_family) continue;
+      CandidateTest all;
+      for (std::size_t j = i; j < singles; ++j)
+        if (round[j].family == round[i].family)
+          all.separable.insert(all.separable.end(), round[j].separable.begin(),
+                               round[j].separable.end());
+      if (all.separable.size() < 2) continue;
+      all.family = round[i].family;
+      all.separated_by = round[i].separated_by;
+      test_candidate(design, current, now, all);
+      round.push_back(std::move(all));
+    }
+    CandidateTest* best = best_of(round, o.alpha);
+    // Candidates that explain the residual as well as the best (their fits' chi-square within
+    // kAmbiguityMargin): the plan cannot tell them apart. Another family's: name neither; the
+    // same family's: the family is named, its axis is ambiguous.
+    if (best) {
+      for (auto& c : round)
+        if (&c != best && c.significant && c.with.chi2 - best->with.chi2 < kAmbiguityMargin)
+          best->ambiguous_with.push_back(c);
+      best->named = std::none_of(best->ambiguous_with.begin(), best->ambiguous_with.end(),
+                                 [&](const CandidateTest& c) { return c.family != best->family; });
+    }
+    rep.rounds.push_back(round);
+    if (!best) break;
+    if (!best->named) {
+      rep.ambiguous.push_back(*best);
+      break;
+    }
+    rep.findings.push_back(*best);
+    current.insert(current.end(), best->separable.begin(), best->separable.end());
+    now = best->with;
+  }
+  // What the plan could not separate (against the final model), one entry per family.
+  if (!rep.rounds.empty())
+    for (const auto& c : rep.rounds.back()) {
+      if (c.aliased.empty()) continue;
+      auto it = std::find_if(rep.not_separable.begin(), rep.not_separable.end(),
+                             [&](const CandidateTest& n) { return n.family == c.family; });
+      if (it == rep.not_separable.end()) {
+        rep.not_separable.push_back(c);
+      } else {
+        it->aliased.insert(it->aliased.end(), c.aliased.begin(), c.aliased.end());
+        if (it->aliased_with.empty()) it->aliased_with = c.aliased_with;
+      }
+    }
+  rep.final_parameters = current;
+  rep.final_fit = now;
+  for (const auto& in : inputs) rep.residuals.push_back(residual_of(in, site, base.table));
+  fill_residuals(design, rep.initial_parameters, rep.residuals, false);
+  fill_residuals(design, rep.final_parameters, rep.residuals, true);
+  return rep;
+}
+
+}  // namespace sinscal

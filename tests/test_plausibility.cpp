@@ -1,0 +1,113 @@
+// The plausibility gate: a clean simulated seed8 log passes every check; a wrong unit, a flipped
+// axis, the wrong plan and clipped data each fail the check that names them.
+#include <catch2/catch.hpp>
+#include <functional>
+
+#include "filter/plausibility.hpp"
+#include "helpers.hpp"
+#include "models/sensor_profile.hpp"
+#include "models/units.hpp"
+#include "rig/motion.hpp"
+
+using namespace sinscal;
+
+namespace {
+
+constexpr double kRate = 10.0;  // Hz: enough for dwell means
+
+// seed8 simulated with the nav-fog profile's drawn errors and noise, altered by `alter`, written
+// as a native log and passed through the gate.
+PlausibilityReport gate(const std::function<void(ImuSample&)>& alter, const Plan* plan_for_gate,
+                        double accel_range = 0.0) {
+  const Plan plan = test::load_plan("seed8.ini");
+  const SensorProfile profile =
+      SensorProfile::load(test::source_path("config/sensors/nav-fog.ini"));
+  const Motion motion = build_motion(plan, plan.site);
+  auto samples = test::simulate(motion, profile.draw(3), kRate, &profile.noise, 3);
+  for (auto& s : samples) alter(s);
+  const std::string dir = test::temp_dir("plausibility");
+  const std::string path = dir + "/imu.csv";
+  {
+    LogWriter w(path, kRate);
+    for (const auto& s : samples) w.write(s);
+    w.close();
+  }
+  PlausibilityLimits limits = PlausibilityLimits::from_profile(&profile);
+  if (accel_range > 0.0) limits.accel_range = accel_range;
+  LogReader reader(LogFormat::native_format(path, kRate));
+  const Plan& p = plan_for_gate ? *plan_for_gate : plan;
+  return check_plausibility(reader, "imu.csv", test::timeline(p), p.site, 0.0, limits);
+}
+
+const PlausibilityCheck& check(const PlausibilityReport& r, const std::string& name) {
+  for (const auto& c : r.checks)
+    if (c.name == name) return c;
+  FAIL("no check '" << name << "'");
+  throw std::logic_error("unreachable");
+}
+
+}  // namespace
+
+TEST_CASE("Plausibility gate: a clean log passes, each bad input fails its check",
+          "[plausibility]") {
+  SECTION("clean") {
+    const auto r = gate([](ImuSample&) {}, nullptr);
+    INFO(r.failures());
+    CHECK(r.passed());
+    CHECK(r.checks.size() == 4);
+  }
+  SECTION("velocity in mm/s declared as m/s") {
+    const auto r = gate([](ImuSample& s) { s.dv_b *= 1000.0; }, nullptr);
+    CHECK_FALSE(check(r, "gravity magnitude").passed);
+    CHECK_THAT(check(r, "gravity magnitude").detail, Catch::Contains("mm/s"));
+    CHECK(check(r, "gravity direction").passed);
+  }
+  SECTION("gyro increments in rad declared as deg") {
+    const auto r = gate([](ImuSample& s) { s.dtheta_b *= units::deg; }, nullptr);
+    CHECK_FALSE(check(r, "Earth rate").passed);
+    CHECK_THAT(check(r, "Earth rate").detail, Catch::Contains("rad declared as deg"));
+    CHECK(check(r, "gravity magnitude").passed);
+  }
+  SECTION("a flipped accelerometer axis") {
+    const auto r = gate([](ImuSample& s) { s.dv_b.y() = -s.dv_b.y(); }, nullptr);
+    CHECK(check(r, "gravity magnitude").passed);
+    CHECK_FALSE(check(r, "gravity direction").passed);
+    CHECK_THAT(check(r, "gravity direction").detail, Catch::Contains("wrong axis map or sign"));
+  }
+  SECTION("swapped accelerometer axes keep the magnitude: the direction of gravity tells") {
+    const auto r = gate([](ImuSample& s) { std::swap(s.dv_b.x(), s.dv_b.z()); }, nullptr);
+    CHECK_FALSE(check(r, "gravity direction").passed);
+  }
+  SECTION("the wrong plan") {
+    const Plan rot19 = test::load_plan("rot19.ini");
+    const auto r = gate([](ImuSample&) {}, &rot19);
+    CHECK_FALSE(r.passed());
+  }
+  SECTION("clipped data") {
+    const double range = 0.6 * units::g0;
+    const auto r = gate(
+        [&](ImuSample& s) {
+          for (int i = 0; i < 3; ++i)
+            s.dv_b(i) = std::clamp(s.dv_b(i), -range * s.dt, range * s.dt);
+        },
+        nullptr, range);
+    CHECK_FALSE(check(r, "saturation").passed);
+    CHECK_THAT(check(r, "saturation").detail, Catch::Contains("imu.csv:"));
+  }
+}
+
+TEST_CASE("Plausibility gate: bounds from the sensor profile's error ranges", "[plausibility]") {
+  const SensorProfile fog = SensorProfile::load(test::source_path("config/sensors/nav-fog.ini"));
+  const SensorProfile mems = SensorProfile::load(test::source_path("config/sensors/mems.ini"));
+  const auto lf = PlausibilityLimits::from_profile(&fog);
+  const auto lm = PlausibilityLimits::from_profile(&mems);
+  // The MEMS unit's larger errors widen every bound; neither is below its floor.
+  CHECK(lm.specific_force > lf.specific_force);
+  CHECK(lm.rate > lf.rate);
+  CHECK(lf.direction >= 5.0 * units::deg);
+  CHECK(lf.check_rate);
+  // A FOG's Earth-rate bound is a small fraction of the Earth rate: rad-as-deg cannot hide in it.
+  CHECK(lf.rate < 0.2 * Earth::wgs84().rate());
+  const auto none = PlausibilityLimits::from_profile(nullptr);
+  CHECK_FALSE(none.check_rate);
+}
