@@ -1,14 +1,7 @@
 #include "report/monitor.hpp"
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -17,9 +10,8 @@
 
 #include "models/imu_error_model.hpp"
 #include "models/sensor_profile.hpp"
+#include "report/gnuplot.hpp"
 #include "report/output.hpp"
-
-extern char** environ;
 
 namespace sinscal {
 
@@ -90,26 +82,9 @@ MonitorSeries read_monitor(const std::string& path) {
 
 namespace {
 
-// Text from the user (file names, labels) as gnuplot sees it: control characters (a newline
-// would end a comment or a string and start a command) shown as '?'.
-std::string printable(const std::string& s) {
-  std::string out;
-  for (char c : s) out += static_cast<unsigned char>(c) < 0x20 || c == 0x7f ? '?' : c;
-  return out;
-}
-
-std::string quoted(const std::string& s) {  // a gnuplot single-quoted string
-  std::string q = "'";
-  for (char c : printable(s)) q += c == '\'' ? std::string("''") : std::string(1, c);
-  return q + "'";
-}
-
-std::string num(double v) {
-  if (std::isnan(v)) return "?";
-  char b[32];
-  std::snprintf(b, sizeof b, "%.9g", v);
-  return b;
-}
+std::string printable(const std::string& s) { return gnuplot_printable(s); }
+std::string quoted(const std::string& s) { return gnuplot_quoted(s); }
+std::string num(double v) { return gnuplot_number(v); }
 
 }  // namespace
 
@@ -231,45 +206,7 @@ ConvergencePlot plot_convergence(const MonitorSeries& series, const ConvergenceP
   const std::string script = convergence_plot_script(series, options, png_path, &plot);
   plot.script = convergence_script_path(png_path);
   write_atomically(plot.script, [&](std::ostream& out) { out << script; });
-  // gnuplot draws into a temporary file renamed over the PNG when it succeeded.
-  const std::string temp_png = png_path + ".tmp-" + std::to_string(::getpid());
-  const std::string set_output = "output = " + quoted(temp_png);
-  const std::string log = plot.script + ".log";
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  std::vector<char*> argv = {const_cast<char*>(options.gnuplot.c_str()), const_cast<char*>("-e"),
-                             const_cast<char*>(set_output.c_str()),
-                             const_cast<char*>(plot.script.c_str()), nullptr};
-  pid_t pid = 0;
-  const int err =
-      posix_spawnp(&pid, options.gnuplot.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (err != 0) {
-    std::remove(log.c_str());
-    throw std::runtime_error("cannot run " + options.gnuplot + ": " + std::strerror(err) +
-                             " (install the Debian package gnuplot-nox; the script is " +
-                             plot.script + ")");
-  }
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR)
-      throw std::runtime_error("waiting for gnuplot: " + std::string(std::strerror(errno)));
-  std::string messages;
-  {
-    std::ifstream in(log);
-    std::ostringstream text;
-    text << in.rdbuf();
-    messages = text.str();
-  }
-  std::remove(log.c_str());
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    std::remove(temp_png.c_str());
-    throw std::runtime_error(options.gnuplot + " failed on " + plot.script + ": " + messages);
-  }
-  if (std::rename(temp_png.c_str(), png_path.c_str()) != 0)
-    throw std::runtime_error(png_path + ": cannot replace: " + std::strerror(errno));
+  run_gnuplot(options.gnuplot, plot.script, png_path);
   return plot;
 }
 
