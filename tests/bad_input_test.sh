@@ -485,7 +485,7 @@ fixed 2 "session.ini:$L: 'log.columns': unknown key in [log]" nav
 
 # --- calibrate: options -----------------------------------------------------------------------
 new calibrate-unknown-method; mini
-fixed 1 "--method' must be closed-form | kf, not 'magic'" S calibrate --method magic --session session.ini --out out/r.json
+fixed 1 "--method' must be closed-form | kf | table-free, not 'magic'" S calibrate --method magic --session session.ini --out out/r.json
 new calibrate-channels-one; s8
 fixed 1 "--channels' must be a list with at least north,east" cf --channels north
 new calibrate-stream-closed-form; mini
