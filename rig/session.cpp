@@ -71,16 +71,6 @@ Session Session::load(const std::string& path, PlanNeed plan_need) {
   s.time_offset = ini.get_quantity("session.time_offset", QuantityKind::Time, "s", 0.0);
   if (!(std::abs(s.time_offset) <= kMaxTimeOffset))
     throw ConfigError(ini.where("session.time_offset") + "must be within -1e10 and 1e10 s");
-  if (ini.has("site.gravity")) {
-    if (!optional_plan)
-      throw ConfigError(ini.where("site.gravity") +
-                        "the local gravity magnitude is read by 'calibrate --method table-free' "
-                        "and 'allan' only (the table methods use the WGS-84 gravity model)");
-    s.gravity = ini.get_quantity("site.gravity", QuantityKind::Acceleration, "m/s^2");
-    if (!(s.gravity >= kMinGravity && s.gravity <= kMaxGravity))
-      throw ConfigError(ini.where("site.gravity") +
-                        "must be within 9.7 and 9.9 m/s^2 (the Earth's surface)");
-  }
   if (ini.has("session.plan")) {
     s.plan = Plan::load(named_file(ini, s.dir, "session.plan", true));
   } else if (!optional_plan) {
@@ -90,6 +80,16 @@ Session Session::load(const std::string& path, PlanNeed plan_need) {
                       "only)");
   } else {
     s.has_plan = false;
+  }
+  if (ini.has("site.gravity")) {
+    if (!optional_plan)
+      throw ConfigError(ini.where("site.gravity") +
+                        "the local gravity magnitude is read by 'calibrate --method table-free' "
+                        "and 'allan' only (the table methods use the WGS-84 gravity model)");
+    s.gravity = ini.get_quantity("site.gravity", QuantityKind::Acceleration, "m/s^2");
+    if (!(s.gravity >= kMinGravity && s.gravity <= kMaxGravity))
+      throw ConfigError(ini.where("site.gravity") +
+                        "must be within 9.7 and 9.9 m/s^2 (the Earth's surface)");
   }
   s.truth_file = named_file(ini, s.dir, "session.truth", true);
   s.sensor_file = named_file(ini, s.dir, "session.sensor", true);
