@@ -224,16 +224,18 @@ AllanRun run_allan(const Session& s, const AllanRunOptions& o) {
     if (o.selection != AllanSelection::All) throw;
   }
   out.poses_found = detected ? static_cast<int>(detection.poses.size()) : -1;
-  double rest = 0.0;
-  for (const Pose& p : detection.poses) rest += p.duration();
-  out.static_fraction = duration > 0.0 ? rest / duration : 0.0;
+  // Static: one pose covers (nearly) the whole record. Several poses covering most of it are a
+  // record with moves between them, which would dominate its Allan deviation.
+  double longest = 0.0;
+  for (const Pose& p : detection.poses) longest = std::max(longest, p.duration());
+  out.static_fraction = duration > 0.0 ? longest / duration : 0.0;
   std::size_t first = 0, last = rec.samples.size() - 1;
   if (o.selection == AllanSelection::All) {
     if (out.static_fraction < 0.9) {
-      out.warning = "the record is not static: the poses found (" +
-                    std::to_string(std::max(out.poses_found, 0)) + ") cover " +
+      out.warning = "the record is not static: its longest static pose covers " +
                     std::to_string(static_cast<int>(std::round(100.0 * out.static_fraction))) +
-                    " % of it; --longest-pose or --pose N analyses one pose";
+                    " % of it (" + std::to_string(std::max(out.poses_found, 0)) +
+                    " poses found); --longest-pose or --pose N analyses one pose";
       if (o.require_static) throw std::invalid_argument(out.log + ": " + out.warning);
     }
   } else {

@@ -141,11 +141,11 @@ struct AllanRun {
   AllanSelection selection = AllanSelection::All;
   int pose = 0;                       // the pose analysed (0: the whole record)
   int poses_found = 0;                // by the detector (-1: it found none)
-  double static_fraction = 0.0;       // of the record in detected poses
+  double static_fraction = 0.0;       // of the record in its longest detected pose
   double t_start = 0.0, t_end = 0.0;  // s, the stretch analysed
   AllanAnalysis analysis;
-  /// Not empty when the whole record was taken but is not static (found poses cover less than
-  /// 90 % of it): says so and how to take one pose.
+  /// Not empty when the whole record was taken but is not static (its longest detected pose
+  /// covers less than 90 % of it): says so and how to take one pose.
   std::string warning;
 };
 
