@@ -28,7 +28,7 @@ void add_table_free_options(po::options_description& d, CalibrateOptions& o) {
        "table-free: window of the pose detector's variances [s]")
       ("min-pose", po::value(&o.min_pose)->default_value(2.0),
        "table-free: shortest static pose the detector takes [s]")
-      ("edge-trim", po::value(&o.edge_trim)->default_value(0.2),
+      ("edge-trim", po::value(&o.edge_trim)->default_value(0.2, "0.2"),
        "table-free: cut from each end of a pose before its mean [s]")
       ("pose-accel-only", po::bool_switch(&o.pose_accel_only), "table-free: the accelerometers alone find the poses (a unit held in "
        "the hand, whose gyros see the tremor)")

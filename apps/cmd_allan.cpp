@@ -24,8 +24,8 @@ int cmd_allan(const std::vector<std::string>& args) {
        "session.ini of the record (a plan is not needed)")
       ("out", po::value(&out_dir)->required(),
        "directory to write allan.csv, profile-fragment.ini, allan.png and allan.gp into")
-      ("all", "the whole record (the default, which refuses a record that is not static; "
-       "--all takes it with a warning)")
+      ("all", "the whole record even when it is not static (with a warning); without a "
+       "selection the whole record, refused when it is not static")
       ("longest-pose", "the longest static pose the detector finds")
       ("pose", po::value(&pose), "static pose N (1-based, in time order) the detector finds")
       ("pose-window", po::value(&o.detector.window)->default_value(1.0),
