@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "apps/cli.hpp"
 #include "report/batch.hpp"
@@ -30,7 +31,24 @@ struct CalibrateOptions {
   bool force = false;  // run even when the plausibility gate fails (recorded in the result)
   int passes = 1;
   std::string terms;
+  // table-free (apps/calibrate_table_free.cpp)
+  double gravity = 0.0;                      // m/s^2, 0: the session's
+  double pose_window = 1.0, min_pose = 2.0;  // s: pose detector
+  double edge_trim = 0.2;                    // s cut from each end of a pose
+  bool pose_accel_only = false;              // the accelerometers alone find the poses
+  std::vector<std::string> validate;         // validation sessions
 };
+
+/// The table-free options (--gravity, --pose-window, ...) added to `d`.
+void add_table_free_options(po::options_description& d, CalibrateOptions& o);
+/// Options of the other methods refused in --method table-free and the table-free options in
+/// the others (UsageError naming the option); the table-free values checked.
+void check_table_free_options(const po::variables_map& vm, const CalibrateOptions& o,
+                              const std::vector<std::vector<std::string>>& table_methods_options);
+/// One hand-held session by the table-free method (a session without a plan is allowed).
+SessionSummary calibrate_table_free_session(const CalibrateOptions& o,
+                                            const std::string& session_path,
+                                            const std::string& out_path, bool verbose);
 
 /// One session by the options' method: the result file, the monitor file (kf, may be empty);
 /// `verbose`: tables and verdicts on standard output (a single session); `live`: the live table

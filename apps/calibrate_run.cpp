@@ -185,6 +185,8 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
 SessionSummary calibrate_session(const CalibrateOptions& o, const std::string& session_path,
                                  const std::string& out_path, const std::string& monitor_path,
                                  bool verbose, bool live) {
+  if (o.method == Method::TableFree)
+    return calibrate_table_free_session(o, session_path, out_path, verbose);
   const Session session = Session::load(session_path);
   refuse_overwrite(session_inputs(session), {{"--out", out_path}, {"--monitor", monitor_path}});
   return o.method == Method::Kf ? calibrate_kf(o, session, out_path, monitor_path, verbose, live)

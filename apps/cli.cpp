@@ -107,7 +107,9 @@ void choose(boost::any& v, const std::vector<std::string>& values,
 }  // namespace
 
 void validate(boost::any& v, const std::vector<std::string>& values, Method*, int) {
-  choose<Method>(v, values, {{"closed-form", Method::ClosedForm}, {"kf", Method::Kf}});
+  choose<Method>(
+      v, values,
+      {{"closed-form", Method::ClosedForm}, {"kf", Method::Kf}, {"table-free", Method::TableFree}});
 }
 void validate(boost::any& v, const std::vector<std::string>& values, OnBadSample*, int) {
   choose<OnBadSample>(v, values, {{"stop", OnBadSample::Stop}, {"skip", OnBadSample::Skip}});
@@ -116,7 +118,9 @@ void validate(boost::any& v, const std::vector<std::string>& values, Vertical*, 
   choose<Vertical>(v, values, {{"free", Vertical::Free}, {"held", Vertical::Held}});
 }
 
-std::string name_of(Method m) { return m == Method::Kf ? "kf" : "closed-form"; }
+std::string name_of(Method m) {
+  return m == Method::Kf ? "kf" : m == Method::TableFree ? "table-free" : "closed-form";
+}
 std::string name_of(Stage1Method m) { return m == Stage1Method::Point ? "point" : "fit"; }
 std::string name_of(ErrorModelKind m) {
   return m == ErrorModelKind::Uncoupled ? "uncoupled" : "coupled";

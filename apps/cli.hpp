@@ -53,7 +53,7 @@ struct Choice {
 };
 
 /// Calibration method of `calibrate`.
-enum class Method { ClosedForm, Kf };
+enum class Method { ClosedForm, Kf, TableFree };
 /// What a bad sample does.
 enum class OnBadSample { Stop, Skip };
 /// The vertical channel of `navigate`.

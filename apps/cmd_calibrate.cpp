@@ -19,7 +19,7 @@ void add_options(po::options_description& d, CalibrateOptions& o) {
   // clang-format off
   d.add_options()
       ("method", po::value(&o.method)->default_value(Method::ClosedForm, "closed-form"),
-       "closed-form | kf (error-state Kalman filter)")
+       "closed-form | kf (error-state Kalman filter) | table-free (hand-held session, no table)")
       ("force", "run even when the plausibility gate fails (static gravity and Earth rate, gravity "
        "direction against the plan, saturation, stage-1 fit); the failed checks go in the result")
       ("table-sigma", po::value(&o.table_sigma)->default_value(2.5),
@@ -67,6 +67,7 @@ void add_options(po::options_description& d, CalibrateOptions& o) {
       ("on-bad-sample", po::value(&o.on_bad_sample)->default_value(OnBadSample::Stop, "stop"),
        "kf: stop | skip (NaN, saturated, time going backwards; each reported)");
   // clang-format on
+  add_table_free_options(d, o);
 }
 
 // Options given that the chosen method does not use: refused by name.
@@ -90,6 +91,8 @@ void check_method_options(const po::variables_map& vm, const CalibrateOptions& o
                                                    "static-min",
                                                    "static-rate-threshold",
                                                    "on-bad-sample"};
+  check_table_free_options(vm, o, {closed_form_only, kf_only, {"table-sigma"}});
+  if (o.method == Method::TableFree) return;
   const bool kf = o.method == Method::Kf;
   for (const auto& name : kf ? closed_form_only : kf_only)
     if (vm.count(name) && !vm[name].defaulted())
@@ -197,8 +200,8 @@ int cmd_calibrate(const std::vector<std::string>& args) {
   add_options(d, o);
   const auto vm = parse(
       args, d,
-      "Usage: sinscal calibrate --session DIR/session.ini --method closed-form|kf --out "
-      "result.json\n"
+      "Usage: sinscal calibrate --session DIR/session.ini --method closed-form|kf|table-free "
+      "--out result.json\n"
       "       sinscal calibrate --session DIR_OF_SESSIONS | --session-list FILE [--session ...] "
       "--out OUT_DIR\n"
       "Estimates the calibration coefficients with their sigma. closed-form: the 24 base\n"
@@ -206,6 +209,8 @@ int cmd_calibrate(const std::vector<std::string>& args) {
       "  --stage1 point --model uncoupled --channels north,east\n"
       "kf: the error-state Kalman filter, with the extended terms the sensor profile declares;\n"
       "--stream reads the samples from standard input as they arrive.\n"
+      "table-free: a hand-held session (no plan needed): static poses found in the data, both\n"
+      "triads from gravity's magnitude and the turns between poses, the raw-count view.\n"
       "Batch (several sessions): OUT_DIR/NAME.json per session and OUT_DIR/summary.csv.");
   if (!vm) return 0;
   o.stream = vm->count("stream") > 0;

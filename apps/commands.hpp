@@ -12,5 +12,6 @@ int cmd_calibrate(const std::vector<std::string>& args);
 int cmd_compare(const std::vector<std::string>& args);
 int cmd_plot_convergence(const std::vector<std::string>& args);
 int cmd_diagnose(const std::vector<std::string>& args);
+int cmd_allan(const std::vector<std::string>& args);
 
 }  // namespace sinscal::cli

@@ -15,12 +15,13 @@ const char* kUsage =
     "  simulate   simulate a calibration session on a two-axis table\n"
     "  navigate   navigate through the static dwells of a session, report navigation errors\n"
     "  calibrate  estimate the calibration coefficients of a session or a batch of sessions\n"
-    "             (closed-form method or Kalman filter)\n"
+    "             (closed-form method, Kalman filter, or table-free for hand-held sessions)\n"
     "  compare    two results side by side, difference over its sigma\n"
     "  plot-convergence\n"
     "             estimates and sigmas over time from a Kalman monitor file, to PNG (gnuplot)\n"
     "  diagnose   what the calibrated model misses on a table session: the effect, its\n"
-    "             magnitude and the gain of adding it (model discovery)\n";
+    "             magnitude and the gain of adding it (model discovery)\n"
+    "  allan      Allan deviation of a static record or pose, fitted noise terms, plot\n";
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -38,6 +39,7 @@ int main(int argc, char** argv) {
     if (command == "compare") return cmd_compare(args);
     if (command == "plot-convergence") return cmd_plot_convergence(args);
     if (command == "diagnose") return cmd_diagnose(args);
+    if (command == "allan") return cmd_allan(args);
     std::cerr << "sinscal: unknown command '" << command << "'\n" << kUsage;
     return kUsageError;
   } catch (const po::error& e) {

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "filter/closed_form.hpp"
+#include "filter/handheld_run.hpp"
 #include "filter/kalman_run.hpp"
 #include "models/sensor_profile.hpp"
 #include "report/result.hpp"
@@ -25,5 +26,12 @@ void print_live_table(const MonitorRecord& record, const std::map<std::string, d
 /// Stage-1 inputs per dwell, identifiability, the static plan's limits, the paper's forms.
 void print_closed_form(const ClosedFormReport& report, const ResultCoefficients& coefficients,
                        const ResultCoefficients& truth);
+
+/// A table-free calibration: the data and the poses found, the fit (chi2/dof), the coefficients
+/// with sigmas (and truth), the raw-count view, the validation records.
+void print_table_free(const TableFreeRun& run, const ResultCoefficients& coefficients,
+                      const ResultCoefficients& truth);
+/// An Allan analysis: the stretch analysed and the fitted noise terms per axis.
+void print_allan(const AllanRun& run);
 
 }  // namespace sinscal::cli

@@ -270,6 +270,71 @@ CandidateTest* best_of(std::vector<CandidateTest>& round, double alpha) {
 
 }  // namespace
 
+namespace {
+
+// One round: every candidate component against the current model, then each family's separable
+// components together (an effect on every axis at once shows only partly in each one alone).
+std::vector<CandidateTest> run_round(const StaticDesign& design, const std::vector<int>& current,
+                                     const FitFigures& now, const DiagnosisOptions& o) {
+  std::vector<CandidateTest> round;
+  for (int component : candidate_components(o, current)) {
+    CandidateTest c = separability(design, current, component, o);
+    if (!c.separable.empty()) test_candidate(design, current, now, c);
+    round.push_back(std::move(c));
+  }
+  const std::size_t singles = round.size();
+  for (std::size_t i = 0; i < singles; ++i) {
+    const bool first_of_family =
+        std::none_of(round.begin(), round.begin() + static_cast<std::ptrdiff_t>(i),
+                     [&](const CandidateTest& c) { return c.family == round[i].family; });
+    if (!first_of_family) continue;
+    CandidateTest all;
+    for (std::size_t j = i; j < singles; ++j)
+      if (round[j].family == round[i].family)
+        all.separable.insert(all.separable.end(), round[j].separable.begin(),
+                             round[j].separable.end());
+    if (all.separable.size() < 2) continue;
+    all.family = round[i].family;
+    all.separated_by = round[i].separated_by;
+    test_candidate(design, current, now, all);
+    round.push_back(std::move(all));
+  }
+  return round;
+}
+
+// The round's most significant candidate, with the candidates that explain the residual as well
+// (their fits' chi-square within kAmbiguityMargin): the plan cannot tell them apart. Another
+// family's: name neither; the same family's: the family is named, its axis is ambiguous.
+CandidateTest* choose(std::vector<CandidateTest>& round, double alpha) {
+  CandidateTest* best = best_of(round, alpha);
+  if (!best) return nullptr;
+  for (auto& c : round)
+    if (&c != best && c.significant && c.with.chi2 - best->with.chi2 < kAmbiguityMargin)
+      best->ambiguous_with.push_back(c);
+  best->named = std::none_of(best->ambiguous_with.begin(), best->ambiguous_with.end(),
+                             [&](const CandidateTest& c) { return c.family != best->family; });
+  return best;
+}
+
+// What the plan could not separate (against the final model), one entry per family.
+std::vector<CandidateTest> not_separable(const std::vector<CandidateTest>& last_round) {
+  std::vector<CandidateTest> out;
+  for (const auto& c : last_round) {
+    if (c.aliased.empty()) continue;
+    auto it = std::find_if(out.begin(), out.end(),
+                           [&](const CandidateTest& n) { return n.family == c.family; });
+    if (it == out.end()) {
+      out.push_back(c);
+    } else {
+      it->aliased.insert(it->aliased.end(), c.aliased.begin(), c.aliased.end());
+      if (it->aliased_with.empty()) it->aliased_with = c.aliased_with;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 DiagnosisReport diagnose_static(const std::vector<EquivalentInputs>& inputs, const Site& site,
                                 const Stage2Options& base, const DiagnosisOptions& o) {
   if (!(o.alpha > 0.0 && o.alpha < 1.0) || !(o.separable_ratio >= 1.0))
@@ -289,42 +354,8 @@ DiagnosisReport diagnose_static(const std::vector<EquivalentInputs>& inputs, con
   rep.initial = figures(design, current);
   FitFigures now = rep.initial;
   while (static_cast<int>(rep.findings.size()) < o.max_findings) {
-    std::vector<CandidateTest> round;
-    for (int component : candidate_components(o, current)) {
-      CandidateTest c = separability(design, current, component, o);
-      if (!c.separable.empty()) test_candidate(design, current, now, c);
-      round.push_back(std::move(c));
-    }
-    // Each family's separable components together too: an effect on every axis at once shows
-    // only partly in each one alone.
-    const std::size_t singles = round.size();
-    for (std::size_t i = 0; i < singles; ++i) {
-      const bool first_of_family =
-          std::none_of(round.begin(), round.begin() + static_cast<std::ptrdiff_t>(i),
-                       [&](const CandidateTest& c) { return c.family == round[i].family; });
-      if (!first_of_family) continue;
-      CandidateTest all;
-      for (std::size_t j = i; j < singles; ++j)
-        if (round[j].family == round[i].family)
-          all.separable.insert(all.separable.end(), round[j].separable.begin(),
-                               round[j].separable.end());
-      if (all.separable.size() < 2) continue;
-      all.family = round[i].family;
-      all.separated_by = round[i].separated_by;
-      test_candidate(design, current, now, all);
-      round.push_back(std::move(all));
-    }
-    CandidateTest* best = best_of(round, o.alpha);
-    // Candidates that explain the residual as well as the best (their fits' chi-square within
-    // kAmbiguityMargin): the plan cannot tell them apart. Another family's: name neither; the
-    // same family's: the family is named, its axis is ambiguous.
-    if (best) {
-      for (auto& c : round)
-        if (&c != best && c.significant && c.with.chi2 - best->with.chi2 < kAmbiguityMargin)
-          best->ambiguous_with.push_back(c);
-      best->named = std::none_of(best->ambiguous_with.begin(), best->ambiguous_with.end(),
-                                 [&](const CandidateTest& c) { return c.family != best->family; });
-    }
+    std::vector<CandidateTest> round = run_round(design, current, now, o);
+    const CandidateTest* best = choose(round, o.alpha);
     rep.rounds.push_back(round);
     if (!best) break;
     if (!best->named) {
@@ -335,19 +366,7 @@ DiagnosisReport diagnose_static(const std::vector<EquivalentInputs>& inputs, con
     current.insert(current.end(), best->separable.begin(), best->separable.end());
     now = best->with;
   }
-  // What the plan could not separate (against the final model), one entry per family.
-  if (!rep.rounds.empty())
-    for (const auto& c : rep.rounds.back()) {
-      if (c.aliased.empty()) continue;
-      auto it = std::find_if(rep.not_separable.begin(), rep.not_separable.end(),
-                             [&](const CandidateTest& n) { return n.family == c.family; });
-      if (it == rep.not_separable.end()) {
-        rep.not_separable.push_back(c);
-      } else {
-        it->aliased.insert(it->aliased.end(), c.aliased.begin(), c.aliased.end());
-        if (it->aliased_with.empty()) it->aliased_with = c.aliased_with;
-      }
-    }
+  if (!rep.rounds.empty()) rep.not_separable = not_separable(rep.rounds.back());
   rep.final_parameters = current;
   rep.final_fit = now;
   for (const auto& in : inputs) rep.residuals.push_back(residual_of(in, site, base.table));

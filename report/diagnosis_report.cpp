@@ -8,8 +8,8 @@
 #include "models/coefficient_families.hpp"
 #include "models/imu_error_model.hpp"
 #include "models/units.hpp"
+#include "report/gnuplot.hpp"
 #include "report/output.hpp"
-#include "report/plot.hpp"
 #include "report/result.hpp"
 
 namespace sinscal {
@@ -37,6 +37,7 @@ json heldout_json(const FitFigures& f) {
 
 std::vector<std::string> names(const std::vector<int>& catalog) {
   std::vector<std::string> out;
+  out.reserve(catalog.size());
   for (int c : catalog) out.push_back(coefficient_catalog()[static_cast<std::size_t>(c)].name);
   return out;
 }
@@ -278,7 +279,7 @@ DiagnosisFiles write_diagnosis(const DiagnosisReport& r, const std::string& sess
   write_atomically(f.markdown, [&](std::ostream& o) { o << diagnosis_markdown(r, session); });
   if (!gnuplot.empty()) {
     write_atomically(f.script, [&](std::ostream& o) { o << residual_plot_script(r, f.png); });
-    run_gnuplot(f.script, f.png, gnuplot);
+    run_gnuplot(gnuplot, f.script, f.png);
   } else {
     f.png.clear();
     f.script.clear();

@@ -1,9 +1,7 @@
 #include "report/monitor.hpp"
 
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -12,8 +10,8 @@
 
 #include "models/imu_error_model.hpp"
 #include "models/sensor_profile.hpp"
+#include "report/gnuplot.hpp"
 #include "report/output.hpp"
-#include "report/plot.hpp"
 
 namespace sinscal {
 
@@ -84,22 +82,9 @@ MonitorSeries read_monitor(const std::string& path) {
 
 namespace {
 
-// Text from the user (file names, labels) as gnuplot sees it: control characters (a newline
-// would end a comment or a string and start a command) shown as '?'.
-std::string printable(const std::string& s) {
-  std::string out;
-  for (char c : s) out += static_cast<unsigned char>(c) < 0x20 || c == 0x7f ? '?' : c;
-  return out;
-}
-
+std::string printable(const std::string& s) { return gnuplot_printable(s); }
 std::string quoted(const std::string& s) { return gnuplot_quoted(s); }
-
-std::string num(double v) {
-  if (std::isnan(v)) return "?";
-  char b[32];
-  std::snprintf(b, sizeof b, "%.9g", v);
-  return b;
-}
+std::string num(double v) { return gnuplot_number(v); }
 
 }  // namespace
 
@@ -217,7 +202,7 @@ ConvergencePlot plot_convergence(const MonitorSeries& series, const ConvergenceP
   const std::string script = convergence_plot_script(series, options, png_path, &plot);
   plot.script = convergence_script_path(png_path);
   write_atomically(plot.script, [&](std::ostream& out) { out << script; });
-  run_gnuplot(plot.script, png_path, options.gnuplot);
+  run_gnuplot(options.gnuplot, plot.script, png_path);
   return plot;
 }
 

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 
 #include "models/coefficient_families.hpp"
 #include "models/units.hpp"
@@ -201,6 +202,12 @@ nlohmann::ordered_json coefficients_json(const ResultCoefficients& coefficients)
       e["value"] = 0.0;
       e["fixed_by_convention"] = true;
     } else if (it->second.observable) {
+      // A broken-down computation must never reach a result file as numbers (or nulls).
+      if (!std::isfinite(it->second.value) ||
+          (it->second.sigma && !std::isfinite(*it->second.sigma)))
+        throw std::runtime_error("the estimate of " + info.name +
+                                 " is not a finite number: the computation broke down (nothing "
+                                 "written)");
       e["value"] = it->second.value;
       if (it->second.sigma) e["sigma"] = *it->second.sigma;
     } else {

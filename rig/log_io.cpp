@@ -91,6 +91,7 @@ TriadColumns read_triad(const IniFile& ini, const std::string& name, bool gyro, 
     throw ConfigError(ini.where(ini.has(p + "_scale") ? p + "_scale" : p + "_unit") + msg);
   }
   c.offset = ini.get_double(p + "_offset", 0.0);
+  c.counts = ini.has(p + "_scale") || ini.has(p + "_offset");
   c.saturation = ini.get_double(p + "_saturation", 0.0);
   if (c.saturation < 0.0) throw ConfigError(ini.where(p + "_saturation") + "must not be negative");
   if (ini.has(p + "_axes")) {

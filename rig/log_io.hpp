@@ -51,6 +51,9 @@ struct TriadColumns {
   std::array<int, 3> axis{0, 1, 2};           // body axis i comes from log axis axis[i]
   std::array<double, 3> sign{1.0, 1.0, 1.0};  // with this sign
   double saturation = 0.0;  // |raw value| at or beyond which a sample is saturated (0: none)
+  /// The log holds raw counts (`_scale` or `_offset` given): scale and offset are then the
+  /// nominal conversion, the starting point of a calibration in counts (raw-count views).
+  bool counts = false;
 };
 
 /// One file of a log recorded as one file per dwell: its samples are placed in the dwell.

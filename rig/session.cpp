@@ -24,6 +24,10 @@ std::string directory_of(const std::string& path) {
 // 1e10 s either way (GPS or Unix seconds are about 1e9 s).
 constexpr double kMaxRateHz = 100000.0;
 constexpr double kMaxTimeOffset = 1e10;
+// [site] gravity: the Earth's surface gravity is 9.76-9.84 m/s^2 (equator to pole, mountains to
+// ocean floors); a value outside 9.7-9.9 is a wrong unit.
+constexpr double kMinGravity = 9.7;
+constexpr double kMaxGravity = 9.9;
 
 // A file named by `key` (a path relative to the session's directory): not empty, and (when
 // `must_exist`) an existing regular file. Empty when the key is absent.
@@ -39,7 +43,8 @@ std::string named_file(const IniFile& ini, const std::string& dir, const std::st
 }
 }  // namespace
 
-Session Session::load(const std::string& path) {
+Session Session::load(const std::string& path, PlanNeed plan_need) {
+  const bool optional_plan = plan_need == PlanNeed::Optional;
   const IniFile ini(path);
   for (const auto& section : ini.sections())
     if (section != "session" && section != "site" && section != "log") {
@@ -52,7 +57,7 @@ Session Session::load(const std::string& path) {
       throw ConfigError(where + "unknown section [" + section + "] (known: session, site, log)");
     }
   ini.check_keys("session", {"name", "rate", "time_offset", "plan", "truth", "sensor"});
-  ini.check_keys("site", {"latitude", "longitude", "height"});
+  ini.check_keys("site", {"latitude", "longitude", "height", "gravity"});
   Session s;
   s.path = path;
   s.dir = directory_of(path);
@@ -63,9 +68,26 @@ Session Session::load(const std::string& path) {
   s.time_offset = ini.get_quantity("session.time_offset", QuantityKind::Time, "s", 0.0);
   if (!(std::abs(s.time_offset) <= kMaxTimeOffset))
     throw ConfigError(ini.where("session.time_offset") + "must be within -1e10 and 1e10 s");
-  if (!ini.has("session.plan"))
-    throw ConfigError(path + ": [session] has no 'plan' (the plan the data follow)");
-  s.plan = Plan::load(named_file(ini, s.dir, "session.plan", true));
+  if (ini.has("session.plan")) {
+    s.plan = Plan::load(named_file(ini, s.dir, "session.plan", true));
+  } else if (!optional_plan) {
+    throw ConfigError(path +
+                      ": [session] has no 'plan' (the plan the data follow; a hand-held session "
+                      "without a plan is read by 'calibrate --method table-free' and 'allan' "
+                      "only)");
+  } else {
+    s.has_plan = false;
+  }
+  if (ini.has("site.gravity")) {
+    if (!optional_plan)
+      throw ConfigError(ini.where("site.gravity") +
+                        "the local gravity magnitude is read by 'calibrate --method table-free' "
+                        "and 'allan' only (the table methods use the WGS-84 gravity model)");
+    s.gravity = ini.get_quantity("site.gravity", QuantityKind::Acceleration, "m/s^2");
+    if (!(s.gravity >= kMinGravity && s.gravity <= kMaxGravity))
+      throw ConfigError(ini.where("site.gravity") +
+                        "must be within 9.7 and 9.9 m/s^2 (the Earth's surface)");
+  }
   s.truth_file = named_file(ini, s.dir, "session.truth", true);
   s.sensor_file = named_file(ini, s.dir, "session.sensor", true);
   if (ini.has("site.latitude")) {
@@ -74,8 +96,10 @@ Session Session::load(const std::string& path) {
     throw ConfigError(ini.where(ini.has("site.longitude") ? "site.longitude" : "site.height") +
                       "[site] without 'latitude' (give the whole site, or none to take the "
                       "plan's)");
-  } else if (s.plan.has_site) {
+  } else if (s.has_plan && s.plan.has_site) {
     s.site = s.plan.site;
+  } else if (optional_plan) {
+    s.has_site = false;
   } else {
     throw ConfigError(path + ": no [site] latitude in the session or its plan");
   }

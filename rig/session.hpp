@@ -17,6 +17,10 @@
 namespace sinscal {
 
 struct Session {
+  /// Whether a session must have a plan. Every table method needs one; a hand-held session
+  /// (`calibrate --method table-free`, `allan`) finds its poses in the data and needs none.
+  enum class PlanNeed { Required, Optional };
+
   std::string path;  // session.ini
   std::string dir;   // its directory
   std::string name;
@@ -27,8 +31,15 @@ struct Session {
   LogFormat log;
   std::string truth_file;   // empty if none
   std::string sensor_file;  // empty if none
+  bool has_plan = true;     // false: no [session] plan (loaded with PlanNeed::Optional)
+  bool has_site = true;     // false: no site in the session or its plan (PlanNeed::Optional)
+  double gravity = 0.0;     // m/s^2: [site] gravity, the local gravity magnitude (0: not given)
 
-  static Session load(const std::string& path);
+  /// Throws ConfigError naming the file, line and key. With PlanNeed::Required (the table
+  /// methods) the plan and a site are required and [site] gravity is refused (they use the
+  /// WGS-84 gravity model); with PlanNeed::Optional both may be absent and [site] may hold only
+  /// `gravity`.
+  static Session load(const std::string& path, PlanNeed plan = PlanNeed::Required);
 };
 
 /// A simulated session to write: the plan on its site, true coefficients drawn from a sensor

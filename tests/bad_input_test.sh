@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # The bad-input corpus, end to end: every command (simulate, navigate, calibrate --method
-# closed-form and kf, compare, plot-convergence) and every input file type (plan, sensor profile,
-# session.ini, native log, custom log, split, one file per dwell, NovAtel, result JSON, monitor
-# JSONL). Each case is one bad input, made in its own folder from small bundled ones, and must end
-# with the documented exit code (2: data, 1: usage), a message on standard error holding the cause,
-# the file's name and :LINE where there is a line, and every input file unchanged (sha256sum of
-# the case's folder before and after; outputs go to its out/ subfolder).
+# closed-form, kf and table-free, compare, plot-convergence, allan) and every input file type
+# (plan, sensor profile, session.ini with or without a plan, native log, custom log, split, one
+# file per dwell, NovAtel, result JSON, monitor JSONL). Each case is one bad input, made in its
+# own folder from small bundled ones, and must end with the documented exit code (2: data, 1:
+# usage), a message on standard error holding the cause, the file's name and :LINE where there is
+# a line, and every input file unchanged (sha256sum of the case's folder before and after; outputs
+# go to its out/ subfolder).
 #
 # Controls (the same files without the fault, which must work) show that each case fails for its
 # own fault. Cases whose fix belongs outside the input readers are in the KNOWN section at the end:
@@ -485,7 +486,7 @@ fixed 2 "session.ini:$L: 'log.columns': unknown key in [log]" nav
 
 # --- calibrate: options -----------------------------------------------------------------------
 new calibrate-unknown-method; mini
-fixed 1 "--method' must be closed-form | kf, not 'magic'" S calibrate --method magic --session session.ini --out out/r.json
+fixed 1 "--method' must be closed-form | kf | table-free, not 'magic'" S calibrate --method magic --session session.ini --out out/r.json
 new calibrate-channels-one; s8
 fixed 1 "--channels' must be a list with at least north,east" cf --channels north
 new calibrate-stream-closed-form; mini
@@ -496,6 +497,42 @@ new calibrate-kf-without-sensor; mini; awk '!/^sensor/' "$d/session.ini" > "$d/s
 fixed 1 "session.ini: --method kf needs the session's sensor profile" kf
 new calibrate-min-dwell-too-long; mini
 fixed 2 "shorter than the 300" cf --min-dwell 300
+
+# --- hand-held: calibrate --method table-free, allan (session.ini without a plan, [site] gravity)
+tf() { S calibrate --method table-free --session session.ini --out out/result.json "$@"; }
+al() { S allan --session session.ini --out out/allan "$@"; }
+# A hand-held session: mini's log without its plan, the local gravity given.
+handheld() {
+  cp "$base"/mini/imu.csv "$d/"
+  printf '%s\n' "[session]" "name = handheld" "rate = 10 Hz" "" "[site]" "gravity = 9.81 m/s^2" "" \
+    "[log]" "file = imu.csv" "format = sinscal" > "$d/session.ini"
+}
+new handheld-control-allan; handheld
+control 0 "" al --longest-pose
+new handheld-too-few-poses; handheld
+fixed 2 "needs at least 10 static poses|found 3" tf
+new handheld-not-static; handheld
+fixed 2 "imu.csv: the record is not static" al
+new handheld-pose-beyond; handheld
+fixed 2 "imu.csv: pose 9 does not exist: the detector found 3 poses" al --pose 9
+new handheld-two-selections; handheld
+fixed 1 "give one of --all, --longest-pose, --pose N" al --all --pose 1
+new handheld-pose-zero; handheld
+fixed 1 "--pose must be 1 or more" al --pose 0
+new handheld-no-plan-for-kf; handheld
+fixed 2 "session.ini: [session] has no 'plan'|table-free" kf
+new handheld-gravity-for-closed-form; mini; add_line "$d/session.ini" "[site]"; add_line "$d/session.ini" "gravity = 9.81 m/s^2"
+fixed 2 "session.ini:$L: 'site.gravity'|read by 'calibrate --method table-free' and 'allan' only" cf
+new handheld-gravity-off-earth; handheld; set_key "$d/session.ini" gravity "98.1 m/s^2"
+fixed 2 "session.ini:$L: 'site.gravity'|within 9.7 and 9.9" tf
+new handheld-gravity-option-off-earth; handheld
+fixed 1 "--gravity must be within 9.7 and 9.9" tf --gravity 0
+new handheld-no-gravity-no-site; handheld; awk '!/^gravity/' "$d/session.ini" > "$d/s" && mv "$d/s" "$d/session.ini"
+fixed 2 "session.ini: no local gravity" tf
+new handheld-kf-option; handheld
+fixed 1 "--passes is an option of the table methods" tf --passes 2
+new handheld-option-in-kf; mini
+fixed 1 "--pose-window acts in --method table-free only" kf --pose-window 2
 
 # --- compare (result JSON) --------------------------------------------------------------------
 new compare-missing-file; cp "$base/s8/cf.json" "$d/a.json"

@@ -111,3 +111,39 @@ TEST_CASE("Plausibility gate: bounds from the sensor profile's error ranges", "[
   const auto none = PlausibilityLimits::from_profile(nullptr);
   CHECK_FALSE(none.check_rate);
 }
+
+// The gate must not cry wolf: every bundled sensor profile on both bundled plans, 20 seeds each
+// (the profile's errors drawn and its noise added), passes.
+TEST_CASE("Plausibility gate Monte Carlo: no false alarm on simulated sessions",
+          "[plausibility][monte_carlo]") {
+  for (const std::string sensor : {"nav-fog.ini", "nav-fog-extended.ini", "mems.ini"}) {
+    const SensorProfile profile =
+        SensorProfile::load(test::source_path("config/sensors/" + sensor));
+    const PlausibilityLimits limits = PlausibilityLimits::from_profile(&profile);
+    for (const std::string plan_file : {"seed8.ini", "rot19.ini"}) {
+      const Plan plan = test::load_plan(plan_file);
+      const Motion motion = build_motion(plan, plan.site);
+      const std::string path = test::temp_dir("plausibility_mc") + "/imu.csv";
+      int alarms = 0;
+      std::string first;
+      for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+        const auto samples =
+            test::simulate(motion, profile.draw(seed), kRate, &profile.noise, seed);
+        {
+          LogWriter w(path, kRate);
+          for (const auto& s : samples) w.write(s);
+          w.close();
+        }
+        LogReader reader(LogFormat::native_format(path, kRate));
+        const auto r =
+            check_plausibility(reader, "imu.csv", test::timeline(plan), plan.site, 0.0, limits);
+        if (!r.passed()) {
+          ++alarms;
+          if (first.empty()) first = r.failures();
+        }
+      }
+      INFO(sensor << " on " << plan_file << ": " << first);
+      CHECK(alarms == 0);
+    }
+  }
+}

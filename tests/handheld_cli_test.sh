@@ -1,0 +1,130 @@
+#!/usr/bin/env bash
+# End-to-end checks of the hand-held commands: `calibrate --method table-free` and `allan` on the
+# real recordings of ../shared/data (read in place by the sessions of config/measured), exit
+# codes, result fields and the messages of bad input.
+# Usage: handheld_cli_test.sh SINSCAL_BINARY SOURCE_DIR WORK_DIR
+set -u
+bin=$1; src=$2; work=$3
+rm -rf "$work"; mkdir -p "$work"
+pass=0; fail=0
+check() {  # check NAME CONDITION...
+  local name=$1; shift
+  if "$@"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAILED: $name"; fi
+}
+contains() { grep -q -- "$2" "$1"; }
+# The number after "key": in a JSON file (the first occurrence).
+json_number() { grep -o "\"$2\": [-0-9.e+]*" "$1" | head -n 1 | sed 's/.*: //'; }
+within() { awk -v x="$1" -v lo="$2" -v hi="$3" 'BEGIN { exit !(x >= lo && x <= hi) }'; }
+
+measured=$src/config/measured
+data=$src/../shared/data
+xsens=$measured/xsens-mti-handheld/session.ini
+if [ ! -f "$data/xsens-mti-handheld/xsens_acc.txt" ] || [ ! -f "$data/mpu6050-handheld/imu_static_test.csv" ]; then
+  echo "the recordings of ../shared/data are not beside the repository: skipped"
+  exit 0
+fi
+
+# The Xsens MTi session: 38 poses, both triads, the raw-count view near imu_tk's figures
+# (accelerometers 414.5, 412.0, 414.7 counts/(m/s^2); gyros 4778, 4764, 4774 counts/(rad/s)).
+"$bin" calibrate --method table-free --session "$xsens" --out "$work/xsens.json" > "$work/xsens.txt" 2> "$work/xsens.err"
+check "table-free on the Xsens session exits 0" test $? -eq 0
+check "table-free prints the poses found" contains "$work/xsens.txt" "Poses found: 38"
+check "table-free prints chi2/dof" contains "$work/xsens.txt" "chi2/dof"
+check "table-free prints the raw view" contains "$work/xsens.txt" "Raw-count view"
+check "result names the method" contains "$work/xsens.json" '"name": "table-free"'
+check "result has chi2_per_dof" contains "$work/xsens.json" '"chi2_per_dof"'
+check "result has the gravity used" contains "$work/xsens.json" '"value": 9.81744'
+check "result has 38 poses" test "$(json_number "$work/xsens.json" poses_found)" = 38
+check "result has a pose's mean specific force" contains "$work/xsens.json" '"specific_force_m_per_s2"'
+check "result has a pose's mean rate" contains "$work/xsens.json" '"rate_deg_per_s"'
+check "result has the noise" contains "$work/xsens.json" '"noise"'
+check "result fixes the accelerometer-triad convention" contains "$work/xsens.json" '"fixed_by_convention": true'
+check "result has sigmas" contains "$work/xsens.json" '"sigma"'
+check "raw view: accelerometer sensitivity unit" contains "$work/xsens.json" '"unit": "counts/(m/s^2)"'
+check "raw view: gyro sensitivity unit" contains "$work/xsens.json" '"unit": "counts/(rad/s)"'
+ax=$(grep -A1 '"accel.sensitivity.x"' "$work/xsens.json" | json_number /dev/stdin value)
+gz=$(grep -A1 '"gyro.sensitivity.z"' "$work/xsens.json" | json_number /dev/stdin value)
+check "accel.sensitivity.x near imu_tk's 414.5 ($ax)" within "$ax" 413.5 415.5
+check "gyro.sensitivity.z near imu_tk's 4774 ($gz)" within "$gz" 4750 4800
+check "raw view: offsets in counts" contains "$work/xsens.json" '"gyro.offset.z"'
+
+# Allan deviation: the Xsens record is not static (refused by default), its longest pose is; the
+# MPU-6050 static record whole.
+"$bin" allan --session "$xsens" --out "$work/allan_x" > /dev/null 2> "$work/allan_all.err"
+check "allan on a moving record exits 2" test $? -eq 2
+check "allan on a moving record says so" contains "$work/allan_all.err" "the record is not static"
+"$bin" allan --session "$xsens" --longest-pose --out "$work/allan_x" > "$work/allan_x.txt"
+check "allan --longest-pose exits 0" test $? -eq 0
+check "allan --longest-pose takes pose 1" contains "$work/allan_x.txt" "pose 1 of 38"
+check "allan.csv has the columns" contains "$work/allan_x/allan.csv" "^tau \[s\],gyro.x adev \[deg/h\],gyro.x lower \[deg/h\],gyro.x upper \[deg/h\],gyro.x fit \[deg/h\]"
+check "allan.csv has rows" test "$(wc -l < "$work/allan_x/allan.csv")" -ge 8
+check "profile fragment has the gyro ARW" contains "$work/allan_x/profile-fragment.ini" "^arw = "
+check "profile fragment has the accelerometer VRW" contains "$work/allan_x/profile-fragment.ini" "^vrw = "
+check "allan draws a PNG" cmp -s -n 4 "$work/allan_x/allan.png" <(printf '\x89PNG')
+check "allan keeps its gnuplot script" contains "$work/allan_x/allan.gp" "set multiplot"
+"$bin" allan --session "$xsens" --pose 39 --out "$work/x" > /dev/null 2> "$work/allan_pose.err"
+check "allan --pose beyond the poses exits 2" test $? -eq 2
+check "allan --pose beyond the poses says how many" contains "$work/allan_pose.err" "found 38 poses"
+"$bin" allan --session "$measured/mpu6050-static/session.ini" --out "$work/allan_m" > /dev/null
+check "allan on the MPU-6050 static record exits 0" test $? -eq 0
+"$bin" allan --session "$xsens" --all --longest-pose --out "$work/x" 2> /dev/null
+check "allan with two selections is a usage error" test $? -eq 1
+# An output that is an input is refused.
+mkdir -p "$work/ow"
+cp "$data/mpu6050-handheld/imu_static_test.csv" "$work/ow/allan.csv"
+sed "s#^file = .*#file = allan.csv#" "$measured/mpu6050-static/session.ini" > "$work/ow/session.ini"
+"$bin" allan --session "$work/ow/session.ini" --out "$work/ow" 2> "$work/ow.err"
+check "allan refuses to overwrite its input" test $? -eq 1
+check "allan names the input it will not overwrite" contains "$work/ow.err" "an output never replaces an input"
+check "the input is unchanged" cmp -s "$work/ow/allan.csv" "$data/mpu6050-handheld/imu_static_test.csv"
+
+# MPU-6050: held in the hand, so the accelerometers find the poses; validation records corrected
+# with the calibration.
+"$bin" calibrate --method table-free --pose-accel-only --session "$measured/mpu6050-calibration/session.ini" \
+  --validate "$measured/mpu6050-static/session.ini" --out "$work/mpu.json" > "$work/mpu.txt"
+check "table-free on the MPU-6050 session exits 0" test $? -eq 0
+check "validation section written" contains "$work/mpu.json" '"gravity_error_rms_m_per_s2"'
+check "validation printed" contains "$work/mpu.txt" "Validation 'mpu6050-static'"
+
+# Bad input. Too few poses: the first 90 s of the Xsens files (the initial rest and 3 poses).
+mkdir -p "$work/few"
+head -n 9000 "$data/xsens-mti-handheld/xsens_acc.txt" > "$work/few/acc.txt"
+head -n 9000 "$data/xsens-mti-handheld/xsens_gyro.txt" > "$work/few/gyro.txt"
+sed -e "s#^accel_file = .*#accel_file = acc.txt#" -e "s#^gyro_file = .*#gyro_file = gyro.txt#" "$xsens" > "$work/few/session.ini"
+"$bin" calibrate --method table-free --session "$work/few/session.ini" --out "$work/few/r.json" 2> "$work/few.err"
+check "too few poses exits 2" test $? -eq 2
+check "too few poses says how many are needed" contains "$work/few.err" "needs at least 10 static poses"
+check "too few poses says how many were found" contains "$work/few.err" "found 4"
+# Poses too short for their means once 1.5 s are cut at each end.
+"$bin" calibrate --method table-free --edge-trim 1.5 --session "$xsens" --out "$work/x.json" 2> "$work/short.err"
+check "poses too short exits 2" test $? -eq 2
+check "poses too short names them" contains "$work/short.err" "poses too short for their means"
+# A two-file log whose time columns disagree on one row.
+mkdir -p "$work/tdis"
+head -n 3000 "$data/xsens-mti-handheld/xsens_acc.txt" > "$work/tdis/acc.txt"
+head -n 3000 "$data/xsens-mti-handheld/xsens_gyro.txt" | awk 'NR == 1500 { $1 = $1 + 0.5 } { print }' > "$work/tdis/gyro.txt"
+cp "$work/few/session.ini" "$work/tdis/session.ini"
+"$bin" calibrate --method table-free --session "$work/tdis/session.ini" --out "$work/tdis/r.json" 2> "$work/tdis.err"
+check "disagreeing time columns exit 2" test $? -eq 2
+check "disagreeing time columns name both files and the line" contains "$work/tdis.err" "acc.txt:1500: t = 15.0181 s here but 15.5181 s in .*gyro.txt:1500"
+# A session without a plan for the table methods; the table methods' options for table-free and
+# the other way round.
+"$bin" calibrate --method kf --session "$xsens" --out "$work/x.json" 2> "$work/noplan.err"
+check "kf on a session without a plan exits 2" test $? -eq 2
+check "kf on a session without a plan says which methods take one" contains "$work/noplan.err" "has no 'plan'.*table-free"
+"$bin" calibrate --method table-free --passes 2 --session "$xsens" --out "$work/x.json" 2> "$work/opt.err"
+check "a kf option in table-free is a usage error" test $? -eq 1
+check "a kf option in table-free is named" contains "$work/opt.err" "\-\-passes is an option of the table methods"
+"$bin" calibrate --method closed-form --gravity 9.8 --session "$xsens" --out "$work/x.json" 2> "$work/opt2.err"
+check "a table-free option in closed-form is a usage error" test $? -eq 1
+check "a table-free option in closed-form is named" contains "$work/opt2.err" "\-\-gravity acts in --method table-free only"
+"$bin" calibrate --method table-free --gravity 98.1 --session "$xsens" --out "$work/x.json" 2> /dev/null
+check "a gravity off the Earth is a usage error" test $? -eq 1
+# Without gravity and site.
+sed "/^gravity = /d" "$work/few/session.ini" > "$work/few/nograv.ini"
+"$bin" calibrate --method table-free --session "$work/few/nograv.ini" --out "$work/x.json" 2> "$work/nograv.err"
+check "no gravity and no site exits 2" test $? -eq 2
+check "no gravity and no site says so" contains "$work/nograv.err" "no local gravity"
+
+echo "$pass passed, $fail failed"
+test "$fail" -eq 0
