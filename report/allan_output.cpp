@@ -26,6 +26,7 @@ struct Channel {
 
 std::vector<Channel> channels(const AllanAnalysis& a) {
   std::vector<Channel> c;
+  c.reserve(6);
   for (int i = 0; i < 3; ++i)
     c.push_back({std::string("gyro.") + kAxis[i], &a.gyro[static_cast<std::size_t>(i)],
                  &a.gyro_fit[static_cast<std::size_t>(i)], units::deg_per_h});

@@ -1,6 +1,7 @@
 // Model discovery on the static dwells (filter/diagnosis.hpp): an effect hidden in a simulated
 // session, which the calibrating model lacks, must be named first with its magnitude; a clean
 // session must name nothing; effects the plan cannot separate must be said to be so.
+#include <boost/math/distributions/chi_squared.hpp>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdio>
@@ -64,6 +65,7 @@ struct Outcome {
   bool within_3_sigma = false;  // ... with the hidden magnitude within 3 sigma
   bool ambiguous = false;       // nothing named: the right family among those the plan confuses
   bool axis_ambiguous = false;  // the right family named, the hidden axis among its tied ones
+  bool statistic_right = true;  // the reported statistic and p-value agree with the fits
   bool wrong = false;           // another family named first, or nothing at all said
   std::string first;
 };
@@ -90,6 +92,16 @@ Outcome hide_and_diagnose(const SimSession& s, std::uint64_t seed, const std::st
   }
   const CandidateTest& f = rep.findings.front();
   out.first = f.family;
+  // The statistic is the fit's chi-square decrease (chi-square test) and its p-value the
+  // chi-square(dof) tail of it.
+  if (f.test == "chi2") {
+    const double lr = rep.initial.chi2 - f.with.chi2;
+    out.statistic_right =
+        std::abs(f.likelihood_ratio - lr) <= 1e-9 * std::max(1.0, lr) &&
+        std::abs(f.p_value - boost::math::cdf(boost::math::complement(
+                                 boost::math::chi_squared(f.dof), f.likelihood_ratio))) <=
+            1e-12 + 1e-9 * f.p_value;
+  }
   out.named_first = f.family == family;
   out.wrong = !out.named_first;
   // The plan may leave the axis ambiguous within the family: then the hidden axis is among them.
@@ -141,6 +153,7 @@ TEST_CASE("Diagnosis: an effect hidden at 8 detection sigmas is named first, wit
     INFO("outcome: " << o.first);
     CHECK_FALSE(o.wrong);
     CHECK((o.within_3_sigma || o.axis_ambiguous || o.ambiguous));
+    CHECK(o.statistic_right);
   }
 }
 
