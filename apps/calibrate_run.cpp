@@ -136,17 +136,13 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
 
 SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& session,
                                      const std::string& out_path, bool verbose) {
-  Stage1Options o;
+  std::optional<SensorProfile> profile;
+  if (!session.sensor_file.empty()) profile = SensorProfile::load(session.sensor_file);
+  Stage1Options o = default_stage1(profile ? &*profile : nullptr);
   o.method = co.stage1;
   o.model = co.model;
   o.channels = co.channels;
   o.min_dwell = co.min_dwell;
-  std::optional<SensorProfile> profile;
-  if (!session.sensor_file.empty()) {
-    profile = SensorProfile::load(session.sensor_file);
-    o.arw = profile->noise.gyro.white;
-    o.vrw = profile->noise.accel.white;
-  }
   const PlausibilityLimits limits = PlausibilityLimits::from_profile(profile ? &*profile : nullptr);
   PlausibilityReport gate = plausibility_gate(co, session, limits);
   if (co.arw > 0.0) o.arw = co.arw * units::deg_per_sqrt_h;

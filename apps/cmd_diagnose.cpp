@@ -80,13 +80,9 @@ int cmd_diagnose(const std::vector<std::string>& args) {
                                              {"report.md", files.markdown},
                                              {"residuals.png", files.png},
                                              {"gnuplot script", files.script}});
-  Stage1Options s1;
   std::optional<SensorProfile> profile;
-  if (!session.sensor_file.empty()) {
-    profile = SensorProfile::load(session.sensor_file);
-    s1.arw = profile->noise.gyro.white;
-    s1.vrw = profile->noise.accel.white;
-  }
+  if (!session.sensor_file.empty()) profile = SensorProfile::load(session.sensor_file);
+  const Stage1Options s1 = default_stage1(profile ? &*profile : nullptr);
   const PlausibilityLimits limits = PlausibilityLimits::from_profile(profile ? &*profile : nullptr);
   const bool force = vm->count("force") > 0;
   PlausibilityReport gate = check_plausibility(session, limits);

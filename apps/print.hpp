@@ -18,6 +18,8 @@ void print_coefficient_table(const ResultCoefficients& coefficients,
 /// What a newcomer reads first: how far the estimates are from the truth (simulations), whether
 /// and when every sigma reached its target (each one above it named), what the plan cannot
 /// observe, the frame convention, skipped samples.
+/// Against the truth (simulations): the largest |error| / sigma and how many are beyond 3.
+void print_truth_verdict(const ResultCoefficients& coefficients, const ResultCoefficients& truth);
 void print_kalman_verdicts(const KalmanRun& run, const SensorProfile& profile,
                            const ResultCoefficients& truth);
 /// Live convergence table on a terminal (standard error): per family, the largest sigma against

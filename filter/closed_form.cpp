@@ -12,6 +12,7 @@
 #include "models/attitude.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/imu_error_model.hpp"
+#include "models/sensor_profile.hpp"
 #include "models/units.hpp"
 #include "rig/log_io.hpp"
 #include "rig/plan.hpp"
@@ -242,6 +243,17 @@ void fit_inputs(const DwellAccumulator& a, const Stage1Options& o, EquivalentInp
 }
 
 }  // namespace
+
+Stage1Options default_stage1(const SensorProfile* profile) {
+  Stage1Options o;
+  o.model = ErrorModelKind::Coupled;
+  o.channels = ChannelSet{true, true, true, true};
+  if (profile) {
+    o.arw = profile->noise.gyro.white;
+    o.vrw = profile->noise.accel.white;
+  }
+  return o;
+}
 
 std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector<PlanDwell>& dwells,
                                          const Site& site, const Stage1Options& o,

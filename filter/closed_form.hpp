@@ -32,6 +32,8 @@
 
 namespace sinscal {
 
+struct SensorProfile;
+
 enum class Stage1Method { Point, Fit };
 
 struct ChannelSet {
@@ -69,6 +71,10 @@ struct EquivalentInputs {
   double rms_attitude = 0.0;        // rad: of the attitude rows (fit)
   double chi2_per_dof = 0.0;  // residual chi-square per degree of freedom under the noise model
 };
+
+/// The command line's stage 1: the coupled model, all four channels, and the white-noise
+/// densities of the sensor profile (nullptr: zero, to be given).
+Stage1Options default_stage1(const SensorProfile* profile);
 
 /// Runs the navigator through every dwell and stage 1 on it. Throws PlanMismatch (dwell missing
 /// from the log) or std::invalid_argument (dwell shorter than min_dwell, no noise densities).

@@ -600,6 +600,14 @@ new closed-form-static-from-data-ignored; s8
 fixed 1 "--static-from" cf --static-from data
 new kf-lever-arm-reference-observable; mini
 fixed 1 "zero velocity at rest only" kf --lever-arm-reference x
+# diagnose: too few dwells for the model, a session that fails the gate, a bad option.
+new diagnose-too-few-dwells; mini
+fixed 2 "too few dwells" S diagnose --session session.ini --out out/d --no-plot
+new diagnose-flipped-axis; s8
+awk -F, -v OFS=, 'NR > 3 { $6 = -$6 } { print }' "$base/s8/imu.csv" > "$d/imu.csv"
+fixed 2 "imu.csv: dwell|gravity direction" S diagnose --session session.ini --out out/d --no-plot
+new diagnose-alpha-zero; mini
+fixed 1 "--alpha must be in (0, 0.5)" S diagnose --session session.ini --out out/d --alpha 0
 # A plan/log mismatch in navigate and the closed form must name the log (the Kalman filter does).
 new navigate-mismatch-names-the-log; mini; head -n 400 "$base/mini/imu.csv" > "$d/imu.csv"
 fixed 2 "imu.csv|plan does not match the data" nav

@@ -60,6 +60,14 @@ inline std::vector<ImuSample> simulate(const Motion& motion, const ImuErrorModel
 
 using sinscal::VectorSource;
 
+/// A sensor-profile range [lo, hi] (SI) for profiles built in tests.
+inline CoefficientRange range(double lo, double hi) {
+  CoefficientRange r;
+  r.lo = lo;
+  r.hi = hi;
+  return r;
+}
+
 inline void write_file(const std::string& path, const std::string& text) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   std::fputs(text.c_str(), f);

@@ -19,22 +19,15 @@ using namespace sinscal;
 
 namespace {
 
-CoefficientRange range(double lo, double hi) {
-  CoefficientRange r;
-  r.lo = lo;
-  r.hi = hi;
-  return r;
-}
-
 SensorProfile mems() {
   SensorProfile p;
   p.name = "test-mems";
-  p.ranges["gyro.bias"] = range(0.5 * units::deg_per_s, 1.0 * units::deg_per_s);
-  p.ranges["gyro.scale"] = range(0.01, 0.03);
-  p.ranges["gyro.misalignment"] = range(300 * units::arcsec, 3000 * units::arcsec);
-  p.ranges["accel.bias"] = range(5 * units::mg, 40 * units::mg);
-  p.ranges["accel.scale"] = range(0.01, 0.03);
-  p.ranges["accel.misalignment"] = range(300 * units::arcsec, 3000 * units::arcsec);
+  p.ranges["gyro.bias"] = test::range(0.5 * units::deg_per_s, 1.0 * units::deg_per_s);
+  p.ranges["gyro.scale"] = test::range(0.01, 0.03);
+  p.ranges["gyro.misalignment"] = test::range(300 * units::arcsec, 3000 * units::arcsec);
+  p.ranges["accel.bias"] = test::range(5 * units::mg, 40 * units::mg);
+  p.ranges["accel.scale"] = test::range(0.01, 0.03);
+  p.ranges["accel.misalignment"] = test::range(300 * units::arcsec, 3000 * units::arcsec);
   p.noise.gyro.white = 0.3 * units::deg_per_sqrt_h;
   p.noise.accel.white = 150 * units::ug_per_sqrt_hz;
   return p;

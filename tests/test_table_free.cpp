@@ -18,25 +18,18 @@ using namespace sinscal;
 
 namespace {
 
-CoefficientRange range(double lo, double hi) {
-  CoefficientRange r;
-  r.lo = lo;
-  r.hi = hi;
-  return r;
-}
-
 /// Test-only profiles: the truth is the nominal scaling's error, so the calibration starts 4-6 %
 /// off in sensitivity and 1.8-2.2 deg/s off in gyro offset. Base terms and white noise only (the
 /// method's model: constant biases, no g-sensitivity, no K2).
 SensorProfile mems_profile() {
   SensorProfile p;
   p.name = "test-mems";
-  p.ranges["gyro.bias"] = range(1.8 * units::deg_per_s, 2.2 * units::deg_per_s);
-  p.ranges["gyro.scale"] = range(0.04, 0.06);
-  p.ranges["gyro.misalignment"] = range(300 * units::arcsec, 3000 * units::arcsec);
-  p.ranges["accel.bias"] = range(5 * units::mg, 40 * units::mg);
-  p.ranges["accel.scale"] = range(0.04, 0.06);
-  p.ranges["accel.misalignment"] = range(300 * units::arcsec, 3000 * units::arcsec);
+  p.ranges["gyro.bias"] = test::range(1.8 * units::deg_per_s, 2.2 * units::deg_per_s);
+  p.ranges["gyro.scale"] = test::range(0.04, 0.06);
+  p.ranges["gyro.misalignment"] = test::range(300 * units::arcsec, 3000 * units::arcsec);
+  p.ranges["accel.bias"] = test::range(5 * units::mg, 40 * units::mg);
+  p.ranges["accel.scale"] = test::range(0.04, 0.06);
+  p.ranges["accel.misalignment"] = test::range(300 * units::arcsec, 3000 * units::arcsec);
   p.noise.gyro.white = 0.3 * units::deg_per_sqrt_h;
   p.noise.accel.white = 150 * units::ug_per_sqrt_hz;
   return p;
@@ -45,9 +38,9 @@ SensorProfile mems_profile() {
 SensorProfile tactical_profile() {
   SensorProfile p = mems_profile();
   p.name = "test-tactical";
-  p.ranges["gyro.misalignment"] = range(30 * units::arcsec, 300 * units::arcsec);
-  p.ranges["accel.misalignment"] = range(30 * units::arcsec, 300 * units::arcsec);
-  p.ranges["accel.bias"] = range(0.5 * units::mg, 5 * units::mg);
+  p.ranges["gyro.misalignment"] = test::range(30 * units::arcsec, 300 * units::arcsec);
+  p.ranges["accel.misalignment"] = test::range(30 * units::arcsec, 300 * units::arcsec);
+  p.ranges["accel.bias"] = test::range(0.5 * units::mg, 5 * units::mg);
   p.noise.gyro.white = 0.05 * units::deg_per_sqrt_h;
   p.noise.accel.white = 30 * units::ug_per_sqrt_hz;
   return p;

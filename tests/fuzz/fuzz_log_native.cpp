@@ -4,7 +4,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "fuzz_support.hpp"
+#include "fuzz_log.hpp"
 #include "rig/log_io.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -16,16 +16,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     sinscal::LogReader reader(in, sinscal::LogFormat::native_format(name, 100.0));
     if (skip) reader.skip_bad_samples([](const sinscal::BadSampleError&) {});
-    sinscal::ImuSample s;
-    double t_prev = -INFINITY;
-    while (reader.next(s)) {
-      if (!std::isfinite(s.t) || !(s.dt > 0.0) || !std::isfinite(s.dt) || !s.dtheta_b.allFinite() ||
-          !s.dv_b.allFinite() || !std::isfinite(s.table_outer) || !std::isfinite(s.table_inner))
-        finding("a sample is not finite", "line " + std::to_string(reader.line()));
-      if (!(s.t > t_prev))
-        finding("time does not increase", "line " + std::to_string(reader.line()));
-      t_prev = s.t;
-    }
+    sinscal::fuzz::read_all_samples(reader);
   } catch (const sinscal::LogError& e) {
     sinscal::fuzz::check_message(e, name + ":");
   } catch (const std::exception& e) {
