@@ -110,7 +110,11 @@ std::vector<DwellMean> read_means(LogReader& reader, const PlanTimeline& timelin
                                   double time_offset, bool dwell_checks, SaturationWatch& sat,
                                   double& dt) {
   std::vector<DwellMean> means;
-  for (const auto& d : timeline.dwells) means.push_back(DwellMean{d, {}, {}, 0.0, 0});
+  for (const auto& d : timeline.dwells) {
+    DwellMean m;  // sums start at zero (the members' initializers)
+    m.dwell = d;
+    means.push_back(m);
+  }
   ImuSample s;
   std::size_t next = 0;
   // A log the reader refuses part of the way is the estimators' to report (with their results up
