@@ -1,6 +1,7 @@
-// libFuzzer target: read_result_json (rig/session.hpp; it may move to report/), which takes a
+// libFuzzer target: read_result_json (report/result.hpp) and the comparison, which take a
 // path: the input is written to a file first. Every error is a std::runtime_error naming the file.
 #include "fuzz_support.hpp"
+#include "report/compare.hpp"
 #include "report/result.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
