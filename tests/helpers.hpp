@@ -2,13 +2,17 @@
 
 #include <unistd.h>
 
+#include <array>
+#include <catch2/catch.hpp>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
 #include "filter/kalman_calibrator.hpp"
 #include "models/sensor_profile.hpp"
+#include "rig/handheld.hpp"
 #include "rig/imu_sim.hpp"
 #include "rig/plan.hpp"
 
@@ -80,6 +84,29 @@ inline std::vector<CoefficientEstimate> run_filter(Calibrator& kf,
   for (const auto& s : samples) kf.push(s);
   kf.finish();
   return kf.estimate();
+}
+
+/// The imu_tk Xsens files: two whitespace tables `t x y z` with the same times (raw counts).
+inline std::vector<ImuReading> read_xsens(const std::string& dir) {
+  auto read = [](const std::string& path) {
+    std::ifstream f(path);
+    REQUIRE(f.good());
+    std::vector<std::array<double, 4>> rows;
+    std::array<double, 4> row{};
+    while (f >> row[0] >> row[1] >> row[2] >> row[3]) rows.push_back(row);
+    return rows;
+  };
+  const auto acc = read(dir + "/xsens_acc.txt");
+  const auto gyr = read(dir + "/xsens_gyro.txt");
+  REQUIRE(acc.size() == gyr.size());
+  std::vector<ImuReading> out(acc.size());
+  for (std::size_t k = 0; k < acc.size(); ++k) {
+    REQUIRE(acc[k][0] == gyr[k][0]);
+    out[k].t = acc[k][0];
+    out[k].accel = Eigen::Vector3d(acc[k][1], acc[k][2], acc[k][3]);
+    out[k].gyro = Eigen::Vector3d(gyr[k][1], gyr[k][2], gyr[k][3]);
+  }
+  return out;
 }
 
 }  // namespace sinscal::test

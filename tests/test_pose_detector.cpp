@@ -92,38 +92,13 @@ TEST_CASE("Pose detector: a record that never rests is an error", "[pose]") {
   CHECK_THROWS_AS(detect_poses(tiny), PoseDetectorError);
 }
 
-namespace {
-/// The imu_tk Xsens files: two whitespace tables `t x y z` with the same times (raw counts).
-std::vector<ImuReading> read_xsens(const std::string& dir) {
-  auto read = [](const std::string& path) {
-    std::ifstream f(path);
-    REQUIRE(f.good());
-    std::vector<std::array<double, 4>> rows;
-    std::array<double, 4> row{};
-    while (f >> row[0] >> row[1] >> row[2] >> row[3]) rows.push_back(row);
-    return rows;
-  };
-  const auto acc = read(dir + "/xsens_acc.txt");
-  const auto gyr = read(dir + "/xsens_gyro.txt");
-  REQUIRE(acc.size() == gyr.size());
-  std::vector<ImuReading> out(acc.size());
-  for (std::size_t k = 0; k < acc.size(); ++k) {
-    REQUIRE(acc[k][0] == gyr[k][0]);
-    out[k].t = acc[k][0];
-    out[k].accel = Eigen::Vector3d(acc[k][1], acc[k][2], acc[k][3]);
-    out[k].gyro = Eigen::Vector3d(gyr[k][1], gyr[k][2], gyr[k][3]);
-  }
-  return out;
-}
-}  // namespace
-
 TEST_CASE("Pose detector on the real Xsens MTi session finds its 38 poses", "[pose][real]") {
   const std::string dir = "/work/shared/data/xsens-mti-handheld";
   if (!std::ifstream(dir + "/xsens_acc.txt").good()) {
     WARN("Xsens recording not found at " << dir << ": skipped");
     return;
   }
-  const auto r = read_xsens(dir);
+  const auto r = test::read_xsens(dir);
   REQUIRE(r.size() == 51175);
   const PoseDetection found = detect_poses(r);
   for (const auto& p : found.poses)

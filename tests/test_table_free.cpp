@@ -266,36 +266,13 @@ TEST_CASE("Table-free calibration Monte Carlo: errors match sigmas (MEMS, tactic
   check_consistency(tactical, "tactical");
 }
 
-namespace {
-std::vector<ImuReading> read_xsens(const std::string& dir) {
-  auto read = [](const std::string& path) {
-    std::ifstream f(path);
-    REQUIRE(f.good());
-    std::vector<std::array<double, 4>> rows;
-    std::array<double, 4> row{};
-    while (f >> row[0] >> row[1] >> row[2] >> row[3]) rows.push_back(row);
-    return rows;
-  };
-  const auto acc = read(dir + "/xsens_acc.txt");
-  const auto gyr = read(dir + "/xsens_gyro.txt");
-  REQUIRE(acc.size() == gyr.size());
-  std::vector<ImuReading> out(acc.size());
-  for (std::size_t k = 0; k < acc.size(); ++k) {
-    out[k].t = acc[k][0];
-    out[k].accel = Eigen::Vector3d(acc[k][1], acc[k][2], acc[k][3]);
-    out[k].gyro = Eigen::Vector3d(gyr[k][1], gyr[k][2], gyr[k][3]);
-  }
-  return out;
-}
-}  // namespace
-
 TEST_CASE("Table-free calibration of the real Xsens MTi session", "[table_free][real]") {
   const std::string dir = "/work/shared/data/xsens-mti-handheld";
   if (!std::ifstream(dir + "/xsens_acc.txt").good()) {
     WARN("Xsens recording not found at " << dir << ": skipped");
     return;
   }
-  const auto counts = read_xsens(dir);
+  const auto counts = test::read_xsens(dir);
   // Nominal: ~414 counts per m/s^2, ~4780 counts per rad/s, zero at 32768.
   RawScaling nominal;
   nominal.accel_sensitivity.setConstant(414.0);
