@@ -36,8 +36,14 @@ int cmd_compare(const std::vector<std::string>& args) {
   if ((tolerances.max_sigma && !(max_sigma >= 0.0)) ||
       (tolerances.max_relative && !(max_relative >= 0.0)))
     throw UsageError("--max-sigma and --max-relative must be numbers >= 0");
-  const auto rows =
-      compare_results(read_result_json(files[0]), read_result_json(files[1]), tolerances);
+  const ResultCoefficients a = read_result_json(files[0]);
+  const ResultCoefficients b = read_result_json(files[1]);
+  std::vector<CoefficientComparison> rows;
+  try {
+    rows = compare_results(a, b, tolerances);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(files[0] + " and " + files[1] + ": " + e.what());
+  }
   std::printf("A = %s\nB = %s\n\n%-28s %14s %14s %12s %8s %10s %-8s\n", files[0].c_str(),
               files[1].c_str(), "coefficient", "A", "B", "A - B", "z", "relative", "unit");
   int failures = 0;

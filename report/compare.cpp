@@ -76,7 +76,7 @@ std::vector<CoefficientComparison> compare_results(const ResultCoefficients& a,
   bool common = false;
   for (const auto& c : out) common = common || (a.count(c.name) && b.count(c.name));
   if (!common)
-    throw std::invalid_argument(
+    throw std::runtime_error(
         "no known coefficient in both results (no coefficient name of sinscal's catalog): nothing "
         "to compare");
   return out;
