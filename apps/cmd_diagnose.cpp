@@ -7,6 +7,7 @@
 #include "apps/cli.hpp"
 #include "apps/commands.hpp"
 #include "filter/diagnosis.hpp"
+#include "filter/diagnosis_kalman.hpp"
 #include "filter/plausibility.hpp"
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"
@@ -16,7 +17,7 @@ namespace sinscal::cli {
 
 namespace {
 
-void print_diagnosis(const DiagnosisReport& r, const DiagnosisFiles& files) {
+void print_diagnosis(const DiagnosisReport& r) {
   std::printf("Calibrated model: %zu coefficients, residual chi2 per dof %.3f over %zu dwells\n",
               r.initial_parameters.size(), r.initial.fit.chi2_per_dof, r.residuals.size());
   if (r.findings.empty())
@@ -40,8 +41,37 @@ void print_diagnosis(const DiagnosisReport& r, const DiagnosisFiles& files) {
   for (const auto& c : r.not_separable)
     std::printf("Not separable on this plan: %s (%zu of its components); separated by %s\n",
                 c.family.c_str(), c.aliased.size(), c.separated_by.c_str());
-  std::printf("Written: %s, %s%s%s\n", files.json.c_str(), files.markdown.c_str(),
-              files.png.empty() ? "" : ", ", files.png.c_str());
+}
+
+void print_kalman(const KalmanDiagnosis& k) {
+  std::printf("Turns (Kalman-filter innovations, NIS per dof %.3f):\n", k.initial_nis_per_dof);
+  for (const auto& f : k.findings)
+    std::printf(
+        "Found %s: W = %.1f on %d dof, p = %.3g; NIS per dof -> %.3f; base moved up to "
+        "%.1f sigma\n",
+        f.family.c_str(), f.wald, f.dof, f.p_value, f.nis_per_dof, f.base_shift_sigma);
+  if (k.findings.empty()) std::printf("Findings: none\n");
+  for (const auto& c : k.not_separable)
+    std::printf("Not separable by the filter either: %s; separated by %s\n", c.family.c_str(),
+                c.separated_by.c_str());
+}
+
+// The Kalman-filter test of the families the static dwells cannot separate.
+std::optional<KalmanDiagnosis> diagnose_turns(const Session& session, const SensorProfile& profile,
+                                              const DiagnosisReport& report, double alpha,
+                                              double table_sigma) {
+  CalibratorOptions ko = calibrator_options_from_profile(profile);
+  ko.attitude_sigma = table_sigma;
+  ko.time_offset = session.time_offset;
+  // The effects the static dwells named are part of the model the filter runs with.
+  for (const auto& f : report.findings)
+    if (!ko.layout.on(f.family)) ko.layout.set(f.family, true);
+  KalmanDiagnosisOptions ko_diag;
+  ko_diag.alpha = alpha;
+  for (const auto& c : report.not_separable)
+    if (!ko.layout.on(c.family)) ko_diag.candidates.push_back(c.family);
+  if (ko_diag.candidates.empty()) return std::nullopt;
+  return diagnose_kalman(session, ko, ko_diag);
 }
 
 }  // namespace
@@ -62,6 +92,7 @@ int cmd_diagnose(const std::vector<std::string>& args) {
       ("table-sigma", po::value(&table_sigma)->default_value(2.5),
        "table attitude error per orientation and axis, 1-sigma [arcsec]")
       ("no-plot", "write no PNG (no gnuplot needed)")
+      ("no-kalman", "skip the Kalman-filter test of the effects of the turns")
       ("force", "run even when the plausibility gate fails");
   // clang-format on
   const auto vm = parse(args, d,
@@ -69,7 +100,9 @@ int cmd_diagnose(const std::vector<std::string>& args) {
                         "Calibrates the session's static dwells (closed form), then tests every\n"
                         "extended family of the family table as a missing effect: names the\n"
                         "significant ones with their magnitude and gain, and says which the plan\n"
-                        "cannot separate. Table sessions; hand-held sessions: not yet.");
+                        "cannot separate. The families the static dwells cannot separate\n"
+                        "(effects of the turns) are then tested in the Kalman filter (needs the\n"
+                        "session's sensor profile). Table sessions; hand-held sessions: not yet.");
   if (!vm) return 0;
   if (!(o.alpha > 0.0 && o.alpha < 0.5)) throw UsageError("--alpha must be in (0, 0.5)");
   if (!(table_sigma > 0.0 && table_sigma < 3600.0))
@@ -93,10 +126,18 @@ int cmd_diagnose(const std::vector<std::string>& args) {
   enforce(gate, force);
   const DiagnosisReport report =
       diagnose_static(calibration.stage1, session.site, calibration.stage2_options, o);
+  print_diagnosis(report);
+  std::optional<KalmanDiagnosis> turns;
+  if (profile && !vm->count("no-kalman")) {
+    turns = diagnose_turns(session, *profile, report, o.alpha, table.sigma);
+    if (turns) print_kalman(*turns);
+  }
   std::filesystem::create_directories(out_dir);
   const DiagnosisFiles written =
-      write_diagnosis(report, session.path, out_dir, vm->count("no-plot") ? "" : "gnuplot");
-  print_diagnosis(report, written);
+      write_diagnosis(report, session.path, out_dir, vm->count("no-plot") ? "" : "gnuplot",
+                      turns ? &*turns : nullptr);
+  std::printf("Written: %s, %s%s%s\n", written.json.c_str(), written.markdown.c_str(),
+              written.png.empty() ? "" : ", ", written.png.c_str());
   return 0;
 }
 

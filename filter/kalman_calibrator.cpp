@@ -246,6 +246,8 @@ void Calibrator::apply(const Measurement& m) {
   last_nis_dof_ = r;
   nis_sum_ += last_nis_;
   nis_dof_ += r;
+  // Prediction-error decomposition: log N(z; 0, S) summed over the updates (log 2 pi dropped).
+  log_likelihood_ -= 0.5 * (last_nis_ + 2.0 * llt.matrixLLT().diagonal().array().log().sum());
   ++updates_;
   // Joseph form (I - K H) P (I - K H)^T + K R K^T, symmetrized: (I - K H) P = P - K (H P), and
   // X (I - K H)^T = X - (X H^T) K^T.

@@ -153,6 +153,9 @@ class Calibrator {
   /// NIS of the updates so far (sum and count of the measurement dimensions).
   double nis_sum() const { return nis_sum_; }
   int nis_dof() const { return nis_dof_; }
+  /// Innovation log-likelihood of the updates so far: the sum of log N(z; 0, S) over them, the
+  /// constant log(2 pi) terms dropped (the likelihood of the data under the filter's model).
+  double log_likelihood() const { return log_likelihood_; }
   /// Number of measurement updates so far, and the NIS and dimension of the last one.
   int updates() const { return updates_; }
   double last_nis() const { return last_nis_; }
@@ -198,6 +201,7 @@ class Calibrator {
   int table_updates_ = 0;
   double nis_sum_ = 0.0;
   int nis_dof_ = 0;
+  double log_likelihood_ = 0.0;
   int updates_ = 0;
   double last_nis_ = 0.0;
   int last_nis_dof_ = 0;

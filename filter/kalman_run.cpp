@@ -201,12 +201,31 @@ std::vector<UnobservableDirection> unobservable_directions(const Calibrator& kf,
   return out;
 }
 
+// The covariance of the coefficient states, by the layout's blocks.
+void coefficient_covariance(const Calibrator& kf, KalmanRun& r) {
+  std::vector<int> states;
+  r.covariance_catalog.clear();
+  for (const auto& cb : kf.layout().coefficients)
+    for (int k = 0; k < cb.block.size; ++k) {
+      states.push_back(cb.block.index + k);
+      r.covariance_catalog.push_back(cb.catalog[static_cast<std::size_t>(k)]);
+    }
+  const auto n = static_cast<Eigen::Index>(states.size());
+  r.coefficient_covariance.resize(n, n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j < n; ++j)
+      r.coefficient_covariance(i, j) =
+          kf.covariance()(states[static_cast<std::size_t>(i)], states[static_cast<std::size_t>(j)]);
+}
+
 // The run's result from the filter at its end.
 void summarize(const Calibrator& kf, const PlanTimeline& timeline, const KalmanRunOptions& run,
                KalmanRun& r) {
   r.states = kf.layout().size;
   r.accel_triad_frame = kf.layout().accel_triad_frame;
   r.nis_per_dof = kf.nis_dof() > 0 ? kf.nis_sum() / kf.nis_dof() : 0.0;
+  r.log_likelihood = kf.log_likelihood();
+  coefficient_covariance(kf, r);
   r.estimates = kf.estimate();
   r.unobservable_directions = unobservable_directions(kf, r.estimates);
   const auto& cat = coefficient_catalog();

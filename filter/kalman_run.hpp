@@ -4,6 +4,7 @@
 // several passes. Returns typed results; report/ writes them.
 #pragma once
 
+#include <Eigen/Core>
 #include <atomic>
 #include <functional>
 #include <map>
@@ -72,6 +73,11 @@ struct KalmanRun {
   double duration = 0.0;  // s of data
   double t_last = 0.0;    // s, log time of the last sample read
   double nis_per_dof = 0.0;
+  double log_likelihood = 0.0;  // innovation log-likelihood (Calibrator::log_likelihood)
+  /// Covariance of the coefficient states at the end (SI), rows and columns in the order of
+  /// `covariance_catalog` (their coefficient_catalog() indices).
+  Eigen::MatrixXd coefficient_covariance;
+  std::vector<int> covariance_catalog;
   std::string stopped;       // empty, or why the input stopped early (bad sample); estimates kept
   bool interrupted = false;  // stopped on request (KalmanRunOptions::stop)
   std::string diverged;      // empty, or the NIS alarm that stopped the run; estimates kept

@@ -8,6 +8,7 @@
 #include "models/coefficient_families.hpp"
 #include "models/imu_error_model.hpp"
 #include "models/units.hpp"
+#include "report/diagnosis_kalman_report.hpp"
 #include "report/gnuplot.hpp"
 #include "report/output.hpp"
 #include "report/result.hpp"
@@ -272,11 +273,17 @@ std::string residual_plot_script(const DiagnosisReport& r, const std::string& pn
 }
 
 DiagnosisFiles write_diagnosis(const DiagnosisReport& r, const std::string& session,
-                               const std::string& dir, const std::string& gnuplot) {
+                               const std::string& dir, const std::string& gnuplot,
+                               const KalmanDiagnosis* kalman) {
   DiagnosisFiles f = diagnosis_files(dir);
-  write_atomically(f.json,
-                   [&](std::ostream& o) { o << diagnosis_json(r, session).dump(2) << "\n"; });
-  write_atomically(f.markdown, [&](std::ostream& o) { o << diagnosis_markdown(r, session); });
+  json j = diagnosis_json(r, session);
+  std::string markdown = diagnosis_markdown(r, session);
+  if (kalman) {
+    add_kalman_diagnosis(j, *kalman);
+    markdown += kalman_diagnosis_markdown(*kalman);
+  }
+  write_atomically(f.json, [&](std::ostream& o) { o << j.dump(2) << "\n"; });
+  write_atomically(f.markdown, [&](std::ostream& o) { o << markdown; });
   if (!gnuplot.empty()) {
     write_atomically(f.script, [&](std::ostream& o) { o << residual_plot_script(r, f.png); });
     run_gnuplot(gnuplot, f.script, f.png);

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "filter/diagnosis.hpp"
+#include "filter/diagnosis_kalman.hpp"
 
 namespace sinscal {
 
@@ -23,7 +24,10 @@ std::string diagnosis_markdown(const DiagnosisReport& report, const std::string&
 std::string residual_plot_script(const DiagnosisReport& report, const std::string& png_path);
 
 /// Writes the three files (each to a temporary name, then renamed); `gnuplot` empty: no PNG.
+/// With `kalman`, the Kalman-filter diagnosis of the turns joins them
+/// (report/diagnosis_kalman_report.hpp).
 DiagnosisFiles write_diagnosis(const DiagnosisReport& report, const std::string& session,
-                               const std::string& dir, const std::string& gnuplot = "gnuplot");
+                               const std::string& dir, const std::string& gnuplot = "gnuplot",
+                               const KalmanDiagnosis* kalman = nullptr);
 
 }  // namespace sinscal

@@ -194,6 +194,15 @@ for f in diagnosis.json report.md residuals.png; do check "diagnose writes $f" t
 check "diagnose names the hidden drift" contains "$work/diag.txt" "Found gyro.bias_drift"
 check "diagnosis.json names it first" python3 -c "import json,sys; d=json.load(open('$work/dr/diag/diagnosis.json')); sys.exit(d['findings'][0]['effect'] != 'gyro.bias_drift')"
 check "diagnose says the lever arms are not separable" contains "$work/diag.txt" "Not separable on this plan: accel.lever_arm"
+check "the filter tests the lever arms and finds nothing" python3 -c "import json,sys; d=json.load(open('$work/dr/diag/diagnosis.json')); e=[c for r in d['kalman']['rounds'] for c in r if c['effect']=='accel.lever_arm']; sys.exit(not e or e[0]['significant'])"
+# A 1 ms gyro-accelerometer delay acts only while the table turns: the Kalman filter's test names it.
+printf '\n[timing]\ntime_delay = 1 ms\n' | cat "$src/config/sensors/nav-fog.ini" - > "$work/delay.ini"
+"$bin" simulate --plan "$src/config/plans/rot19.ini" --sensor "$work/delay.ini" --out "$work/dl" \
+  --seed 5 --rate 20 > /dev/null
+cp "$src/config/sensors/nav-fog.ini" "$work/dl/sensor.ini"
+"$bin" diagnose --session "$work/dl/session.ini" --out "$work/dl/diag" --no-plot > "$work/diag4.txt"
+check "diagnose names a hidden time delay from the turns" contains "$work/diag4.txt" "Found time_delay"
+check "diagnosis.json: the delay's finding and magnitude" python3 -c "import json,sys; d=json.load(open('$work/dl/diag/diagnosis.json')); f=[x for x in d['findings'] if x['effect']=='time_delay'][0]; c=f['coefficients']['time_delay']; sys.exit(not (f['method']=='kalman_innovations' and abs(abs(c['value'])-1.0) < 3*c['sigma']))"
 "$bin" diagnose --session "$work/dr/session.ini" --out "$work/dr/d2" --alpha 2 2> "$work/diag2.err"
 check "diagnose --alpha out of range is a usage error" test $? -eq 1
 "$bin" diagnose --session "$work/s8/session.ini" --out "$work/s8diag" --no-plot > "$work/diag3.txt"

@@ -300,7 +300,7 @@ TEST_CASE("Closed form: a dwell shorter than the fit needs is a clear error", "[
 }
 
 TEST_CASE("Closed form Monte Carlo: spread of the errors matches the predicted sigma",
-          "[closed_form][monte_carlo]") {
+          "[long][closed_form][monte_carlo]") {
   // Seeded runs: navigation-grade profile (new coefficients, noise) and a table that sets every
   // orientation to 2.5 arcsec (1-sigma, about each axis). 60 runs: the standard error of a spread
   // ratio is 1/sqrt(2 (N-1)) = 0.092, so the band 0.7-1.4 lies 3.3 and 4.3 standard errors out

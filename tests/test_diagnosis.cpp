@@ -161,7 +161,7 @@ TEST_CASE("Diagnosis: an effect hidden at 8 detection sigmas is named first, wit
 // 95 %; on clean sessions nothing named in at least 95 %. Effect, axis (among the components the
 // plan separates), sign and a magnitude of 5-10 detection sigmas drawn from each seed.
 TEST_CASE("Diagnosis Monte Carlo: hidden effects named, clean sessions quiet (seed8, rot19)",
-          "[diagnosis][monte_carlo]") {
+          "[long][diagnosis][monte_carlo]") {
   const std::vector<std::string> families = {"gyro.g_sensitivity", "accel.k2", "accel.scale_asym",
                                              "gyro.bias_drift", "accel.bias_drift"};
   for (const std::string plan : {"seed8.ini", "rot19.ini"}) {

@@ -44,7 +44,7 @@ std::string profile_with(const std::string& section, const std::string& line) {
 }  // namespace
 
 TEST_CASE("Every extended family is recovered by the Kalman filter within 3 sigma on rot19",
-          "[kalman][families]") {
+          "[long][kalman][families]") {
   const Plan p = test::load_plan("rot19.ini");
   const Motion m = build_motion(p, p.site);
   const std::string dir = test::temp_dir("family_recovery");

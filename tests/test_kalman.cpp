@@ -54,7 +54,7 @@ TEST_CASE("Kalman calibrator, rot19, extended model, noise-free: converges to th
 }
 
 TEST_CASE("Kalman calibrator, rot19, extended model, with noise: errors within their sigma",
-          "[kalman]") {
+          "[long][kalman]") {
   const auto& cat = coefficient_catalog();
   for (std::uint64_t seed : {1, 2}) {
     const Run r = run_rot19(true, seed);
@@ -69,7 +69,7 @@ TEST_CASE("Kalman calibrator, rot19, extended model, with noise: errors within t
 }
 
 TEST_CASE("Kalman calibrator Monte Carlo: NEES of every coefficient block in the 95 % band",
-          "[kalman][monte_carlo]") {
+          "[long][kalman][monte_carlo]") {
   // 20 seeded runs of rot19 with the extended profile (new coefficients and noise each run).
   // For each block, the sum over runs of e^T P^-1 e is chi-square with 20 x (block size) degrees
   // of freedom if the filter's covariance is honest.
@@ -123,7 +123,7 @@ TEST_CASE("Kalman calibrator Monte Carlo: NEES of every coefficient block in the
 }
 
 TEST_CASE("Kalman calibrator: streaming through the log reader equals the in-memory batch",
-          "[kalman]") {
+          "[long][kalman]") {
   const Plan p = test::load_plan("rot19.ini");
   const SensorProfile prof =
       SensorProfile::load(test::source_path("config/sensors/nav-fog-extended.ini"));
@@ -205,7 +205,7 @@ FamilyStats monte_carlo_rot19(const CalibratorOptions& base, int runs, std::uint
 }  // namespace
 
 TEST_CASE("Kalman calibrator Monte Carlo: zero velocity only, accuracy of every family",
-          "[kalman][monte_carlo]") {
+          "[long][kalman][monte_carlo]") {
   // The issue's acceptance run: rot19, nav-fog-extended (ARW 0.001 deg/sqrt(h), VRW 10
   // ug/sqrt(Hz)), 100 Hz, zero-velocity updates only (no attitude, no position), body frame the
   // accelerometer triad's. Targets: the reference tool's figures on such data.

@@ -36,7 +36,7 @@ CalibratorOptions options_for(const Session& s) {
 }  // namespace
 
 TEST_CASE("Kalman filter and closed form agree on seed8 within 3 sigma of the difference",
-          "[kalman][closed_form]") {
+          "[long][kalman][closed_form]") {
   TableErrors table;
   table.angle_sigma = 2.5 * units::arcsec;
   table.seed = 41;
@@ -64,7 +64,7 @@ TEST_CASE("Kalman filter and closed form agree on seed8 within 3 sigma of the di
   CHECK(compared >= 21);
 }
 
-TEST_CASE("Kalman filter: a coefficient the plan cannot observe is named", "[kalman]") {
+TEST_CASE("Kalman filter: a coefficient the plan cannot observe is named", "[long][kalman]") {
   // rot19's turns from a start with z down: the z turns are about the vertical, so without
   // attitude updates the z gyro's scale factor shows only through gyrocompassing (sigma ~44 ppm
   // against a prior of 45): not observed. The x and y gyros, turned about horizontal axes, are.
@@ -96,7 +96,7 @@ TEST_CASE("Kalman filter: a coefficient the plan cannot observe is named", "[kal
 }
 
 TEST_CASE("Kalman filter: bad samples are skipped (reported) or stop the run, estimates kept",
-          "[kalman][log]") {
+          "[long][kalman][log]") {
   const Session clean = make_session("kf_bad", "rot19.ini", "config/sensors/nav-fog.ini",
                                      "config/sensors/nav-fog.ini", 50);
   // Corrupt two samples: a NaN at line 20001 and a repeated time stamp at 40001.
@@ -158,7 +158,7 @@ TEST_CASE("Kalman filter: bad samples are skipped (reported) or stop the run, es
 }
 
 TEST_CASE("Kalman filter: divergence alarm on an unmodelled effect, none on a clean run",
-          "[kalman]") {
+          "[long][kalman]") {
   // Data with inner lever arms (6 cm: 4 mm/s^2 while turning) given to a filter whose profile
   // has none: the innovations grow far beyond their covariance and the run stops.
   const Session hidden =
@@ -176,7 +176,8 @@ TEST_CASE("Kalman filter: divergence alarm on an unmodelled effect, none on a cl
   CHECK(c.samples == 59200);
 }
 
-TEST_CASE("Kalman filter: converged verdict against the profile's sigma targets", "[kalman]") {
+TEST_CASE("Kalman filter: converged verdict against the profile's sigma targets",
+          "[long][kalman]") {
   const Session s = make_session("kf_converge", "rot19.ini", "config/sensors/nav-fog-extended.ini",
                                  "config/sensors/nav-fog-extended.ini", 70);
   const SensorProfile prof = SensorProfile::load(s.sensor_file);
@@ -212,7 +213,7 @@ TEST_CASE("Kalman filter: converged verdict against the profile's sigma targets"
 }
 
 TEST_CASE("Kalman filter, several passes: a MEMS unit's large errors linearized about the estimate",
-          "[kalman][passes]") {
+          "[long][kalman][passes]") {
   // Consumer MEMS errors (scale factors up to 1 %, misalignments up to 3000 arcsec) put the
   // attitude error near 1 deg after a turn: the single pass, linearized about estimates that are
   // still far off, trips the divergence alarm on this seed. Passes that start from the previous

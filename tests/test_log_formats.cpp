@@ -289,7 +289,7 @@ TEST_CASE("One file per dwell: missing file, unknown dwell, overlap, too long ar
 TEST_CASE(
     "One file per dwell: seed8 cut into its dwells, each on its own clock, calibrates as "
     "the whole log does",
-    "[log][segments][closed-form]") {
+    "[long][log][segments][closed-form]") {
   const std::string a = test::temp_dir("h2_seed8_whole"), b = test::temp_dir("h2_seed8_cut");
   SessionSimulation spec;
   spec.plan_path = test::source_path("config/plans/seed8.ini");

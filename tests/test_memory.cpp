@@ -56,7 +56,7 @@ std::string session_with_length(const std::string& name, const std::string& plan
 }  // namespace
 
 TEST_CASE("Kalman streaming peak memory: a 10x longer log within 10 % (peak memory)",
-          "[kalman][memory]") {
+          "[long][kalman][memory]") {
   const Plan base = test::load_plan("rot19.ini");
   // rot19 lasts 70 + 18 (9 + 20) = 592 s; with a 700 s start and 281 s pauses, 5920 s.
   std::string text = base.text;

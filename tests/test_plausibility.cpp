@@ -115,7 +115,7 @@ TEST_CASE("Plausibility gate: bounds from the sensor profile's error ranges", "[
 // The gate must not cry wolf: every bundled sensor profile on both bundled plans, 20 seeds each
 // (the profile's errors drawn and its noise added), passes.
 TEST_CASE("Plausibility gate Monte Carlo: no false alarm on simulated sessions",
-          "[plausibility][monte_carlo]") {
+          "[long][plausibility][monte_carlo]") {
   for (const std::string sensor : {"nav-fog.ini", "nav-fog-extended.ini", "mems.ini"}) {
     const SensorProfile profile =
         SensorProfile::load(test::source_path("config/sensors/" + sensor));

@@ -80,7 +80,7 @@ TEST_CASE("Simulator: error model applied through the quadrature", "[simulator]"
   CHECK(sb.y() - sa.y() == Approx(1000e-6 * sa.y() + 36.0 * units::deg_per_h * 9.0).epsilon(1e-9));
 }
 
-TEST_CASE("Simulator: noise is reproducible from its seed", "[simulator]") {
+TEST_CASE("Simulator: noise is reproducible from its seed", "[long][simulator]") {
   const Plan p = test::load_plan("rot19.ini");
   const Motion m = build_motion(p, p.site);
   NoiseModel n;

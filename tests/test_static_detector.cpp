@@ -36,7 +36,7 @@ Plan rot19_with(const std::string& from, const std::string& to) {
 }
 }  // namespace
 
-TEST_CASE("Static detector finds rot19's dwells where the motion has them", "[static]") {
+TEST_CASE("Static detector finds rot19's dwells where the motion has them", "[long][static]") {
   const Plan p = test::load_plan("rot19.ini");
   const Motion m = build_motion(p, p.site);
   // A FOG unit, a consumer MEMS unit (biases up to 0.5 deg/s, noise 50x the FOG's), and the FOG's
@@ -66,7 +66,7 @@ TEST_CASE("Static detector finds rot19's dwells where the motion has them", "[st
 }
 
 TEST_CASE("Kalman filter with dwells from the data: a log whose timing is off the plan",
-          "[kalman][static]") {
+          "[long][kalman][static]") {
   // The data rest 12.3 s longer at the start than the plan says, so every later dwell is 12.3 s
   // late against the plan: with the plan's timing the attitude updates come mid-turn.
   const Plan data_plan = rot19_with("dwell = 70 s", "dwell = 82.3 s");
@@ -104,7 +104,7 @@ TEST_CASE("Kalman filter with dwells from the data: a log whose timing is off th
 }
 
 TEST_CASE("Kalman filter with dwells from the data: more static intervals than the plan's dwells",
-          "[kalman][static]") {
+          "[long][kalman][static]") {
   // The data follow rot19; the plan stops three turns earlier.
   const Plan full = test::load_plan("rot19.ini");
   const Plan shorter = rot19_with("-x -x -x +z +z -z -z -z\n", "-x -x -x +z +z\n");
@@ -132,7 +132,7 @@ TEST_CASE("Kalman filter with dwells from the data: more static intervals than t
 }
 
 TEST_CASE("Kalman filter with a table-angle column: the attitude the table really reached",
-          "[kalman][table]") {
+          "[long][kalman][table]") {
   // The table misses each commanded orientation by 30 arcsec per axis (1-sigma); its encoders
   // read where it went. With the plan's orientations (taken as known to 2.5 arcsec) the attitude
   // updates are wrong by far more than their sigma; with the logged angles they are right.

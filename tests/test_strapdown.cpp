@@ -20,7 +20,7 @@ struct MaxError {
 };
 }  // namespace
 
-TEST_CASE("Strapdown, perfect sensors: 8 static dwells of 180 s", "[strapdown]") {
+TEST_CASE("Strapdown, perfect sensors: 8 static dwells of 180 s", "[long][strapdown]") {
   const Plan p = test::load_plan("seed8.ini");
   const Motion m = build_motion(p, p.site);
   const auto samples = test::simulate(m);
@@ -143,7 +143,7 @@ TEST_CASE("Strapdown: constant accelerometer bias alone matches the Schuler solu
 }
 
 TEST_CASE("Strapdown: constant gyro drift alone matches the Schuler solution to 2 %",
-          "[strapdown][schuler]") {
+          "[long][strapdown][schuler]") {
   ImuErrorModel errors;
   errors.gyro.bias = Vector3d(0.2, -0.15, 0.25) * units::deg_per_h;
   check_schuler(errors, true);

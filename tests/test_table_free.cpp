@@ -258,7 +258,7 @@ void check_consistency(const ZStats& st, const char* profile) {
 }  // namespace
 
 TEST_CASE("Table-free calibration Monte Carlo: errors match sigmas (MEMS, tactical)",
-          "[table_free][monte_carlo]") {
+          "[long][table_free][monte_carlo]") {
   const int runs = 40;
   const ZStats mems = monte_carlo(mems_profile(), mpu6050_scaling(), runs, 100);
   check_consistency(mems, "mems");
@@ -266,7 +266,7 @@ TEST_CASE("Table-free calibration Monte Carlo: errors match sigmas (MEMS, tactic
   check_consistency(tactical, "tactical");
 }
 
-TEST_CASE("Table-free calibration of the real Xsens MTi session", "[table_free][real]") {
+TEST_CASE("Table-free calibration of the real Xsens MTi session", "[long][table_free][real]") {
   const std::string dir = "/work/shared/data/xsens-mti-handheld";
   if (!std::ifstream(dir + "/xsens_acc.txt").good()) {
     WARN("Xsens recording not found at " << dir << ": skipped");

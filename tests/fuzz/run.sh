@@ -31,8 +31,12 @@ if ! command -v "$cxx" >/dev/null 2>&1; then
 fi
 
 echo "== building ${targets[*]} in $build"
-cmake -S "$root" -B "$build" -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DSINSCAL_FUZZ=ON -DSINSCAL_TESTS=OFF -DSINSCAL_WERROR=OFF >/dev/null
+# A build directory already configured with SINSCAL_FUZZ=ON (CI's sanitizer build, which also
+# holds the sanitized tests) is used as it is configured.
+if ! grep -q '^SINSCAL_FUZZ:BOOL=ON$' "$build/CMakeCache.txt" 2>/dev/null; then
+  cmake -S "$root" -B "$build" -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DSINSCAL_FUZZ=ON -DSINSCAL_TESTS=OFF -DSINSCAL_WERROR=OFF >/dev/null
+fi
 cmake --build "$build" -j"${SINSCAL_FUZZ_JOBS:-2}" --target "${targets[@]}" >/dev/null
 
 failed=()

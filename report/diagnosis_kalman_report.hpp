@@ -1,0 +1,19 @@
+// The Kalman-filter part of the diagnosis files (filter/diagnosis_kalman.hpp): its findings join
+// diagnosis.json's "findings" (statistic "wald_kalman"), its every test goes under "kalman", and
+// report.md gets a section (docs/formats.md).
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "filter/diagnosis_kalman.hpp"
+
+namespace sinscal {
+
+/// Adds the Kalman-filter diagnosis to a diagnosis.json document (its "findings", a "kalman"
+/// section, and on each "not_separable" entry the filter tested, a "kalman" verdict).
+void add_kalman_diagnosis(nlohmann::ordered_json& diagnosis, const KalmanDiagnosis& kalman);
+/// The report.md section of the Kalman-filter diagnosis.
+std::string kalman_diagnosis_markdown(const KalmanDiagnosis& kalman);
+
+}  // namespace sinscal
