@@ -125,6 +125,7 @@ TableFreeRun run_table_free(const Session& s, const TableFreeRunOptions& o) {
     throw TableFreeError(TableFreeError::Kind::BadInput, run.log + ": " + e.what());
   }
   run.poses = handheld_poses(rec, run.detection);
+  run.readings = rec.raw() ? si_from_counts(detector_in, rec.nominal) : rec.readings;
   run.result = rec.raw()
                    ? calibrate_table_free_counts(detector_in, rec.nominal, run.options, o.detector)
                    : calibrate_table_free(rec.readings, run.detection.poses, run.options);
@@ -150,29 +151,43 @@ HandheldValidation validate_table_free(const Session& v, const TableFreeRun& run
   out.name = v.name;
   out.samples = rec.samples.size();
   out.duration = rec.samples.back().t - rec.samples.front().t;
+  // Corrected with the calibration's whole model (any extended terms a diagnosis added), the
+  // time-dependent terms from the record's start.
   const ImuErrorModel& m = run.result.model;
-  const Eigen::Matrix3d La = m.accel.linear().inverse(), Lg = m.gyro.linear().inverse();
-  const double g = run.result.gravity;
-  auto accel = [&](const Eigen::Vector3d& y, bool calibrated) -> Eigen::Vector3d {
-    return calibrated ? Eigen::Vector3d(La * (y - m.accel.bias)) : y;
+  const double g = run.result.gravity, t0 = si.front().t;
+  auto correct = [&](const Eigen::Vector3d& yg, const Eigen::Vector3d& ya, double t,
+                     bool calibrated) {
+    std::pair<Eigen::Vector3d, Eigen::Vector3d> wf{yg, ya};
+    if (calibrated)
+      m.compensate(yg, ya, Eigen::Vector3d::Zero(), wf.first, wf.second, t - t0);
+    return wf;
   };
-  auto gyro = [&](const Eigen::Vector3d& y, bool calibrated) -> Eigen::Vector3d {
-    return calibrated ? Eigen::Vector3d(Lg * (y - m.gyro.bias)) : y;
+  auto accel = [&](const Eigen::Vector3d& ya, const Eigen::Vector3d& yg, double t,
+                   bool calibrated) -> Eigen::Vector3d {
+    return correct(yg, ya, t, calibrated).second;
+  };
+  auto gyro = [&](const Eigen::Vector3d& yg, const Eigen::Vector3d& ya, double t,
+                  bool calibrated) -> Eigen::Vector3d {
+    return correct(yg, ya, t, calibrated).first;
   };
   std::vector<double> ge_n, ge_c, r_n, r_c, t_n, t_c;
-  std::vector<Eigen::Vector3d> f_mean;
+  std::vector<Eigen::Vector3d> f_mean, w_mean;
+  std::vector<double> t_mean;
   for (const Pose& p : detection.poses) {
     Eigen::Vector3d f, w, fs, ws;
     reading_statistics(si, p.first, p.last, f, w, fs, ws);
+    const double tm = 0.5 * (si[p.first].t + si[p.last].t);
     f_mean.push_back(f);
+    w_mean.push_back(w);
+    t_mean.push_back(tm);
     ValidationPose vp;
     vp.index = p.index;
     vp.t_start = p.t_start;
     vp.t_end = p.t_end;
-    vp.gravity_error_nominal = accel(f, false).norm() - g;
-    vp.gravity_error_calibrated = accel(f, true).norm() - g;
-    vp.rate_nominal = gyro(w, false).norm();
-    vp.rate_calibrated = gyro(w, true).norm();
+    vp.gravity_error_nominal = accel(f, w, tm, false).norm() - g;
+    vp.gravity_error_calibrated = accel(f, w, tm, true).norm() - g;
+    vp.rate_nominal = gyro(w, f, tm, false).norm();
+    vp.rate_calibrated = gyro(w, f, tm, true).norm();
     ge_n.push_back(vp.gravity_error_nominal);
     ge_c.push_back(vp.gravity_error_calibrated);
     r_n.push_back(vp.rate_nominal);
@@ -188,9 +203,12 @@ HandheldValidation validate_table_free(const Session& v, const TableFreeRun& run
     for (const bool calibrated : {false, true}) {
       Eigen::Matrix3d C = Eigen::Matrix3d::Identity();
       for (std::size_t k = detection.poses[p].last + 1; k <= detection.poses[p + 1].first; ++k)
-        C = C * dcm_from_rotvec(gyro(si[k].gyro, calibrated) * (si[k].t - si[k - 1].t));
-      const Eigen::Vector3d u0 = accel(f_mean[p], calibrated).normalized();
-      const Eigen::Vector3d u1 = accel(f_mean[p + 1], calibrated).normalized();
+        C = C * dcm_from_rotvec(gyro(si[k].gyro, si[k].accel, si[k].t, calibrated) *
+                                (si[k].t - si[k - 1].t));
+      const Eigen::Vector3d u0 =
+          accel(f_mean[p], w_mean[p], t_mean[p], calibrated).normalized();
+      const Eigen::Vector3d u1 =
+          accel(f_mean[p + 1], w_mean[p + 1], t_mean[p + 1], calibrated).normalized();
       const double e = angle_between(C.transpose() * u0, u1);
       (calibrated ? vt.error_calibrated : vt.error_nominal) = e;
       (calibrated ? t_c : t_n).push_back(e);

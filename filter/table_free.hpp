@@ -118,6 +118,10 @@ struct TableFreePoseFit {
   double gyro_rms = 0.0;       // RMS over the axes of y_g,p - (b_g + G w_v,p) (rad/s)
   double turn_error = 0.0;     // rad: angle between the gravity direction the turn into this
                                // pose predicts and the pose's own (0 for the first pose)
+  std::size_t first = 0, last = 0;  // readings of the trimmed stretch (indices)
+  /// Unit direction of the pose's specific force at the solution (u_p, body axes).
+  Eigen::Vector3d direction = Eigen::Vector3d::Zero();
+  double turn_sigma = 0.0;  // rad: 1-sigma of each tangent component of the turn into this pose
 };
 
 struct TableFreeStage {
