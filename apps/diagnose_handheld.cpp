@@ -78,11 +78,17 @@ void print(const HandheldDiagnosisInput& in, const HandheldDiagnosisFiles& files
       std::printf("Noise: %s on %s (the Allan deviation of pose %d leaves the white-noise model "
                   "at %.3g s)\n",
                   n.effect.c_str(), n.channel.c_str(), in.diagnosis.noise_pose, n.tau);
-  for (const auto& [b, a] : in.validations)
-    std::printf("Validation %s: gravity magnitude %.5g -> %.5g %s, turns %.3f -> %.3f deg\n",
+  for (const auto& [b, a] : in.validations) {
+    std::printf("Validation %s: gravity magnitude %.5g -> %.5g %s, rate at rest %.5g -> %.5g %s",
                 b.session.c_str(), b.gravity_rms_calibrated / u.accel_si,
                 a.gravity_rms_calibrated / u.accel_si, u.accel.c_str(),
-                b.turn_rms_calibrated / units::deg, a.turn_rms_calibrated / units::deg);
+                b.rate_rms_calibrated / u.gyro_si, a.rate_rms_calibrated / u.gyro_si,
+                u.gyro.c_str());
+    if (!b.turns.empty())
+      std::printf(", turns %.3f -> %.3f deg", b.turn_rms_calibrated / units::deg,
+                  a.turn_rms_calibrated / units::deg);
+    std::printf("\n");
+  }
   std::printf("Written: %s, %s%s%s%s%s (%.2f s: reading, calibration and diagnosis)\n",
               files.json.c_str(), files.markdown.c_str(), files.png.empty() ? "" : ", ",
               files.png.c_str(), files.allan_png.empty() ? "" : ", ", files.allan_png.c_str(),

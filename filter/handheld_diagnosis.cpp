@@ -712,13 +712,24 @@ double noise_confidence(std::size_t samples, double alpha) {
 
 namespace {
 
+// The white-noise-only model of a channel: N from the median of ADEV sqrt(tau) over the first
+// half of the cluster times (the most precise; a flicker floor or a random walk lifts only the
+// long ones).
+double white_only(const std::vector<AllanPoint>& pts) {
+  std::vector<double> n;
+  for (std::size_t k = 0; k < std::max<std::size_t>(1, (pts.size() + 1) / 2); ++k)
+    n.push_back(pts[k].adev * std::sqrt(pts[k].tau));
+  std::nth_element(n.begin(), n.begin() + static_cast<std::ptrdiff_t>(n.size() / 2), n.end());
+  return n[n.size() / 2];
+}
+
 NoiseCandidate noise_channel(const std::vector<AllanPoint>& pts, const AllanFit& fit,
                              const std::string& channel) {
   NoiseCandidate c;
   c.channel = channel;
   c.points = static_cast<int>(pts.size());
   if (pts.empty()) return c;
-  const double N = fit.valid && fit.white > 0.0 ? fit.white : pts.front().adev * std::sqrt(pts.front().tau);
+  const double N = white_only(pts);
   double worst_tau = pts.back().tau;
   for (const auto& p : pts) {
     const double white = N / std::sqrt(p.tau);
@@ -742,6 +753,8 @@ NoiseCandidate noise_channel(const std::vector<AllanPoint>& pts, const AllanFit&
 }
 
 }  // namespace
+
+double white_only_deviation(const std::vector<AllanPoint>& points) { return white_only(points); }
 
 std::vector<NoiseCandidate> noise_candidates(const AllanAnalysis& a, double alpha) {
   const double confidence = noise_confidence(a.samples, alpha);

@@ -121,6 +121,9 @@ AllanAnalysis stretch_allan(const std::vector<ImuReading>& readings, std::size_t
 /// (each point's bound at confidence 1 - 2 alpha / (points of all channels)); the analysis must
 /// have been computed at `noise_confidence(analysis points, alpha)`.
 std::vector<NoiseCandidate> noise_candidates(const AllanAnalysis& analysis, double alpha);
+/// The white-noise-only model of one channel's Allan deviation, N (ADEV = N / sqrt(tau)): the
+/// median of ADEV sqrt(tau) over the first half of the cluster times. `points` not empty.
+double white_only_deviation(const std::vector<AllanPoint>& points);
 /// The two-sided confidence of each point's bound for a family-wise level alpha over the
 /// cluster times of a record of `samples` (octaves up to a quarter of it) on six channels.
 double noise_confidence(std::size_t samples, double alpha);

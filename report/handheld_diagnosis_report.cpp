@@ -183,8 +183,12 @@ json validation_json(const HandheldUnits& u, const HandheldDiagnosisInput& in) {
                    {"gravity_rms_after", num(after.gravity_rms_calibrated / u.accel_si)},
                    {"rate_rms_before", num(before.rate_rms_calibrated / u.gyro_si)},
                    {"rate_rms_after", num(after.rate_rms_calibrated / u.gyro_si)},
-                   {"turn_rms_before_deg", num(before.turn_rms_calibrated / units::deg)},
-                   {"turn_rms_after_deg", num(after.turn_rms_calibrated / units::deg)}});
+                   {"turn_rms_before_deg",
+                    before.turns.empty() ? json(nullptr)
+                                         : num(before.turn_rms_calibrated / units::deg)},
+                   {"turn_rms_after_deg", before.turns.empty()
+                                              ? json(nullptr)
+                                              : num(after.turn_rms_calibrated / units::deg)}});
   return arr;
 }
 
@@ -436,7 +440,6 @@ std::string handheld_allan_plot_script(const HandheldDiagnosisInput& in,
   const AllanAnalysis& a = in.diagnosis.allan;
   for (int sensor = 0; sensor < 2; ++sensor) {
     const auto& pts = sensor == 0 ? a.gyro : a.accel;
-    const auto& fits = sensor == 0 ? a.gyro_fit : a.accel_fit;
     const double unit = sensor == 0 ? units::deg_per_h : units::ug;
     g << "set title '" << (sensor == 0 ? "gyros [deg/h]" : "accelerometers [ug]") << "'\nplot ";
     for (int k = 0; k < 6; ++k)
@@ -445,10 +448,7 @@ std::string handheld_allan_plot_script(const HandheldDiagnosisInput& in,
     g << "\n";
     for (int k = 0; k < 6; ++k) {
       const auto& p = pts[static_cast<std::size_t>(k % 3)];
-      const AllanFit& f = fits[static_cast<std::size_t>(k % 3)];
-      const double N = f.valid && f.white > 0.0 ? f.white
-                       : p.empty()              ? 0.0
-                                                : p.front().adev * std::sqrt(p.front().tau);
+      const double N = p.empty() ? 0.0 : white_only_deviation(p);
       for (const auto& q : p) {
         g << q.tau << " ";
         if (k < 3)
