@@ -18,9 +18,8 @@ namespace sinscal::cli {
 
 namespace {
 
-const std::vector<std::string> kHandheldOnly = {"gravity",         "pose-window", "min-pose",
-                                                "edge-trim",       "validate",    "candidates",
-                                                "pose-accel-only"};
+const std::vector<std::string> kHandheldOnly = {
+    "gravity", "pose-window", "min-pose", "edge-trim", "validate", "candidates", "pose-accel-only"};
 
 bool given(const po::variables_map& vm, const std::string& name) {
   return vm.count(name) && !vm[name].defaulted();

@@ -75,9 +75,10 @@ void print(const HandheldDiagnosisInput& in, const HandheldDiagnosisFiles& files
                 c.family.c_str(), c.aliased.size(), c.separated_by.c_str());
   for (const auto& n : in.diagnosis.noise)
     if (n.significant)
-      std::printf("Noise: %s on %s (the Allan deviation of pose %d leaves the white-noise model "
-                  "at %.3g s)\n",
-                  n.effect.c_str(), n.channel.c_str(), in.diagnosis.noise_pose, n.tau);
+      std::printf(
+          "Noise: %s on %s (the Allan deviation of pose %d leaves the white-noise model "
+          "at %.3g s)\n",
+          n.effect.c_str(), n.channel.c_str(), in.diagnosis.noise_pose, n.tau);
   for (const auto& [b, a] : in.validations) {
     std::printf("Validation %s: gravity magnitude %.5g -> %.5g %s, rate at rest %.5g -> %.5g %s",
                 b.session.c_str(), b.gravity_rms_calibrated / u.accel_si,
@@ -136,8 +137,9 @@ int diagnose_handheld_session(const Session& session, const HandheldDiagnoseOpti
         "(the other candidates' findings are written to " +
         written.json + ")");
   if (!d.refused.empty())
-    throw std::runtime_error(d.refused.front() + " (the other candidates' findings are written to " +
-                             written.json + ")");
+    throw std::runtime_error(d.refused.front() +
+                             " (the other candidates' findings are written to " + written.json +
+                             ")");
   return 0;
 }
 

@@ -49,13 +49,13 @@ struct DwellResidual {
 /// Fit figures of one parameter set.
 struct FitFigures {
   Stage2Result fit;
-  double chi2 = 0.0;            // whitened residual sum of squares
-  double accel_rms = 0.0;       // m/s^2: RMS of the accelerometer residuals over dwells, axes
-  double gyro_rms = 0.0;        // rad/s
-  double heldout = 0.0;         // RMS of the leave-one-dwell-out prediction error, in sigmas
-  double heldout_accel = 0.0;   // m/s^2, same in the sensor's units
-  double heldout_gyro = 0.0;    // rad/s
-  int heldout_dwells = 0;       // dwells whose prediction the others determine
+  double chi2 = 0.0;           // whitened residual sum of squares
+  double accel_rms = 0.0;      // m/s^2: RMS of the accelerometer residuals over dwells, axes
+  double gyro_rms = 0.0;       // rad/s
+  double heldout = 0.0;        // RMS of the leave-one-dwell-out prediction error, in sigmas
+  double heldout_accel = 0.0;  // m/s^2, same in the sensor's units
+  double heldout_gyro = 0.0;   // rad/s
+  int heldout_dwells = 0;      // dwells whose prediction the others determine
   /// Hand-held sessions (filter/handheld_diagnosis.hpp): accel_rms, gyro_rms are the poses'
   /// gravity-magnitude residual and rate at rest; these the turns' (rad), 0 for table sessions.
   double turn_rms = 0.0;

@@ -107,12 +107,15 @@ class HandheldDesign {
   const Eigen::MatrixXd& J() const { return J_; }
   const Eigen::VectorXd& r0() const { return r0_; }
   const Eigen::MatrixXd& M() const { return M_; }
-  double turn_sigma(Eigen::Index p) const { return cal_.poses[static_cast<std::size_t>(p)].turn_sigma; }
+  double turn_sigma(Eigen::Index p) const {
+    return cal_.poses[static_cast<std::size_t>(p)].turn_sigma;
+  }
   Eigen::Index turn_row(Eigen::Index p) const { return 6 * poses() + 2 * p; }  // into pose p+1
 
   // Positions (in J) of catalog coefficients, then every pose-direction column.
   std::vector<Eigen::Index> subset(const std::vector<int>& catalog) const {
     std::vector<Eigen::Index> s;
+    s.reserve(catalog.size() + static_cast<std::size_t>(2 * poses()));
     for (int c : catalog) s.push_back(position(c));
     for (Eigen::Index k = 0; k < 2 * poses(); ++k) s.push_back(coefficient_columns() + k);
     return s;
@@ -270,7 +273,8 @@ void HandheldDesign::turn_rows(Eigen::Index p) {
   const Eigen::MatrixXd dtheta = w * Eto.transpose() * skew(pred) * Cm.transpose() * S;
   for (std::size_t j = 0; j < gyro_columns_.size(); ++j)
     J_.block<2, 1>(row, gyro_columns_[j]) = dtheta.col(static_cast<Eigen::Index>(j));
-  J_.block<2, 2>(row, C + 2 * p) = w * Eto.transpose() * Cm.transpose() * pose_[static_cast<std::size_t>(p)].E;
+  J_.block<2, 2>(row, C + 2 * p) =
+      w * Eto.transpose() * Cm.transpose() * pose_[static_cast<std::size_t>(p)].E;
   J_.block<2, 2>(row, C + 2 * (p + 1)) = -w * Eigen::Matrix2d::Identity();
 }
 
@@ -437,8 +441,9 @@ CandidateTest separability(const HandheldFitter& fit, const std::vector<int>& cu
   (ok ? c.separable : c.aliased).push_back(component);
   if (!ok && mcc > 0.0) {
     Eigen::Index worst = 0;
-    (beta.cwiseAbs().cwiseProduct(Eigen::VectorXd(
-         Eigen::VectorXd::NullaryExpr(beta.size(), [&](Eigen::Index i) {
+    (beta.cwiseAbs().cwiseProduct(Eigen::VectorXd(Eigen::VectorXd::NullaryExpr(
+         beta.size(),
+         [&](Eigen::Index i) {
            return std::sqrt(d.M()(s[static_cast<std::size_t>(i)], s[static_cast<std::size_t>(i)]));
          }))))
         .maxCoeff(&worst);
@@ -629,9 +634,9 @@ HandheldDiagnosis diagnose_handheld(const std::vector<ImuReading>& readings,
   DiagnosisReport& rep = out.report;
   rep.alpha = o.alpha;
   rep.inputs = out.rows;
-  std::vector<int> current(design.columns().begin(),
-                           design.columns().begin() +
-                               static_cast<std::ptrdiff_t>(cal.covariance_names.size()));
+  std::vector<int> current(
+      design.columns().begin(),
+      design.columns().begin() + static_cast<std::ptrdiff_t>(cal.covariance_names.size()));
   rep.initial_parameters = current;
   rep.initial = fit.figures(current, true);
   FitFigures now = rep.initial;
@@ -759,6 +764,7 @@ double white_only_deviation(const std::vector<AllanPoint>& points) { return whit
 std::vector<NoiseCandidate> noise_candidates(const AllanAnalysis& a, double alpha) {
   const double confidence = noise_confidence(a.samples, alpha);
   std::vector<NoiseCandidate> out;
+  out.reserve(6);
   const char* axis[3] = {"x", "y", "z"};
   for (int i = 0; i < 3; ++i)
     out.push_back(noise_channel(a.gyro[static_cast<std::size_t>(i)],

@@ -61,8 +61,8 @@ struct HandheldDiagnosisOptions {
 
 /// The residuals of one pose (and the turn into it) before and after the findings.
 struct PoseResidual {
-  int pose = 0;         // the detector's index
-  double t_mid = 0.0;   // s since the first reading
+  int pose = 0;        // the detector's index
+  double t_mid = 0.0;  // s since the first reading
   double gravity_before = 0.0, gravity_after = 0.0, gravity_sigma = 0.0;  // |f| - g, m/s^2
   Eigen::Vector3d rate_before = Eigen::Vector3d::Zero();  // rad/s at rest, body axes
   Eigen::Vector3d rate_after = Eigen::Vector3d::Zero();

@@ -35,6 +35,7 @@ std::string sci(double v) {
 
 std::vector<std::string> names(const std::vector<int>& catalog) {
   std::vector<std::string> out;
+  out.reserve(catalog.size());
   for (int c : catalog) out.push_back(coefficient_catalog()[static_cast<std::size_t>(c)].name);
   return out;
 }
@@ -57,8 +58,12 @@ json unit_json(const HandheldUnits& u) {
 }
 
 json statistic_json(const CandidateTest& c, double alpha) {
-  return {{"name", "likelihood_ratio"}, {"test", c.test},           {"value", c.likelihood_ratio},
-          {"dof", c.dof},               {"p_value", c.p_value},     {"threshold", c.threshold},
+  return {{"name", "likelihood_ratio"},
+          {"test", c.test},
+          {"value", c.likelihood_ratio},
+          {"dof", c.dof},
+          {"p_value", c.p_value},
+          {"threshold", c.threshold},
           {"alpha", alpha}};
 }
 
@@ -127,8 +132,8 @@ json noise_json(const HandheldDiagnosis& d) {
   for (const auto& c : d.noise) {
     const bool gyro = c.channel.rfind("gyro", 0) == 0;
     const bool walk = c.effect == "noise.rate_random_walk";
-    const double unit = gyro ? (walk ? units::deg_per_h / std::sqrt(units::hour) : units::deg_per_h)
-                             : units::ug;
+    const double unit =
+        gyro ? (walk ? units::deg_per_h / std::sqrt(units::hour) : units::deg_per_h) : units::ug;
     const std::string uname =
         gyro ? (walk ? "deg/h/sqrt(h)" : "deg/h") : (walk ? "ug/sqrt(s)" : "ug");
     arr.push_back({{"effect", c.effect},
@@ -175,26 +180,26 @@ json ambiguous_json(const DiagnosisReport& r) {
 json validation_json(const HandheldUnits& u, const HandheldDiagnosisInput& in) {
   json arr = json::array();
   for (const auto& [before, after] : in.validations)
-    arr.push_back({{"session", before.session},
-                   {"poses", before.poses.size()},
-                   {"turns", before.turns.size()},
-                   {"gravity_rms_nominal", num(before.gravity_rms_nominal / u.accel_si)},
-                   {"gravity_rms_before", num(before.gravity_rms_calibrated / u.accel_si)},
-                   {"gravity_rms_after", num(after.gravity_rms_calibrated / u.accel_si)},
-                   {"rate_rms_before", num(before.rate_rms_calibrated / u.gyro_si)},
-                   {"rate_rms_after", num(after.rate_rms_calibrated / u.gyro_si)},
-                   {"turn_rms_before_deg",
-                    before.turns.empty() ? json(nullptr)
-                                         : num(before.turn_rms_calibrated / units::deg)},
-                   {"turn_rms_after_deg", before.turns.empty()
-                                              ? json(nullptr)
-                                              : num(after.turn_rms_calibrated / units::deg)}});
+    arr.push_back(
+        {{"session", before.session},
+         {"poses", before.poses.size()},
+         {"turns", before.turns.size()},
+         {"gravity_rms_nominal", num(before.gravity_rms_nominal / u.accel_si)},
+         {"gravity_rms_before", num(before.gravity_rms_calibrated / u.accel_si)},
+         {"gravity_rms_after", num(after.gravity_rms_calibrated / u.accel_si)},
+         {"rate_rms_before", num(before.rate_rms_calibrated / u.gyro_si)},
+         {"rate_rms_after", num(after.rate_rms_calibrated / u.gyro_si)},
+         {"turn_rms_before_deg",
+          before.turns.empty() ? json(nullptr) : num(before.turn_rms_calibrated / units::deg)},
+         {"turn_rms_after_deg",
+          before.turns.empty() ? json(nullptr) : num(after.turn_rms_calibrated / units::deg)}});
   return arr;
 }
 
 json calibration_json(const HandheldUnits& u, const DiagnosisReport& r) {
   ResultCoefficients c = result_coefficients(r.final_fit.fit);
-  for (const char* n : {"accel.misalignment.xy", "accel.misalignment.xz", "accel.misalignment.yz"}) {
+  for (const char* n :
+       {"accel.misalignment.xy", "accel.misalignment.xz", "accel.misalignment.yz"}) {
     ResultCoefficient f;
     f.unit = coefficient_info(n).unit;
     f.sigma = 0.0;
@@ -271,12 +276,12 @@ void markdown_fit_table(std::ostringstream& m, const HandheldUnits& u, const Fit
     << "| gravity-magnitude residual RMS [" << u.accel << "] | "
     << fixed(before.accel_rms / u.accel_si, 5) << " | " << fixed(after.accel_rms / u.accel_si, 5)
     << " |\n"
-    << "| rate at rest RMS [" << u.gyro << "] | " << fixed(before.gyro_rms / u.gyro_si, 5)
-    << " | " << fixed(after.gyro_rms / u.gyro_si, 5) << " |\n"
+    << "| rate at rest RMS [" << u.gyro << "] | " << fixed(before.gyro_rms / u.gyro_si, 5) << " | "
+    << fixed(after.gyro_rms / u.gyro_si, 5) << " |\n"
     << "| turn residual RMS [deg] | " << fixed(before.turn_rms / units::deg, 4) << " | "
     << fixed(after.turn_rms / units::deg, 4) << " |\n"
-    << "| held-out error [sigma] | " << fixed(before.heldout, 3) << " | "
-    << fixed(after.heldout, 3) << " |\n"
+    << "| held-out error [sigma] | " << fixed(before.heldout, 3) << " | " << fixed(after.heldout, 3)
+    << " |\n"
     << "| held-out gravity magnitude [" << u.accel << "] | "
     << fixed(before.heldout_accel / u.accel_si, 5) << " | "
     << fixed(after.heldout_accel / u.accel_si, 5) << " |\n"
@@ -304,7 +309,8 @@ void markdown_findings(std::ostringstream& m, const HandheldUnits& u, const Diag
   const FitFigures* before = &r.initial;
   for (const auto& f : r.findings) {
     m << "### " << f.family << "\n\n"
-      << (f.test == "F" ? "F statistic (noise rescaled by the fit's residual) " : "Likelihood ratio ")
+      << (f.test == "F" ? "F statistic (noise rescaled by the fit's residual) "
+                        : "Likelihood ratio ")
       << fixed(f.likelihood_ratio, 1) << " on " << f.dof << " dof, p = " << sci(f.p_value)
       << " (threshold " << sci(f.threshold) << ").\n\n";
     markdown_fit_table(m, u, *before, f.with);
@@ -313,8 +319,8 @@ void markdown_findings(std::ostringstream& m, const HandheldUnits& u, const Diag
     const ResultCoefficients all = result_coefficients(f.with.fit);
     for (const auto& n : names(f.separable)) {
       const auto& c = all.at(n);
-      m << "| " << n << " | " << sci(c.value) << " | " << (c.sigma ? sci(*c.sigma) : "-")
-        << " | " << c.unit << " |\n";
+      m << "| " << n << " | " << sci(c.value) << " | " << (c.sigma ? sci(*c.sigma) : "-") << " | "
+        << c.unit << " |\n";
     }
     m << "\n";
     before = &f.with;
@@ -327,8 +333,7 @@ void markdown_rest(std::ostringstream& m, const HandheldDiagnosisInput& in) {
     m << "## Ambiguous\n\nA significant residual (statistic " << fixed(a.likelihood_ratio, 1)
       << ", p = " << sci(a.p_value) << ") that " << a.family;
     for (const auto& b : a.ambiguous_with) m << " and " << b.family;
-    m << " explain equally well on these poses: neither is named. Separated by: "
-      << a.separated_by;
+    m << " explain equally well on these poses: neither is named. Separated by: " << a.separated_by;
     for (const auto& b : a.ambiguous_with) m << "; " << b.separated_by;
     m << ".\n\n";
   }
@@ -338,9 +343,15 @@ void markdown_rest(std::ostringstream& m, const HandheldDiagnosisInput& in) {
     m << "- **" << c.family << "** (";
     const auto n = names(c.aliased);
     for (std::size_t i = 0; i < n.size(); ++i) m << (i ? ", " : "") << n[i];
-    m << ")" << (c.aliased_with.empty() ? "" : ": aliased with " + c.aliased_with)
+    const bool reason =
+        c.aliased_with.rfind("too few poses", 0) == 0 || c.aliased_with.rfind("nothing", 0) == 0;
+    m << ")"
+      << (c.aliased_with.empty() ? ""
+          : reason               ? ": " + c.aliased_with
+                                 : ": aliased with " + c.aliased_with)
       << ". Separated by: " << c.separated_by << ".\n";
   }
+  m << "\n";
   if (!in.validations.empty()) {
     const HandheldUnits u = handheld_units(in.calibration);
     m << "## Held-out validation records\n\nCorrected with the calibration before and after the "
@@ -352,19 +363,23 @@ void markdown_rest(std::ostringstream& m, const HandheldDiagnosisInput& in) {
         << fixed(a.gravity_rms_calibrated / u.accel_si, 5) << " | "
         << fixed(b.rate_rms_calibrated / u.gyro_si, 5) << " -> "
         << fixed(a.rate_rms_calibrated / u.gyro_si, 5) << " | "
-        << fixed(b.turn_rms_calibrated / units::deg, 3) << " -> "
-        << fixed(a.turn_rms_calibrated / units::deg, 3) << " |\n";
+        << (b.turns.empty() ? std::string("-")
+                            : fixed(b.turn_rms_calibrated / units::deg, 3) + " -> " +
+                                  fixed(a.turn_rms_calibrated / units::deg, 3))
+        << " |\n";
     m << "\n";
   }
-  m << "\n## Noise (Allan deviation of pose " << in.diagnosis.noise_pose << ")\n\n";
+  m << "## Noise (Allan deviation of pose " << in.diagnosis.noise_pose << ")\n\n";
   if (in.diagnosis.noise.empty()) m << "Not analysed.\n";
   for (const auto& c : in.diagnosis.noise)
-    m << "- " << c.channel << ": " << (c.significant ? "**" + c.effect + "** significant" : "white noise only")
+    m << "- " << c.channel << ": "
+      << (c.significant ? "**" + c.effect + "** significant" : "white noise only")
       << " (largest ratio of the measured deviation to the white-noise model " << fixed(c.ratio, 2)
-      << " over " << c.points << " cluster times, bounds at confidence " << sci(c.confidence)
+      << " over " << c.points << " cluster times, bounds at confidence " << fixed(c.confidence, 5)
       << ")\n";
   m << "\nPer-pose residuals before and after: `residuals.png`"
-    << (in.diagnosis.has_allan ? "; Allan deviation against the white-noise model: `allan.png`" : "")
+    << (in.diagnosis.has_allan ? "; Allan deviation against the white-noise model: `allan.png`"
+                               : "")
     << "; every figure: `diagnosis.json`.\n";
 }
 
@@ -443,8 +458,9 @@ std::string handheld_allan_plot_script(const HandheldDiagnosisInput& in,
     const double unit = sensor == 0 ? units::deg_per_h : units::ug;
     g << "set title '" << (sensor == 0 ? "gyros [deg/h]" : "accelerometers [ug]") << "'\nplot ";
     for (int k = 0; k < 6; ++k)
-      g << (k ? ", " : "") << "'-' using 1:2" << (k < 3 ? ":3:4 with yerrorlines" : " with lines dt 2")
-        << " title '" << "xyz"[k % 3] << (k < 3 ? " measured" : " white noise") << "'";
+      g << (k ? ", " : "") << "'-' using 1:2"
+        << (k < 3 ? ":3:4 with yerrorlines" : " with lines dt 2") << " title '"
+        << "xyz"[k % 3] << (k < 3 ? " measured" : " white noise") << "'";
     g << "\n";
     for (int k = 0; k < 6; ++k) {
       const auto& p = pts[static_cast<std::size_t>(k % 3)];
@@ -478,7 +494,8 @@ HandheldDiagnosisFiles write_handheld_diagnosis(const HandheldDiagnosisInput& in
     f.allan_script.clear();
     return f;
   }
-  write_atomically(f.script, [&](std::ostream& o) { o << handheld_residual_plot_script(in, f.png); });
+  write_atomically(f.script,
+                   [&](std::ostream& o) { o << handheld_residual_plot_script(in, f.png); });
   run_gnuplot(gnuplot, f.script, f.png);
   if (in.diagnosis.has_allan) {
     write_atomically(f.allan_script,

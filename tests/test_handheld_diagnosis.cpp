@@ -105,10 +105,12 @@ Tally monte_carlo(const std::string& family, int runs, std::uint64_t seed0,
   Tally t;
   for (int k = 1; k <= runs; ++k) {
     auto it = sigma.begin();
-    std::advance(it, std::uniform_int_distribution<int>(0, static_cast<int>(sigma.size()) - 1)(rng));
+    std::advance(it,
+                 std::uniform_int_distribution<int>(0, static_cast<int>(sigma.size()) - 1)(rng));
     const double size = std::uniform_real_distribution<double>(5.0, 10.0)(rng) * it->second;
     const double value = std::bernoulli_distribution(0.5)(rng) ? size : -size;
-    const Run r = simulate_and_diagnose(seed0 + static_cast<std::uint64_t>(k), {{it->first, value}});
+    const Run r =
+        simulate_and_diagnose(seed0 + static_cast<std::uint64_t>(k), {{it->first, value}});
     const DiagnosisReport& rep = r.diagnosis.report;
     ++t.runs;
     if (!rep.findings.empty() && rep.findings.front().family == family) {
@@ -132,9 +134,10 @@ Tally monte_carlo(const std::string& family, int runs, std::uint64_t seed0,
                            << (rep.findings.empty() ? "nothing" : rep.findings.front().family));
     }
   }
-  std::printf("hand-held diagnosis, %s hidden: named first %d of %d (within 3 sigma %d), "
-              "ambiguous %d, wrong %d\n",
-              family.c_str(), t.named_first, t.runs, t.within_3_sigma, t.ambiguous, t.wrong);
+  std::printf(
+      "hand-held diagnosis, %s hidden: named first %d of %d (within 3 sigma %d), "
+      "ambiguous %d, wrong %d\n",
+      family.c_str(), t.named_first, t.runs, t.within_3_sigma, t.ambiguous, t.wrong);
   return t;
 }
 
@@ -191,9 +194,9 @@ TEST_CASE("Hand-held diagnosis: requests the poses cannot serve are refused",
   TableFreeOptions to;
   to.site = site();
   // Keep the first 11 poses only (the calibration of them is still possible: 10 needed).
-  std::vector<ImuReading> part(r.readings.begin(),
-                               r.readings.begin() +
-                                   static_cast<std::ptrdiff_t>(r.cal.poses[10].last + 50));
+  std::vector<ImuReading> part(
+      r.readings.begin(),
+      r.readings.begin() + static_cast<std::ptrdiff_t>(r.cal.poses[10].last + 50));
   const TableFreeResult cal = calibrate_table_free_counts(part, RawScaling{}, to);
   REQUIRE(cal.poses.size() == 11);
   HandheldDiagnosisOptions o;
