@@ -27,7 +27,8 @@
 //
 // Noise candidates come from the Allan deviation of the longest static pose: bias instability
 // or rate (acceleration) random walk is significant when the measured Allan deviation exceeds the
-// white-noise model beyond its confidence bound at the family-wise level.
+// white-noise-only model (its level from the short cluster times) beyond its confidence bound at
+// the family-wise level.
 #pragma once
 
 #include <Eigen/Core>
