@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -319,8 +320,7 @@ class HandheldFitter {
   // case): chi2 beyond its 99 % quantile.
   static double noise_scale(const FitFigures& f) {
     if (f.fit.dof <= 0) return 1.0;
-    const double dof = f.fit.dof;
-    const double q99 = dof + 2.326 * std::sqrt(2.0 * dof) + 2.0;  // Wilson-Hilferty, about
+    const double q99 = boost::math::quantile(boost::math::chi_squared(f.fit.dof), 0.99);
     return f.chi2 > q99 ? f.fit.chi2_per_dof : 1.0;
   }
 
