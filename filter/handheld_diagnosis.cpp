@@ -712,7 +712,8 @@ double noise_confidence(std::size_t samples, double alpha) {
   int points = 0;
   for (std::size_t m = 1; static_cast<double>(m) <= 0.25 * static_cast<double>(samples); m *= 2)
     ++points;
-  return 1.0 - 2.0 * alpha / (6.0 * std::max(1, points));
+  const int tested = points - (points + 1) / 2;  // the long cluster times of each channel
+  return 1.0 - 2.0 * alpha / (6.0 * std::max(1, tested));
 }
 
 namespace {
@@ -732,11 +733,13 @@ NoiseCandidate noise_channel(const std::vector<AllanPoint>& pts, const AllanFit&
                              const std::string& channel) {
   NoiseCandidate c;
   c.channel = channel;
-  c.points = static_cast<int>(pts.size());
   if (pts.empty()) return c;
   const double N = white_only(pts);
   double worst_tau = pts.back().tau;
-  for (const auto& p : pts) {
+  // The long cluster times only: the short ones set N.
+  c.points = static_cast<int>(pts.size() - (pts.size() + 1) / 2);
+  for (std::size_t k = (pts.size() + 1) / 2; k < pts.size(); ++k) {
+    const AllanPoint& p = pts[k];
     const double white = N / std::sqrt(p.tau);
     const double ratio = p.adev / white;
     if (p.adev_low > white && !c.significant) {

@@ -81,7 +81,7 @@ struct NoiseCandidate {
   double tau = 0.0;                 // s: the first cluster time beyond the white-noise model
   double ratio = 0.0;               // measured ADEV over the white-noise model there (largest)
   double confidence = 0.0;          // two-sided, of each point's bound (Bonferroni)
-  int points = 0;                   // cluster times tested on this channel
+  int points = 0;                   // cluster times tested on this channel (the long half)
 };
 
 struct HandheldDiagnosis {
@@ -118,15 +118,17 @@ ImuErrorModel diagnosed_model(const HandheldDiagnosis& diagnosis,
 AllanAnalysis stretch_allan(const std::vector<ImuReading>& readings, std::size_t first,
                             std::size_t last, double alpha);
 
-/// Noise candidates of every channel of an Allan analysis at the family-wise level `alpha`
-/// (each point's bound at confidence 1 - 2 alpha / (points of all channels)); the analysis must
-/// have been computed at `noise_confidence(analysis points, alpha)`.
+/// Noise candidates of every channel of an Allan analysis at the family-wise level `alpha`: the
+/// long half of the cluster times against the white-noise-only model the short half sets, each
+/// point's bound at confidence 1 - 2 alpha / (points tested on all channels); the analysis must
+/// have been computed at `noise_confidence(samples, alpha)`.
 std::vector<NoiseCandidate> noise_candidates(const AllanAnalysis& analysis, double alpha);
 /// The white-noise-only model of one channel's Allan deviation, N (ADEV = N / sqrt(tau)): the
 /// median of ADEV sqrt(tau) over the first half of the cluster times. `points` not empty.
 double white_only_deviation(const std::vector<AllanPoint>& points);
-/// The two-sided confidence of each point's bound for a family-wise level alpha over the
-/// cluster times of a record of `samples` (octaves up to a quarter of it) on six channels.
+/// The two-sided confidence of each point's bound for a family-wise level alpha over the long
+/// half of the cluster times of a record of `samples` (octaves up to a quarter of it), six
+/// channels.
 double noise_confidence(std::size_t samples, double alpha);
 
 }  // namespace sinscal

@@ -244,3 +244,44 @@ TEST_CASE("Hand-held diagnosis Monte Carlo: hidden effects named, clean sessions
   std::printf("hand-held diagnosis Monte Carlo: %.1f s\n",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
 }
+
+TEST_CASE("Hand-held diagnosis: noise candidates from the Allan deviation",
+          "[handheld_diagnosis]") {
+  // A 200 s static stretch at 100 Hz: white noise alone names nothing; a gyro rate random walk
+  // strong enough to double the deviation at the long cluster times is named on its axis as a
+  // rate random walk, with its size.
+  const double dt = 0.01, white = 0.01, K = 0.01 / std::sqrt(1.0);  // rad/s, rad/s/sqrt(s)
+  auto record = [&](double walk, std::uint64_t seed) {
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> n(0.0, 1.0);
+    std::vector<ImuReading> r(20000);
+    double bias = 0.0;
+    for (std::size_t k = 0; k < r.size(); ++k) {
+      bias += walk * std::sqrt(dt) * n(rng);
+      r[k].t = static_cast<double>(k) * dt;
+      r[k].gyro = Eigen::Vector3d(white * n(rng) + bias, white * n(rng), white * n(rng));
+      r[k].accel = Eigen::Vector3d(1e-3 * n(rng), 1e-3 * n(rng), 9.81 + 1e-3 * n(rng));
+    }
+    return r;
+  };
+  // White noise alone: the family-wise level 0.01 over 100 records (the bounds' degrees of
+  // freedom are approximations: at most 4 % flagged).
+  int quiet = 0;
+  for (std::uint64_t seed = 1; seed <= 100; ++seed) {
+    const auto r = record(0.0, seed);
+    const auto c = noise_candidates(stretch_allan(r, 0, r.size() - 1, 0.01), 0.01);
+    REQUIRE(c.size() == 6);
+    bool any = false;
+    for (const auto& x : c) any = any || x.significant;
+    quiet += any ? 0 : 1;
+  }
+  CHECK(quiet >= 96);
+  const auto r = record(K, 42);
+  const auto c = noise_candidates(stretch_allan(r, 0, r.size() - 1, 0.01), 0.01);
+  CHECK(c[0].channel == "gyro.x");
+  CHECK(c[0].significant);
+  CHECK(c[0].effect == "noise.rate_random_walk");
+  CHECK(c[0].value == Approx(K).epsilon(0.5));
+  CHECK(!c[1].significant);
+  CHECK(!c[2].significant);
+}
