@@ -1,11 +1,13 @@
 // sinscal diagnose: what the calibrated model fails to explain on a table session, the missing
-// effect that explains it, and the gain of adding it (filter/diagnosis.hpp).
+// effect that explains it, and the gain of adding it (filter/diagnosis.hpp); sessions without a
+// plan are hand-held (apps/diagnose_handheld.cpp).
 #include <cstdio>
 #include <filesystem>
 #include <optional>
 
 #include "apps/cli.hpp"
 #include "apps/commands.hpp"
+#include "apps/diagnose.hpp"
 #include "filter/diagnosis.hpp"
 #include "filter/diagnosis_kalman.hpp"
 #include "filter/plausibility.hpp"
@@ -16,6 +18,35 @@
 namespace sinscal::cli {
 
 namespace {
+
+const std::vector<std::string> kHandheldOnly = {
+    "gravity", "pose-window", "min-pose", "edge-trim", "validate", "candidates", "pose-accel-only"};
+
+bool given(const po::variables_map& vm, const std::string& name) {
+  return vm.count(name) && !vm[name].defaulted();
+}
+
+void add_handheld_options(po::options_description& d, HandheldDiagnoseOptions& h) {
+  // clang-format off
+  d.add_options()
+      ("candidates", po::value(&h.candidates),
+       "hand-held: the candidates tested, comma separated: extended families of the family "
+       "table, noise (noise.bias_instability, noise.rate_random_walk), temperature (default: "
+       "every family and noise)")
+      ("validate", po::value(&h.validate)->composing(),
+       "hand-held: a held-out validation session (repeatable), corrected before and after the "
+       "findings")
+      ("gravity", po::value(&h.run.gravity),
+       "hand-held: local gravity [m/s^2] (default: the session's, else normal gravity)")
+      ("pose-window", po::value(&h.run.detector.window)->default_value(1.0),
+       "hand-held: window of the pose detector's variances [s]")
+      ("min-pose", po::value(&h.run.detector.min_duration)->default_value(2.0),
+       "hand-held: shortest static pose the detector takes [s]")
+      ("edge-trim", po::value(&h.run.calibration.edge_trim)->default_value(0.2, "0.2"),
+       "hand-held: cut from each end of a pose before its mean [s]")
+      ("pose-accel-only", "hand-held: the accelerometers alone find the poses");
+  // clang-format on
+}
 
 void print_diagnosis(const DiagnosisReport& r) {
   std::printf("Calibrated model: %zu coefficients, residual chi2 per dof %.3f over %zu dwells\n",
@@ -95,6 +126,8 @@ int cmd_diagnose(const std::vector<std::string>& args) {
       ("no-kalman", "skip the Kalman-filter test of the effects of the turns")
       ("force", "run even when the plausibility gate fails");
   // clang-format on
+  HandheldDiagnoseOptions h;
+  add_handheld_options(d, h);
   const auto vm = parse(args, d,
                         "Usage: sinscal diagnose --session S --out DIR\n"
                         "Calibrates the session's static dwells (closed form), then tests every\n"
@@ -102,9 +135,34 @@ int cmd_diagnose(const std::vector<std::string>& args) {
                         "significant ones with their magnitude and gain, and says which the plan\n"
                         "cannot separate. The families the static dwells cannot separate\n"
                         "(effects of the turns) are then tested in the Kalman filter (needs the\n"
-                        "session's sensor profile). Table sessions; hand-held sessions: not yet.");
+                        "session's sensor profile). A session without a plan is hand-held:\n"
+                        "calibrated table-free, its poses and turns diagnosed, plus the noise of\n"
+                        "its longest pose.");
   if (!vm) return 0;
   if (!(o.alpha > 0.0 && o.alpha < 0.5)) throw UsageError("--alpha must be in (0, 0.5)");
+  const Session any = Session::load(session_path, Session::PlanNeed::Optional);
+  if (!any.has_plan) {
+    if (given(*vm, "table-sigma") || vm->count("force") || vm->count("no-kalman"))
+      throw UsageError("--table-sigma, --force and --no-kalman act on table sessions; " +
+                       session_path + " has no plan (a hand-held session)");
+    if (given(*vm, "gravity") && !(h.run.gravity >= 9.7 && h.run.gravity <= 9.9))
+      throw UsageError("--gravity must be within 9.7 and 9.9 m/s^2 (the Earth's surface)");
+    if (!(h.run.detector.window > 0.0 && h.run.detector.window <= 60.0) ||
+        !(h.run.detector.min_duration > 0.0 && h.run.detector.min_duration <= 3600.0) ||
+        !(h.run.calibration.edge_trim >= 0.0 && h.run.calibration.edge_trim <= 60.0))
+      throw UsageError(
+          "--pose-window must be in (0, 60] s, --min-pose in (0, 3600] s, --edge-trim in "
+          "[0, 60] s");
+    h.run.detector.use_gyro = vm->count("pose-accel-only") == 0;
+    h.out_dir = out_dir;
+    h.alpha = o.alpha;
+    h.plot = vm->count("no-plot") == 0;
+    return diagnose_handheld_session(any, h);
+  }
+  for (const auto& name : kHandheldOnly)
+    if (given(*vm, name))
+      throw UsageError("--" + name + " acts on hand-held sessions (no plan); " + session_path +
+                       " has a plan");
   if (!(table_sigma > 0.0 && table_sigma < 3600.0))
     throw UsageError("--table-sigma must be above 0 and below 3600 arcsec");
   const Session session = Session::load(session_path);

@@ -169,6 +169,10 @@ CandidateTest separability(const StaticDesign& design, const std::vector<int>& c
   return c;
 }
 
+}  // namespace
+
+namespace diagnosis_detail {
+
 double largest_shift(const FitFigures& before, const FitFigures& after,
                      const std::vector<int>& base) {
   double worst = 0.0;
@@ -199,6 +203,59 @@ void test_statistic(const FitFigures& now, CandidateTest& c) {
         boost::math::complement(boost::math::fisher_f(c.dof, dof1), c.likelihood_ratio / c.dof));
   }
 }
+
+// Marks the round's significant candidates and returns the most significant one, or nullptr.
+CandidateTest* best_of(std::vector<CandidateTest>& round, double alpha) {
+  const auto tested =
+      std::count_if(round.begin(), round.end(), [](const CandidateTest& c) { return c.dof > 0; });
+  CandidateTest* best = nullptr;
+  for (auto& c : round) {
+    c.threshold = alpha / static_cast<double>(std::max<std::ptrdiff_t>(1, tested));
+    c.significant = c.dof > 0 && c.p_value < c.threshold;
+    if (c.significant &&
+        (!best || c.p_value < best->p_value ||
+         (c.p_value == best->p_value && c.likelihood_ratio > best->likelihood_ratio)))
+      best = &c;
+  }
+  return best;
+}
+
+// The round's most significant candidate, with the candidates that explain the residual as well
+// (their fits' chi-square within kAmbiguityMargin): the plan cannot tell them apart. Another
+// family's: name neither; the same family's: the family is named, its axis is ambiguous.
+CandidateTest* choose(std::vector<CandidateTest>& round, double alpha) {
+  CandidateTest* best = best_of(round, alpha);
+  if (!best) return nullptr;
+  for (auto& c : round)
+    if (&c != best && c.significant && c.with.chi2 - best->with.chi2 < kAmbiguityMargin)
+      best->ambiguous_with.push_back(c);
+  best->named = std::none_of(best->ambiguous_with.begin(), best->ambiguous_with.end(),
+                             [&](const CandidateTest& c) { return c.family != best->family; });
+  return best;
+}
+
+// What the plan could not separate (against the final model), one entry per family.
+std::vector<CandidateTest> not_separable(const std::vector<CandidateTest>& last_round) {
+  std::vector<CandidateTest> out;
+  for (const auto& c : last_round) {
+    if (c.aliased.empty()) continue;
+    auto it = std::find_if(out.begin(), out.end(),
+                           [&](const CandidateTest& n) { return n.family == c.family; });
+    if (it == out.end()) {
+      out.push_back(c);
+    } else {
+      it->aliased.insert(it->aliased.end(), c.aliased.begin(), c.aliased.end());
+      if (it->aliased_with.empty()) it->aliased_with = c.aliased_with;
+    }
+  }
+  return out;
+}
+
+}  // namespace diagnosis_detail
+
+using namespace diagnosis_detail;
+
+namespace {
 
 void test_candidate(const StaticDesign& design, const std::vector<int>& current,
                     const FitFigures& now, CandidateTest& c) {
@@ -252,22 +309,6 @@ std::vector<int> candidate_components(const DiagnosisOptions& o, const std::vect
   return out;
 }
 
-// Marks the round's significant candidates and returns the most significant one, or nullptr.
-CandidateTest* best_of(std::vector<CandidateTest>& round, double alpha) {
-  const auto tested =
-      std::count_if(round.begin(), round.end(), [](const CandidateTest& c) { return c.dof > 0; });
-  CandidateTest* best = nullptr;
-  for (auto& c : round) {
-    c.threshold = alpha / static_cast<double>(std::max<std::ptrdiff_t>(1, tested));
-    c.significant = c.dof > 0 && c.p_value < c.threshold;
-    if (c.significant &&
-        (!best || c.p_value < best->p_value ||
-         (c.p_value == best->p_value && c.likelihood_ratio > best->likelihood_ratio)))
-      best = &c;
-  }
-  return best;
-}
-
 }  // namespace
 
 namespace {
@@ -300,37 +341,6 @@ std::vector<CandidateTest> run_round(const StaticDesign& design, const std::vect
     round.push_back(std::move(all));
   }
   return round;
-}
-
-// The round's most significant candidate, with the candidates that explain the residual as well
-// (their fits' chi-square within kAmbiguityMargin): the plan cannot tell them apart. Another
-// family's: name neither; the same family's: the family is named, its axis is ambiguous.
-CandidateTest* choose(std::vector<CandidateTest>& round, double alpha) {
-  CandidateTest* best = best_of(round, alpha);
-  if (!best) return nullptr;
-  for (auto& c : round)
-    if (&c != best && c.significant && c.with.chi2 - best->with.chi2 < kAmbiguityMargin)
-      best->ambiguous_with.push_back(c);
-  best->named = std::none_of(best->ambiguous_with.begin(), best->ambiguous_with.end(),
-                             [&](const CandidateTest& c) { return c.family != best->family; });
-  return best;
-}
-
-// What the plan could not separate (against the final model), one entry per family.
-std::vector<CandidateTest> not_separable(const std::vector<CandidateTest>& last_round) {
-  std::vector<CandidateTest> out;
-  for (const auto& c : last_round) {
-    if (c.aliased.empty()) continue;
-    auto it = std::find_if(out.begin(), out.end(),
-                           [&](const CandidateTest& n) { return n.family == c.family; });
-    if (it == out.end()) {
-      out.push_back(c);
-    } else {
-      it->aliased.insert(it->aliased.end(), c.aliased.begin(), c.aliased.end());
-      if (it->aliased_with.empty()) it->aliased_with = c.aliased_with;
-    }
-  }
-  return out;
 }
 
 }  // namespace

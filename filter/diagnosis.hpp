@@ -49,13 +49,17 @@ struct DwellResidual {
 /// Fit figures of one parameter set.
 struct FitFigures {
   Stage2Result fit;
-  double chi2 = 0.0;            // whitened residual sum of squares
-  double accel_rms = 0.0;       // m/s^2: RMS of the accelerometer residuals over dwells, axes
-  double gyro_rms = 0.0;        // rad/s
-  double heldout = 0.0;         // RMS of the leave-one-dwell-out prediction error, in sigmas
-  double heldout_accel = 0.0;   // m/s^2, same in the sensor's units
-  double heldout_gyro = 0.0;    // rad/s
-  int heldout_dwells = 0;       // dwells whose prediction the others determine
+  double chi2 = 0.0;           // whitened residual sum of squares
+  double accel_rms = 0.0;      // m/s^2: RMS of the accelerometer residuals over dwells, axes
+  double gyro_rms = 0.0;       // rad/s
+  double heldout = 0.0;        // RMS of the leave-one-dwell-out prediction error, in sigmas
+  double heldout_accel = 0.0;  // m/s^2, same in the sensor's units
+  double heldout_gyro = 0.0;   // rad/s
+  int heldout_dwells = 0;      // dwells whose prediction the others determine
+  /// Hand-held sessions (filter/handheld_diagnosis.hpp): accel_rms, gyro_rms are the poses'
+  /// gravity-magnitude residual and rate at rest; these the turns' (rad), 0 for table sessions.
+  double turn_rms = 0.0;
+  double heldout_turn = 0.0;
   double log_likelihood = 0.0;  // -chi2/2 (constant terms dropped)
   double bic = 0.0;             // chi2 + rank log(inputs)
 };
@@ -96,6 +100,24 @@ struct DiagnosisReport {
   int inputs = 0;  // equivalent inputs over all dwells
   double alpha = 0.0;
 };
+
+/// The statistics shared by the table and hand-held diagnoses.
+namespace diagnosis_detail {
+/// The test of a nested extension `c.with` of `now` (c.dof extra parameters): the chi-square test
+/// of the likelihood ratio while the noise model holds, else the F test.
+void test_statistic(const FitFigures& now, CandidateTest& c);
+/// Largest move of the first base.size() coefficients between two fits, in their sigmas before.
+double largest_shift(const FitFigures& before, const FitFigures& after,
+                     const std::vector<int>& base);
+/// Marks the round's significant candidates (Bonferroni) and returns the most significant one,
+/// or nullptr.
+CandidateTest* best_of(std::vector<CandidateTest>& round, double alpha);
+/// The most significant candidate with those that explain the residual as well; named unless
+/// another family's does.
+CandidateTest* choose(std::vector<CandidateTest>& round, double alpha);
+/// What could not be separated (aliased components), one entry per family.
+std::vector<CandidateTest> not_separable(const std::vector<CandidateTest>& last_round);
+}  // namespace diagnosis_detail
 
 /// Diagnoses the stage-1 equivalent inputs of a session, starting from `base` (its parameters:
 /// the session's model). Throws std::invalid_argument when the dwells are too few for the base

@@ -125,11 +125,72 @@ TableFreeRun run_table_free(const Session& s, const TableFreeRunOptions& o) {
     throw TableFreeError(TableFreeError::Kind::BadInput, run.log + ": " + e.what());
   }
   run.poses = handheld_poses(rec, run.detection);
+  run.readings = rec.raw() ? si_from_counts(detector_in, rec.nominal) : rec.readings;
   run.result = rec.raw()
                    ? calibrate_table_free_counts(detector_in, rec.nominal, run.options, o.detector)
                    : calibrate_table_free(rec.readings, run.detection.poses, run.options);
   return run;
 }
+
+namespace {
+
+// A validation record's readings, nominal or corrected with the calibration's whole model (any
+// extended terms a diagnosis added; time-dependent terms from the record's start).
+struct Corrector {
+  const ImuErrorModel& m;
+  double t0;
+  std::pair<Eigen::Vector3d, Eigen::Vector3d> correct(const Eigen::Vector3d& yg,
+                                                      const Eigen::Vector3d& ya, double t,
+                                                      bool calibrated) const {
+    std::pair<Eigen::Vector3d, Eigen::Vector3d> wf{yg, ya};
+    if (calibrated) m.compensate(yg, ya, Eigen::Vector3d::Zero(), wf.first, wf.second, t - t0);
+    return wf;
+  }
+  Eigen::Vector3d accel(const Eigen::Vector3d& ya, const Eigen::Vector3d& yg, double t,
+                        bool calibrated) const {
+    return correct(yg, ya, t, calibrated).second;
+  }
+  Eigen::Vector3d gyro(const Eigen::Vector3d& yg, const Eigen::Vector3d& ya, double t,
+                       bool calibrated) const {
+    return correct(yg, ya, t, calibrated).first;
+  }
+};
+
+struct PoseMean {
+  Eigen::Vector3d f, w;
+  double t;
+};
+
+// Each turn: the gyro rates integrated from the end of one pose to the start of the next (each
+// reading's rate over its interval) turn the gravity direction of the first pose into the one
+// the accelerometers see in the next.
+void validation_turns(const std::vector<ImuReading>& si, const PoseDetection& detection,
+                      const std::vector<PoseMean>& means, const Corrector& c,
+                      HandheldValidation& out) {
+  std::vector<double> t_n, t_c;
+  for (std::size_t p = 0; p + 1 < detection.poses.size(); ++p) {
+    ValidationTurn vt;
+    vt.from = detection.poses[p].index;
+    for (const bool calibrated : {false, true}) {
+      Eigen::Matrix3d C = Eigen::Matrix3d::Identity();
+      for (std::size_t k = detection.poses[p].last + 1; k <= detection.poses[p + 1].first; ++k)
+        C = C * dcm_from_rotvec(c.gyro(si[k].gyro, si[k].accel, si[k].t, calibrated) *
+                                (si[k].t - si[k - 1].t));
+      const PoseMean &a = means[p], &b = means[p + 1];
+      const Eigen::Vector3d u0 = c.accel(a.f, a.w, a.t, calibrated).normalized();
+      const Eigen::Vector3d u1 = c.accel(b.f, b.w, b.t, calibrated).normalized();
+      const double e = angle_between(C.transpose() * u0, u1);
+      (calibrated ? vt.error_calibrated : vt.error_nominal) = e;
+      (calibrated ? t_c : t_n).push_back(e);
+      if (calibrated) vt.angle = rotvec_from_dcm(C).norm();
+    }
+    out.turns.push_back(vt);
+  }
+  out.turn_rms_nominal = rms(t_n);
+  out.turn_rms_calibrated = rms(t_c);
+}
+
+}  // namespace
 
 HandheldValidation validate_table_free(const Session& v, const TableFreeRun& run,
                                        const PoseDetectorOptions& detector) {
@@ -150,60 +211,34 @@ HandheldValidation validate_table_free(const Session& v, const TableFreeRun& run
   out.name = v.name;
   out.samples = rec.samples.size();
   out.duration = rec.samples.back().t - rec.samples.front().t;
-  const ImuErrorModel& m = run.result.model;
-  const Eigen::Matrix3d La = m.accel.linear().inverse(), Lg = m.gyro.linear().inverse();
+  const Corrector c{run.result.model, si.front().t};
   const double g = run.result.gravity;
-  auto accel = [&](const Eigen::Vector3d& y, bool calibrated) -> Eigen::Vector3d {
-    return calibrated ? Eigen::Vector3d(La * (y - m.accel.bias)) : y;
-  };
-  auto gyro = [&](const Eigen::Vector3d& y, bool calibrated) -> Eigen::Vector3d {
-    return calibrated ? Eigen::Vector3d(Lg * (y - m.gyro.bias)) : y;
-  };
-  std::vector<double> ge_n, ge_c, r_n, r_c, t_n, t_c;
-  std::vector<Eigen::Vector3d> f_mean;
+  std::vector<double> ge_n, ge_c, r_n, r_c;
+  std::vector<PoseMean> means;
   for (const Pose& p : detection.poses) {
     Eigen::Vector3d f, w, fs, ws;
     reading_statistics(si, p.first, p.last, f, w, fs, ws);
-    f_mean.push_back(f);
+    const double tm = 0.5 * (si[p.first].t + si[p.last].t);
+    means.push_back({f, w, tm});
     ValidationPose vp;
     vp.index = p.index;
     vp.t_start = p.t_start;
     vp.t_end = p.t_end;
-    vp.gravity_error_nominal = accel(f, false).norm() - g;
-    vp.gravity_error_calibrated = accel(f, true).norm() - g;
-    vp.rate_nominal = gyro(w, false).norm();
-    vp.rate_calibrated = gyro(w, true).norm();
+    vp.gravity_error_nominal = c.accel(f, w, tm, false).norm() - g;
+    vp.gravity_error_calibrated = c.accel(f, w, tm, true).norm() - g;
+    vp.rate_nominal = c.gyro(w, f, tm, false).norm();
+    vp.rate_calibrated = c.gyro(w, f, tm, true).norm();
     ge_n.push_back(vp.gravity_error_nominal);
     ge_c.push_back(vp.gravity_error_calibrated);
     r_n.push_back(vp.rate_nominal);
     r_c.push_back(vp.rate_calibrated);
     out.poses.push_back(vp);
   }
-  // Each turn: the gyro rates integrated from the end of one pose to the start of the next
-  // (each reading's rate over its interval) turn the gravity direction of the first pose into
-  // the one the accelerometers see in the next.
-  for (std::size_t p = 0; p + 1 < detection.poses.size(); ++p) {
-    ValidationTurn vt;
-    vt.from = detection.poses[p].index;
-    for (const bool calibrated : {false, true}) {
-      Eigen::Matrix3d C = Eigen::Matrix3d::Identity();
-      for (std::size_t k = detection.poses[p].last + 1; k <= detection.poses[p + 1].first; ++k)
-        C = C * dcm_from_rotvec(gyro(si[k].gyro, calibrated) * (si[k].t - si[k - 1].t));
-      const Eigen::Vector3d u0 = accel(f_mean[p], calibrated).normalized();
-      const Eigen::Vector3d u1 = accel(f_mean[p + 1], calibrated).normalized();
-      const double e = angle_between(C.transpose() * u0, u1);
-      (calibrated ? vt.error_calibrated : vt.error_nominal) = e;
-      (calibrated ? t_c : t_n).push_back(e);
-      if (calibrated) vt.angle = rotvec_from_dcm(C).norm();
-    }
-    out.turns.push_back(vt);
-  }
+  validation_turns(si, detection, means, c, out);
   out.gravity_rms_nominal = rms(ge_n);
   out.gravity_rms_calibrated = rms(ge_c);
   out.rate_rms_nominal = rms(r_n);
   out.rate_rms_calibrated = rms(r_c);
-  out.turn_rms_nominal = rms(t_n);
-  out.turn_rms_calibrated = rms(t_c);
   return out;
 }
 

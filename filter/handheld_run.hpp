@@ -107,6 +107,9 @@ struct TableFreeRun {
   RawScaling nominal;
   std::array<int, 3> accel_log_axis{0, 1, 2}, gyro_log_axis{0, 1, 2};
   TableFreeResult result;
+  /// The readings the calibration took (SI through the log's nominal conversion; the result is
+  /// relative to it): the input of the hand-held diagnosis.
+  std::vector<ImuReading> readings;
   std::vector<HandheldValidation> validations;
 };
 

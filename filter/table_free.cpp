@@ -641,6 +641,9 @@ class TableFreeSolver {
       f.t_start = r_[pd_[p].first].t;
       f.t_end = r_[pd_[p].last].t;
       f.count = pd_[p].last - pd_[p].first + 1;
+      f.first = pd_[p].first;
+      f.last = pd_[p].last;
+      f.direction = u_[p];
       f.gravity_error = A.invert_step(pd_[p].accel, zero, zero).norm() - g_;
       f.accel_rms = std::sqrt((pd_[p].accel - A.apply(g_ * u_[p], zero)).squaredNorm() / 3.0);
       f.gyro_rms = std::sqrt((pd_[p].gyro - G.apply(omega_v_ * u_[p], zero)).squaredNorm() / 3.0);
@@ -652,6 +655,7 @@ class TableFreeSolver {
           for (int j = 0; j < 3; ++j) Cm(i, j) = C[i][j];
         const Eigen::Vector3d pred = Cm.transpose() * u_[p - 1];
         f.turn_error = std::atan2(pred.cross(u_[p]).norm(), pred.dot(u_[p]));
+        f.turn_sigma = 1.0 / turns_[p - 1].inv_sigma;
       }
       out_.poses.push_back(f);
     }

@@ -109,15 +109,19 @@ struct RawTriadView {
 
 /// Residuals of one pose at the solution.
 struct TableFreePoseFit {
-  int index = 0;               // the pose's index (1-based, as detected)
-  double t_start = 0.0;        // s: the trimmed stretch used for the means
-  double t_end = 0.0;          // s
-  std::size_t count = 0;       // readings averaged
-  double gravity_error = 0.0;  // |f_p| - g (m/s^2), f_p the calibrated mean specific force
-  double accel_rms = 0.0;      // RMS over the axes of y_a,p - (A g u_p + b_a) (m/s^2)
-  double gyro_rms = 0.0;       // RMS over the axes of y_g,p - (b_g + G w_v,p) (rad/s)
-  double turn_error = 0.0;     // rad: angle between the gravity direction the turn into this
-                               // pose predicts and the pose's own (0 for the first pose)
+  int index = 0;                    // the pose's index (1-based, as detected)
+  double t_start = 0.0;             // s: the trimmed stretch used for the means
+  double t_end = 0.0;               // s
+  std::size_t count = 0;            // readings averaged
+  double gravity_error = 0.0;       // |f_p| - g (m/s^2), f_p the calibrated mean specific force
+  double accel_rms = 0.0;           // RMS over the axes of y_a,p - (A g u_p + b_a) (m/s^2)
+  double gyro_rms = 0.0;            // RMS over the axes of y_g,p - (b_g + G w_v,p) (rad/s)
+  double turn_error = 0.0;          // rad: angle between the gravity direction the turn into this
+                                    // pose predicts and the pose's own (0 for the first pose)
+  std::size_t first = 0, last = 0;  // readings of the trimmed stretch (indices)
+  /// Unit direction of the pose's specific force at the solution (u_p, body axes).
+  Eigen::Vector3d direction = Eigen::Vector3d::Zero();
+  double turn_sigma = 0.0;  // rad: 1-sigma of each tangent component of the turn into this pose
 };
 
 struct TableFreeStage {

@@ -533,6 +533,20 @@ new handheld-kf-option; handheld
 fixed 1 "--passes is an option of the table methods" tf --passes 2
 new handheld-option-in-kf; mini
 fixed 1 "--pose-window acts in --method table-free only" kf --pose-window 2
+# diagnose on a hand-held session: the calibration itself fails (3 poses), the table's options
+# and an unknown candidate refused. (Temperature without a column and a candidate the poses are too
+# few for need a calibratable session: tests/handheld_cli_test.sh, on the real recordings.)
+dg() { S diagnose --session session.ini --out out/d --no-plot "$@"; }
+new handheld-diagnose-too-few-poses; handheld
+fixed 2 "needs at least 10 static poses|found 3" dg
+new handheld-diagnose-table-sigma; handheld
+fixed 1 "--table-sigma, --force and --no-kalman act on table sessions" dg --table-sigma 3
+new handheld-diagnose-unknown-candidate; handheld
+fixed 1 "--candidates: 'accel.nonsense' is not an extended family" dg --candidates accel.nonsense
+new handheld-diagnose-base-candidate; handheld
+fixed 1 "--candidates: 'gyro.bias' is not an extended family" dg --candidates gyro.bias
+new diagnose-handheld-option-on-table; mini
+fixed 1 "--candidates acts on hand-held sessions (no plan)" S diagnose --session session.ini --out out/d --no-plot --candidates accel.k2
 
 # --- compare (result JSON) --------------------------------------------------------------------
 new compare-missing-file; cp "$base/s8/cf.json" "$d/a.json"

@@ -126,5 +126,42 @@ sed "/^gravity = /d" "$work/few/session.ini" > "$work/few/nograv.ini"
 check "no gravity and no site exits 2" test $? -eq 2
 check "no gravity and no site says so" contains "$work/nograv.err" "no local gravity"
 
+# diagnose on hand-held sessions (no plan): the table-free calibration, then model discovery on the
+# poses and turns, with the files of the table diagnosis's schema.
+"$bin" diagnose --session "$xsens" --out "$work/dx" > "$work/dx.txt" 2> "$work/dx.err"
+check "diagnose on the Xsens session exits 0" test $? -eq 0
+check "diagnose prints the calibration's residuals" contains "$work/dx.txt" "Table-free calibration: 38 poses, 37 turns"
+check "diagnose names the method" contains "$work/dx/diagnosis.json" '"name": "hand-held poses (table-free, linearized refit)"'
+check "diagnosis has findings" contains "$work/dx/diagnosis.json" '"findings"'
+check "diagnosis has the residual unit" contains "$work/dx/diagnosis.json" '"residual_unit"'
+check "diagnosis has not_separable with the lever arms" contains "$work/dx/diagnosis.json" '"effect": "accel.lever_arm"'
+check "diagnosis has the per-pose residuals" contains "$work/dx/diagnosis.json" '"gravity_before"'
+check "diagnosis has the noise candidates" contains "$work/dx/diagnosis.json" '"noise.bias_instability"'
+check "diagnosis has the calibration" contains "$work/dx/diagnosis.json" '"calibration"'
+check "diagnosis draws the residuals" cmp -s -n 4 "$work/dx/residuals.png" <(printf '\x89PNG')
+check "diagnosis draws the Allan deviation" cmp -s -n 4 "$work/dx/allan.png" <(printf '\x89PNG')
+check "diagnosis writes the report" contains "$work/dx/report.md" "## Not separable on this session"
+# MPU-6050 with the validation records: before and after the findings.
+"$bin" diagnose --pose-accel-only --session "$measured/mpu6050-calibration/session.ini" \
+  --validate "$measured/mpu6050-x-turns/session.ini" --out "$work/dm" > "$work/dm.txt"
+check "diagnose on the MPU-6050 session exits 0" test $? -eq 0
+check "diagnosis has the validation" contains "$work/dm/diagnosis.json" '"turn_rms_after_deg"'
+check "10 poses are too few for the accelerometer terms" contains "$work/dm/diagnosis.json" "needs at least 11 poses"
+# Bad requests: reported after the other findings are written, exit 2.
+"$bin" diagnose --pose-accel-only --session "$measured/mpu6050-calibration/session.ini" \
+  --candidates accel.k2 --out "$work/dk" > /dev/null 2> "$work/dk.err"
+check "a candidate the poses are too few for exits 2" test $? -eq 2
+check "... saying how many poses are needed and found" contains "$work/dk.err" "needs at least 11 poses.*found 10"
+check "... with the findings so far written" test -s "$work/dk/diagnosis.json"
+"$bin" diagnose --session "$xsens" --candidates gyro.g_sensitivity,temperature --no-plot --out "$work/dt" > /dev/null 2> "$work/dt.err"
+check "temperature without a temperature column exits 2" test $? -eq 2
+check "... saying the log has none" contains "$work/dt.err" "needs a temperature column in the log, which has none"
+check "... with the other candidates' findings written" contains "$work/dt/diagnosis.json" '"effect": "gyro.g_sensitivity"'
+"$bin" diagnose --session "$xsens" --candidates accel.nonsense --out "$work/dn" 2> "$work/dn.err"
+check "an unknown candidate is a usage error" test $? -eq 1
+"$bin" diagnose --session "$work/few/session.ini" --out "$work/df" 2> "$work/df.err"
+check "diagnose with a calibration that fails exits 2" test $? -eq 2
+check "... saying why" contains "$work/df.err" "needs at least 10 static poses"
+
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0

@@ -1,0 +1,27 @@
+// sinscal diagnose: the hand-held path (apps/diagnose_handheld.cpp) of the command
+// (apps/cmd_diagnose.cpp).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "apps/cli.hpp"
+#include "filter/handheld_run.hpp"
+
+namespace sinscal::cli {
+
+struct HandheldDiagnoseOptions {
+  std::string out_dir;
+  double alpha = 0.01;
+  bool plot = true;
+  std::string candidates;             // --candidates, comma separated (empty: all)
+  std::vector<std::string> validate;  // held-out validation sessions
+  TableFreeRunOptions run;            // gravity, pose detector, edge trim
+};
+
+/// Calibrates a hand-held session table-free, diagnoses it, writes the files and prints the
+/// summary; a temperature candidate without a temperature column, or a requested candidate the
+/// poses are too few for, throws (exit 2) after the files are written.
+int diagnose_handheld_session(const Session& session, const HandheldDiagnoseOptions& o);
+
+}  // namespace sinscal::cli
