@@ -213,7 +213,7 @@ TEST_CASE("Hand-held diagnosis: requests the poses cannot serve are refused",
 }
 
 TEST_CASE("Hand-held diagnosis Monte Carlo: hidden effects named, clean sessions quiet",
-          "[handheld_diagnosis][monte_carlo]") {
+          "[long][handheld_diagnosis][monte_carlo]") {
   const auto t0 = std::chrono::steady_clock::now();
   const int runs = 30;
   const std::vector<std::pair<std::string, std::vector<std::string>>> effects = {
