@@ -19,7 +19,12 @@ double bias_wander(const TriadNoise& tn) {
 
 ErrorPropagator::ErrorPropagator(const StateLayout& layout, const InsSiteTerms& site,
                                  const NoiseModel& noise)
-    : layout_(layout), site_(site), noise_(noise), n_(layout.nav_size), m_(layout.size - n_) {
+    : layout_(layout),
+      site_(site),
+      noise_(noise),
+      n_(layout.nav_size),
+      m_(layout.size - n_),
+      coefficients_(layout.coefficient_states()) {
   if (n_ > kMaxNavStates || m_ > kMaxCoefficients)
     throw std::logic_error("state layout larger than the filter's fixed storage");
   wander_ = Eigen::VectorXd::Zero(m_);
@@ -60,8 +65,10 @@ void ErrorPropagator::step(const Eigen::Matrix3d& C, const KinematicSample& k,
   model.jacobian(k, f_dot, coefficient_catalog_, J_);
   // Coefficient coupling: gyro errors rotate the attitude (phi' = -C dw_b), accelerometer errors
   // add to the velocity (dv' = C df_b).
-  B_.middleRows(a.index, 3).noalias() = -(C.lazyProduct(J_.topRows<3>()));
-  B_.middleRows(v.index, v.size).noalias() = (C.lazyProduct(J_.bottomRows<3>())).topRows(v.size);
+  // The base attitude (after the coefficients) does not enter the dynamics: its columns stay 0.
+  B_.block(a.index, 0, 3, coefficients_).noalias() = -(C.lazyProduct(J_.topRows<3>()));
+  B_.block(v.index, 0, v.size, coefficients_).noalias() =
+      (C.lazyProduct(J_.bottomRows<3>())).topRows(v.size);
   nonzero_ = 0;
   for (int j = 0; j < kMaxNavStates; ++j)
     for (int i = 0; i < kMaxNavStates; ++i)

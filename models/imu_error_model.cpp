@@ -35,11 +35,15 @@ Eigen::Vector3d TriadErrors::invert_step(const Eigen::Vector3d& y, const Eigen::
 
 Eigen::Vector3d ImuErrorModel::size_effect(const Eigen::Vector3d& omega_ib_b,
                                            const Eigen::Vector3d& omega_dot_ib_b) const {
+  // Each accelerometer measures the specific force at its proof mass along its own sensitive
+  // axis, row i of the linear part: a rotation of the triad (a mounting) carries it exactly.
   Eigen::Vector3d out;
+  const Eigen::Matrix3d A = accel.linear();
   for (int i = 0; i < 3; ++i) {
     const Eigen::Vector3d r = accel_lever_arm_b.col(i);
-    out(i) =
-        r.isZero(0.0) ? 0.0 : (omega_dot_ib_b.cross(r) + omega_ib_b.cross(omega_ib_b.cross(r)))(i);
+    out(i) = r.isZero(0.0)
+                 ? 0.0
+                 : A.row(i).dot(omega_dot_ib_b.cross(r) + omega_ib_b.cross(omega_ib_b.cross(r)));
   }
   return out;
 }
@@ -223,6 +227,20 @@ ImuErrorModel in_accel_triad_frame(const ImuErrorModel& model, Eigen::Matrix3d* 
   out.gyro_g_sensitivity = model.gyro_g_sensitivity * Q;
   out.accel_lever_arm_b = Q.transpose() * model.accel_lever_arm_b;
   if (C_a_b) *C_a_b = Q;
+  return out;
+}
+
+ImuErrorModel in_platform_frame(const ImuErrorModel& model, const Eigen::Matrix3d& C_b_p) {
+  ImuErrorModel out = model;
+  auto split = [](TriadErrors& t, const Eigen::Matrix3d& linear) {
+    t.scale = linear.diagonal() - Eigen::Vector3d::Ones();
+    t.misalignment = linear;
+    t.misalignment.diagonal().setZero();
+  };
+  split(out.accel, model.accel.linear() * C_b_p.transpose());
+  split(out.gyro, model.gyro.linear() * C_b_p.transpose());
+  out.gyro_g_sensitivity = model.gyro_g_sensitivity * C_b_p.transpose();
+  out.accel_lever_arm_b = C_b_p * model.accel_lever_arm_b;
   return out;
 }
 
