@@ -201,8 +201,11 @@ void print_closed_form(const ClosedFormReport& r, const ResultCoefficients& coef
     }
     std::printf(" %8.3f\n", e.chi2_per_dof);
   }
-  std::printf("\nIdentifiability: rank %d of %zu; stage-2 chi2 per dof %.3f (%d dof)\n",
-              r.stage2.rank, r.stage2.parameters.size(), r.stage2.chi2_per_dof, r.stage2.dof);
+  const std::size_t base = r.stage2.base_estimated ? 3 : 0;
+  std::printf("\nIdentifiability: rank %d of %zu%s; stage-2 chi2 per dof %.3f (%d dof)\n",
+              r.stage2.rank, r.stage2.parameters.size() + base,
+              base > 0 ? " (the coefficients and the table base's 3 angles)" : "",
+              r.stage2.chi2_per_dof, r.stage2.dof);
   for (const auto& u : r.stage2.unobservable_directions)
     std::printf("  unobservable direction: %s\n", u.c_str());
   print_coefficient_table(coefficients, truth);

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -597,11 +598,19 @@ void turn_back(Stage2Result& r, const Eigen::Matrix3d& C) {
 // base. Returns the turn of the samples (its mounting taken out), identity otherwise.
 Eigen::Matrix3d apply_alignment(const Session& session, PlanTimeline& timeline,
                                 ClosedFormReport& r) {
-  LogReader reader(session.log);
+  std::vector<AlignmentDwell> means;
+  try {
+    // Bad samples left out of the means; stage 1 reports them.
+    LogReader reader(session.log);
+    reader.skip_bad_samples([](const BadSampleError&) {});
+    means = dwell_means(reader, timeline, session.time_offset, kAlignmentEdge);
+  } catch (const std::runtime_error&) {
+    return Eigen::Matrix3d::Identity();  // a log stage 1 will refuse, with the reason
+  }
   const Earth& earth = Earth::wgs84();
   InstallationResult& in = r.installation;
   in.alignment =
-      align(dwell_means(reader, timeline, session.time_offset, kAlignmentEdge), session.site,
+      align(means, session.site,
             kAlignmentLinearError * earth.gravity_n(session.site.lat_rad, session.site.h_m).norm(),
             kAlignmentLinearError * earth.rate());
   const Alignment& a = *in.alignment;
@@ -642,7 +651,11 @@ ClosedFormReport run_closed_form(const Session& session, const Stage1Options& st
   r.stage1 = run_stage1(turned, timeline.dwells, session.site, stage1, session.time_offset,
                         session.log.file);
   r.stage2_options.table = table;
-  r.stage2_options.base_attitude = align_first;
+  // The base needs every input (all four channels, the command line's default): with the
+  // paper's two it mixes with the scale factors, and the paper's method takes the plan's base.
+  const auto inputs = stage1.channels.inputs();
+  r.stage2_options.base_attitude =
+      align_first && std::all_of(inputs.begin(), inputs.end(), [](bool b) { return b; });
   r.stage2 = solve_stage2(r.stage1, session.site, r.stage2_options);
   InstallationResult& in = r.installation;
   if (in.alignment_applied) turn_back(r.stage2, C_turn);

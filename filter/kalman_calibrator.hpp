@@ -52,6 +52,9 @@ constexpr double kDefaultStartAttitudeSigma = 0.5 * units::deg;
 /// level (about North and East) and heading (about Down) of a table set up on its site.
 constexpr double kBaseLevelPriorSigma = 1.0 * units::deg;
 constexpr double kBaseHeadingPriorSigma = 5.0 * units::deg;
+/// The base heading is estimated when the gyro bias prior is below this fraction of the Earth
+/// rate (the gyros then find North); otherwise it is the plan's, to the table's accuracy.
+constexpr double kNorthSeekingBiasRatio = 0.1;
 constexpr double kStartVelocitySigma = 1e-3;  // m/s
 constexpr double kStartPositionSigma = 1e-2;  // m
 

@@ -299,8 +299,15 @@ double largest_prior(const CalibratorOptions& o, const std::string& family) {
 CalibratorOptions aligned(const Session& session, const CalibratorOptions& options,
                           InstallationResult& in) {
   const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
-  LogReader reader(session.log);
-  const auto means = dwell_means(reader, timeline, options.time_offset, options.static_margin);
+  std::vector<AlignmentDwell> means;
+  try {
+    // Bad samples left out of the means; the filter's pass reports them (stop or skip).
+    LogReader reader(session.log);
+    reader.skip_bad_samples([](const BadSampleError&) {});
+    means = dwell_means(reader, timeline, options.time_offset, options.static_margin);
+  } catch (const std::runtime_error&) {
+    return options;  // a log the filter's pass will refuse, with the reason
+  }
   const double linear_a =
       std::max(largest_prior(options, "accel.scale"), largest_prior(options, "accel.misalignment"));
   const double linear_g =
@@ -376,8 +383,9 @@ KalmanRun run_kalman(const Session& session, const CalibratorOptions& given, Sam
       r.passes_requested = run.passes;
       return with_installation(std::move(r));
     }
+    // The coefficients carry over; the base starts again where the first pass did (a pass
+    // far off, MEMS, leaves it anywhere, and its prior is wide enough).
     o.initial_model = r.model;
-    o.initial_base_n = r.installation.base_n;
     previous = std::move(r);
   }
   return previous;  // not reached

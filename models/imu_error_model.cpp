@@ -121,7 +121,14 @@ void ImuErrorModel::jacobian(const KinematicSample& s, const Eigen::Vector3d& f_
   // only in TriadErrors::apply, size_effect and the g-sensitivity product. A gyro coefficient
   // enters only the gyro outputs, an accelerometer one only the accelerometer outputs (the
   // finite-difference test of the Jacobian checks this too).
+  // The accelerometers' linear part and lever arms stay the model's: the size effect is measured
+  // along each accelerometer's sensitive axis (row i of the linear part), bilinear in the two, so
+  // a lever arm's column carries the row (a mounting makes it a rotation of degrees) and a linear
+  // column the size effect. Every other term is additive: its column does not depend on them.
   ImuErrorModel zero;
+  zero.accel.scale = accel.scale;
+  zero.accel.misalignment = accel.misalignment;
+  zero.accel_lever_arm_b = accel_lever_arm_b;
   const auto& slots = coefficient_slots();
   J.setZero(6, static_cast<Eigen::Index>(columns.size()));
   const Eigen::Vector3d g0 = zero.gyro_output(s), a0 = zero.accel_output(s);
@@ -139,11 +146,13 @@ void ImuErrorModel::jacobian(const KinematicSample& s, const Eigen::Vector3d& f_
         J.col(col).head<3>() = zero.gyro_output(s) - g0;
         *value = 0.0;
         break;
-      case CoefficientSlot::Output::Accel:
-        *value = 1.0;
+      case CoefficientSlot::Output::Accel: {
+        const double held = *value;
+        *value = held + 1.0;
         J.col(col).tail<3>() = zero.accel_output(s) - a0;
-        *value = 0.0;
+        *value = held;
         break;
+      }
     }
   }
 }

@@ -190,7 +190,7 @@ TEST_CASE(
   // The table's base: an estimate off the identity, its error a state (the attitude update
   // measures the attitude relative to it).
   REQUIRE(StateLayout::on(l.base));
-  const Eigen::Matrix3d C_base0 = dcm_from_rotvec(Eigen::Vector3d(2e-4, -3e-4, 5e-4));
+  const Eigen::Matrix3d C_base0 = dcm_from_rotvec(Eigen::Vector3d(2e-5, -3e-5, 5e-5));
   using Function = std::function<Measurement(const NavState&, const Eigen::Matrix3d&)>;
   const std::vector<std::pair<std::string, Function>> ms = {
       {"zero velocity",
