@@ -149,6 +149,9 @@ TEST_CASE("Simulator: the table base and the mounting turn the truth, not the pl
   const SensorProfile prof = SensorProfile::load(test::source_path("config/sensors/nav-fog.ini"));
   const ImuErrorModel sensors = prof.draw(3), platform = in_platform_frame(sensors, C_b_p);
   const Eigen::Vector3d x_p(1.0, -2.0, 9.0);
+  // The reported mounting of the platform-frame model is the simulated one, to the triad's own
+  // misalignments (tens of arcsec of a navigation-grade unit).
+  CHECK((mounting_of(platform) - t.mounting_b).norm() < 100.0 * units::arcsec);
   CHECK((sensors.accel.linear() * C_b_p.transpose() * x_p - platform.accel.linear() * x_p).norm() <
         1e-12);
 }
@@ -234,6 +237,21 @@ TEST_CASE(
       CHECK(v.mounting_worst < 3.0);
     }
   }
+}
+
+TEST_CASE("Closed form: a base below the alignment's threshold is stage 2's alone",
+          "[installation][closed_form]") {
+  // 0.08 deg of heading and 0.05 deg of level: the alignment is not applied, stage 2 finds the
+  // base from the Earth rate (heading) and gravity (level) by itself.
+  TableErrors t;
+  t.base_heading = 0.08 * units::deg;
+  t.base_level_east = 0.05 * units::deg;
+  const Session s = simulate("cf_small_base", "seed8.ini", "nav-fog.ini", 41, t);
+  const Verdict v = run_closed(s, t);
+  CAPTURE(v.worst, v.worst_name, v.base_worst);
+  CHECK(v.ok);
+  CHECK(v.worst < 3.0);
+  CHECK(v.base_worst < 3.0);
 }
 
 TEST_CASE(
