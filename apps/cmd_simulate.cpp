@@ -3,6 +3,9 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "apps/cli.hpp"
 #include "apps/commands.hpp"
@@ -13,7 +16,33 @@
 namespace sinscal::cli {
 
 namespace {
-constexpr double kMaxRateHz = 100000.0;  // a log beyond this is not an IMU's
+constexpr double kMaxRateHz = 100000.0;       // a log beyond this is not an IMU's
+constexpr double kMaxInstallationDeg = 10.0;  // base level and mounting errors simulated, deg
+
+// "a,b[,c]" (deg) as `count` angles in rad; a usage error naming the option otherwise.
+std::vector<double> angles_deg(const std::string& option, const std::string& text, int count) {
+  std::vector<double> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    std::size_t used = 0;
+    double v = 0.0;
+    try {
+      v = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !(std::abs(v) <= kMaxInstallationDeg))
+      throw UsageError("--" + option + " takes " + std::to_string(count) +
+                       " comma-separated angles in deg, each within +-" +
+                       fmt("%g", kMaxInstallationDeg) + ", not '" + text + "'");
+    out.push_back(v * units::deg);
+  }
+  if (static_cast<int>(out.size()) != count)
+    throw UsageError("--" + option + " takes " + std::to_string(count) +
+                     " comma-separated angles in deg, not '" + text + "'");
+  return out;
+}
 
 void print_simulation(const SimulatedSession& sim, const SessionSimulation& spec,
                       const std::string& out_dir, double seconds) {
@@ -23,6 +52,14 @@ void print_simulation(const SimulatedSession& sim, const SessionSimulation& spec
             << " Hz, " << fmt("%.1f", sim.duration) << " s, " << sim.dwells << " dwells, "
             << (noise ? "noise on" : "noise off") << ", "
             << fmt("%.0f", static_cast<double>(sim.samples) / seconds) << " samples/s written\n";
+  if (spec.table.has_installation_errors()) {
+    const Eigen::Vector3d m = spec.table.mounting_b / units::deg;
+    std::printf(
+        "  table base: level %.4f deg (North) %.4f deg (East), heading %.4f deg; IMU mounting "
+        "%.4f %.4f %.4f deg (rotation vector, body axes)\n",
+        spec.table.base_level_north / units::deg, spec.table.base_level_east / units::deg,
+        spec.table.base_heading / units::deg, m.x(), m.y(), m.z());
+  }
   if (sim.saturated > 0)
     std::cout << "  WARNING: " << sim.saturated << " samples clipped at the sensor range\n";
   std::cout << "  session: " << out_dir << "/session.ini\n  injected coefficients (truth.json):\n";
@@ -38,7 +75,8 @@ int cmd_simulate(const std::vector<std::string>& args) {
   po::options_description d("sinscal simulate options");
   SessionSimulation spec;
   std::string out_dir;
-  double angle_sigma_arcsec = 0.0, non_orth_arcsec = 0.0;
+  double angle_sigma_arcsec = 0.0, non_orth_arcsec = 0.0, base_heading_deg = 0.0;
+  std::string base_level = "0,0", mounting = "0,0,0";
   unsigned long long seed = 1;
   // clang-format off
   d.add_options()
@@ -55,12 +93,20 @@ int cmd_simulate(const std::vector<std::string>& args) {
       ("table-angle-sigma", po::value(&angle_sigma_arcsec)->default_value(0.0),
        "table angle error per commanded angle, 1-sigma [arcsec]")
       ("table-non-orthogonality", po::value(&non_orth_arcsec)->default_value(0.0),
-       "lean of the inner axis [arcsec]");
+       "lean of the inner axis [arcsec]")
+      ("base-level-error", po::value(&base_level),
+       "level error of the table's base: N,E [deg], rotations about North and East")
+      ("base-heading-error", po::value(&base_heading_deg)->default_value(0.0),
+       "heading error of the table's base, about Down [deg]")
+      ("mounting-error", po::value(&mounting),
+       "the IMU's mounting on the platform: x,y,z [deg], rotation vector in body axes");
   // clang-format on
-  const auto vm = parse(args, d,
-                        "Usage: sinscal simulate --plan P --sensor S --out DIR [--rate HZ] "
-                        "[--seed N] [--no-noise]\nSimulates a calibration session: DIR/imu.csv, "
-                        "session.ini, plan.ini, sensor.ini, truth.json.");
+  const auto vm =
+      parse(args, d,
+            "Usage: sinscal simulate --plan P --sensor S --out DIR [--rate HZ] "
+            "[--seed N] [--no-noise]\n       [--base-level-error N,E] [--base-heading-error DEG] "
+            "[--mounting-error X,Y,Z]\nSimulates a calibration session: DIR/imu.csv, "
+            "session.ini, plan.ini, sensor.ini, truth.json.");
   if (!vm) return 0;
   if (!(spec.rate_hz > 0.0 && spec.rate_hz <= kMaxRateHz))
     throw UsageError("--rate must be above 0 and at most " + fmt("%g", kMaxRateHz) + " Hz");
@@ -76,6 +122,14 @@ int cmd_simulate(const std::vector<std::string>& args) {
   spec.table.angle_sigma = angle_sigma_arcsec * units::arcsec;
   spec.table.non_orthogonality = non_orth_arcsec * units::arcsec;
   spec.table.seed = derive_seed(seed, 3);
+  const std::vector<double> level = angles_deg("base-level-error", base_level, 2);
+  const std::vector<double> mount = angles_deg("mounting-error", mounting, 3);
+  if (!(std::abs(base_heading_deg) <= 180.0))
+    throw UsageError("--base-heading-error must be within +-180 deg");
+  spec.table.base_level_north = level[0];
+  spec.table.base_level_east = level[1];
+  spec.table.base_heading = base_heading_deg * units::deg;
+  spec.table.mounting_b = Eigen::Vector3d(mount[0], mount[1], mount[2]);
   std::vector<std::pair<std::string, std::string>> outputs;
   for (const char* f : {"imu.csv", "session.ini", "plan.ini", "sensor.ini", "truth.json"})
     outputs.emplace_back("output", out_dir + "/" + f);

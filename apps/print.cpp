@@ -76,6 +76,33 @@ void explain_above_target(const KalmanRun& run, const std::string& family, doubl
   }
 }
 
+namespace {
+// The table base and the IMU's mounting (arcsec), and the alignment the filter started from.
+void print_installation(const InstallationResult& in) {
+  auto v = [](const Eigen::Vector3d& x) { return Eigen::Vector3d(x / units::arcsec); };
+  if (in.base_estimated) {
+    const Eigen::Vector3d b = v(in.base_n), s = v(in.base_sigma_n);
+    std::printf(
+        "Table base: level %.1f +- %.1f arcsec (North), %.1f +- %.1f arcsec (East), "
+        "heading %.1f +- %.1f arcsec\n",
+        b.x(), s.x(), b.y(), s.y(), b.z(), s.z());
+  }
+  if (in.mounting_estimated) {
+    const Eigen::Vector3d m = v(in.mounting_b), s = v(in.mounting_sigma_b);
+    std::printf(
+        "IMU mounting (common rotation of the triads, polar decomposition of the "
+        "accelerometer matrix): %.1f +- %.1f, %.1f +- %.1f, %.1f +- %.1f arcsec (x, y, z; "
+        "%.4f deg)\n",
+        m.x(), s.x(), m.y(), s.y(), m.z(), s.z(), in.mounting_b.norm() / units::deg);
+  }
+  if (in.alignment && in.alignment->valid && in.alignment_applied)
+    std::printf(
+        "  (the filter started from the alignment of the dwells: base %.4f deg, "
+        "mounting %.4f deg)\n",
+        in.alignment->base_n.norm() / units::deg, in.alignment->mounting_b.norm() / units::deg);
+}
+}  // namespace
+
 void print_kalman_verdicts(const KalmanRun& run, const SensorProfile& profile,
                            const ResultCoefficients& truth) {
   const ResultCoefficients coefficients = result_coefficients(run);
@@ -89,6 +116,7 @@ void print_kalman_verdicts(const KalmanRun& run, const SensorProfile& profile,
   }
   std::printf("\n");
   print_truth_verdict(coefficients, truth);
+  print_installation(run.installation);
   if (!run.unobservable.empty()) {
     std::fprintf(stderr,
                  "sinscal calibrate: warning: the plan does not observe these coefficients (the "
@@ -173,11 +201,16 @@ void print_closed_form(const ClosedFormReport& r, const ResultCoefficients& coef
     }
     std::printf(" %8.3f\n", e.chi2_per_dof);
   }
-  std::printf("\nIdentifiability: rank %d of %zu; stage-2 chi2 per dof %.3f (%d dof)\n",
-              r.stage2.rank, r.stage2.parameters.size(), r.stage2.chi2_per_dof, r.stage2.dof);
+  const std::size_t base = r.stage2.base_estimated ? 3 : 0;
+  std::printf("\nIdentifiability: rank %d of %zu%s; stage-2 chi2 per dof %.3f (%d dof)\n",
+              r.stage2.rank, r.stage2.parameters.size() + base,
+              base > 0 ? " (the coefficients and the table base's 3 angles)" : "",
+              r.stage2.chi2_per_dof, r.stage2.dof);
   for (const auto& u : r.stage2.unobservable_directions)
     std::printf("  unobservable direction: %s\n", u.c_str());
   print_coefficient_table(coefficients, truth);
+  std::printf("\n");
+  print_installation(r.installation);
   // The limits of a static plan, shown rather than hidden.
   auto sigma_range = [&](const std::string& family) {
     std::pair<double, double> range{1e300, 0.0};

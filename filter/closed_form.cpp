@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -335,11 +336,20 @@ struct NormalEquations {
 
 NormalEquations stage2_normal_equations(const std::vector<EquivalentInputs>& inputs,
                                         const Site& site, const Stage2Options& o) {
-  const int n = static_cast<int>(o.parameters.size());
+  const int nc = static_cast<int>(o.parameters.size());
+  const int n = nc + (o.base_attitude ? 3 : 0);
   NormalEquations ne{Eigen::MatrixXd::Zero(n, n), Eigen::VectorXd::Zero(n)};
+  const Earth& earth = Earth::wgs84();
   for (const auto& in : inputs) {
-    const auto H = equivalent_input_map(in.dwell.C_b_n_known, site, o.parameters,
-                                        0.5 * (in.dwell.t_start + in.dwell.t_end));
+    Eigen::Matrix<double, 6, Eigen::Dynamic> H(6, n);
+    H.leftCols(nc) = equivalent_input_map(in.dwell.C_b_n_known, site, o.parameters,
+                                          0.5 * (in.dwell.t_start + in.dwell.t_end));
+    // The base's error aliases as the table's does: df_n += f_n x d_base, dw_n += omega_ie_n x
+    // d_base (f_n = -g_n).
+    if (o.base_attitude) {
+      H.block<3, 3>(ins_input::kAccel.index, nc) = skew(-earth.gravity_n(site.lat_rad, site.h_m));
+      H.block<3, 3>(ins_input::kGyro.index, nc) = skew(earth.omega_ie_n(site.lat_rad));
+    }
     const Matrix6d R = stage2_input_covariance(in, site, o.table);
     std::vector<int> idx;
     for (int i = 0; i < 6; ++i)
@@ -366,24 +376,46 @@ NormalEquations stage2_normal_equations(const std::vector<EquivalentInputs>& inp
 }
 
 // "+0.577 accel.scale.x +0.577 ..." for a direction in parameter space.
-std::string direction_text(const Eigen::VectorXd& dir, const std::vector<int>& parameters) {
-  const auto& cat = coefficient_catalog();
+std::string direction_text(const Eigen::VectorXd& dir, const std::vector<std::string>& names) {
   std::string text;
   for (Eigen::Index i = 0; i < dir.size(); ++i)
     if (std::abs(dir(i)) > 0.05) {
       char buf[96];
-      std::snprintf(
-          buf, sizeof buf, "%s%+.3f %s", text.empty() ? "" : " ", dir(i),
-          cat[static_cast<std::size_t>(parameters[static_cast<std::size_t>(i)])].name.c_str());
+      std::snprintf(buf, sizeof buf, "%s%+.3f %s", text.empty() ? "" : " ", dir(i),
+                    names[static_cast<std::size_t>(i)].c_str());
       text += buf;
     }
   return text;
+}
+
+// The names of stage 2's parameters: the coefficients, then the base's three angles.
+std::vector<std::string> parameter_names(const Stage2Options& o) {
+  std::vector<std::string> names;
+  for (int c : o.parameters)
+    names.push_back(coefficient_catalog()[static_cast<std::size_t>(c)].name);
+  if (o.base_attitude)
+    names.insert(names.end(), {"table.base.north", "table.base.east", "table.base.down"});
+  return names;
+}
+
+// Splits the base's three angles off the end of the solution.
+void split_base(Stage2Result& r, int nc) {
+  r.base_estimated = true;
+  r.base_n = r.theta.tail<3>();
+  r.base_cov = r.cov.bottomRightCorner<3, 3>();
+  r.base_observable = r.observable[static_cast<std::size_t>(nc)] &&
+                      r.observable[static_cast<std::size_t>(nc + 1)] &&
+                      r.observable[static_cast<std::size_t>(nc + 2)];
+  r.theta.conservativeResize(nc);
+  r.cov.conservativeResize(nc, nc);
+  r.observable.resize(static_cast<std::size_t>(nc));
 }
 }  // namespace
 
 Stage2Result solve_stage2(const std::vector<EquivalentInputs>& inputs, const Site& site,
                           const Stage2Options& o) {
-  const int n = static_cast<int>(o.parameters.size());
+  const std::vector<std::string> names = parameter_names(o);
+  const int n = static_cast<int>(names.size());
   const NormalEquations ne = stage2_normal_equations(inputs, site, o);
   // Jacobi scaling, then the eigen-decomposition names the unobservable directions.
   Eigen::VectorXd d(n);
@@ -408,7 +440,7 @@ Stage2Result solve_stage2(const std::vector<EquivalentInputs>& inputs, const Sit
     Eigen::Index lead = 0;
     dir.cwiseAbs().maxCoeff(&lead);
     if (dir(lead) < 0.0) dir = -dir;
-    r.unobservable_directions.push_back(direction_text(dir, o.parameters));
+    r.unobservable_directions.push_back(direction_text(dir, names));
     r.null_vectors.push_back(dir);
   }
   r.theta = d.asDiagonal() * pinv * d.asDiagonal() * ne.b;
@@ -424,6 +456,7 @@ Stage2Result solve_stage2(const std::vector<EquivalentInputs>& inputs, const Sit
       r.cov.row(i).setConstant(nan);
       r.cov.col(i).setConstant(nan);
     }
+  if (o.base_attitude) split_base(r, static_cast<int>(o.parameters.size()));
   return r;
 }
 
@@ -498,16 +531,140 @@ bool is_paper_plan(const Session& session, const std::vector<EquivalentInputs>& 
 }
 }  // namespace
 
+namespace {
+// The samples turned by a rotation, both triads: the alignment's mounting taken out.
+class TurnedSource : public SampleSource {
+ public:
+  TurnedSource(SampleSource& in, const Eigen::Matrix3d& C) : in_(in), C_(C) {}
+  bool next(ImuSample& s) override {
+    if (!in_.next(s)) return false;
+    s.dtheta_b = C_ * s.dtheta_b;
+    s.dv_b = C_ * s.dv_b;
+    return true;
+  }
+
+ private:
+  SampleSource& in_;
+  Eigen::Matrix3d C_;
+};
+
+// Stage 2's coefficients of samples turned by C, relative to the platform again: A = C^T A',
+// b = C^T b' (both triads), a linear map applied to the estimate and its covariance. A
+// coefficient the data did not determine spreads to those it enters.
+void turn_back(Stage2Result& r, const Eigen::Matrix3d& C) {
+  const auto n = static_cast<int>(r.theta.size());
+  auto map = [&](const Eigen::VectorXd& theta) {
+    ImuErrorModel m;
+    auto refs = m.coefficient_refs();
+    for (int i = 0; i < n; ++i)
+      *refs[static_cast<std::size_t>(r.parameters[static_cast<std::size_t>(i)])].second = theta(i);
+    ImuErrorModel out = m;
+    for (auto [to, from] : {std::pair{&out.accel, &m.accel}, std::pair{&out.gyro, &m.gyro}}) {
+      const Eigen::Matrix3d A = C.transpose() * from->linear();
+      to->scale = A.diagonal() - Eigen::Vector3d::Ones();
+      to->misalignment = A;
+      to->misalignment.diagonal().setZero();
+      to->bias = C.transpose() * from->bias;
+    }
+    return parameter_vector(out, r.parameters);
+  };
+  const Eigen::VectorXd offset = map(Eigen::VectorXd::Zero(n));
+  Eigen::MatrixXd T(n, n);
+  for (int j = 0; j < n; ++j) T.col(j) = map(Eigen::VectorXd::Unit(n, j)) - offset;
+  std::vector<bool> observable = r.observable;
+  Eigen::VectorXd theta = r.theta;
+  Eigen::MatrixXd cov = r.cov;
+  for (int j = 0; j < n; ++j)
+    if (!r.observable[static_cast<std::size_t>(j)]) {
+      theta(j) = 0.0;
+      cov.row(j).setZero();
+      cov.col(j).setZero();
+      for (int i = 0; i < n; ++i)
+        if (T(i, j) != 0.0) observable[static_cast<std::size_t>(i)] = false;
+    }
+  r.theta = T * theta + offset;
+  r.cov = T * cov * T.transpose();
+  r.observable = observable;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int i = 0; i < n; ++i)
+    if (!observable[static_cast<std::size_t>(i)]) {
+      r.theta(i) = nan;
+      r.cov.row(i).setConstant(nan);
+      r.cov.col(i).setConstant(nan);
+    }
+}
+
+// The alignment from the session's dwells; when significant, the dwells' attitudes turned by its
+// base. Returns the turn of the samples (its mounting taken out), identity otherwise.
+Eigen::Matrix3d apply_alignment(const Session& session, PlanTimeline& timeline,
+                                ClosedFormReport& r) {
+  std::vector<AlignmentDwell> means;
+  try {
+    // Bad samples left out of the means; stage 1 reports them.
+    LogReader reader(session.log);
+    reader.skip_bad_samples([](const BadSampleError&) {});
+    means = dwell_means(reader, timeline, session.time_offset, kAlignmentEdge);
+  } catch (const std::runtime_error&) {
+    return Eigen::Matrix3d::Identity();  // a log stage 1 will refuse, with the reason
+  }
+  const Earth& earth = Earth::wgs84();
+  InstallationResult& in = r.installation;
+  in.alignment =
+      align(means, session.site,
+            kAlignmentLinearError * earth.gravity_n(session.site.lat_rad, session.site.h_m).norm(),
+            kAlignmentLinearError * earth.rate());
+  const Alignment& a = *in.alignment;
+  if (!a.valid || std::max(a.mounting_b.norm(), a.base_n.norm()) <= kAlignmentThreshold)
+    return Eigen::Matrix3d::Identity();
+  in.alignment_applied = true;
+  const Eigen::Matrix3d C_base = dcm_from_rotvec(a.base_n);
+  for (auto& d : timeline.dwells) d.C_b_n_known = C_base * d.C_b_n_known;
+  in.base_n = a.base_n;
+  return dcm_from_rotvec(a.mounting_b);
+}
+
+// The common rotation of the triads of the stage-2 coefficients (when the accelerometer
+// misalignments are all determined).
+void set_mounting(const Stage2Result& r, InstallationResult& in) {
+  ImuErrorModel m;
+  auto refs = m.coefficient_refs();
+  for (std::size_t i = 0; i < r.parameters.size(); ++i) {
+    const auto c = static_cast<std::size_t>(r.parameters[i]);
+    if (refs[c].first.family == "accel.misalignment" && !r.observable[i]) return;
+    if (r.observable[i]) *refs[c].second = r.theta(static_cast<Eigen::Index>(i));
+  }
+  in.mounting_estimated = true;
+  in.mounting_b = mounting_of(m);
+  in.mounting_sigma_b = mounting_sigma(r.parameters, r.cov);
+}
+}  // namespace
+
 ClosedFormReport run_closed_form(const Session& session, const Stage1Options& stage1,
-                                 const TableAttitudeError& table) {
+                                 const TableAttitudeError& table, bool align_first) {
   ClosedFormReport r;
   r.stage1_options = stage1;
-  const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
+  PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
+  const Eigen::Matrix3d C_turn =
+      align_first ? apply_alignment(session, timeline, r) : Eigen::Matrix3d::Identity();
   LogReader reader(session.log);
-  r.stage1 = run_stage1(reader, timeline.dwells, session.site, stage1, session.time_offset,
+  TurnedSource turned(reader, C_turn);
+  r.stage1 = run_stage1(turned, timeline.dwells, session.site, stage1, session.time_offset,
                         session.log.file);
   r.stage2_options.table = table;
+  // The base needs every input (all four channels, the command line's default): with the
+  // paper's two it mixes with the scale factors, and the paper's method takes the plan's base.
+  const auto inputs = stage1.channels.inputs();
+  r.stage2_options.base_attitude =
+      align_first && std::all_of(inputs.begin(), inputs.end(), [](bool b) { return b; });
   r.stage2 = solve_stage2(r.stage1, session.site, r.stage2_options);
+  InstallationResult& in = r.installation;
+  if (in.alignment_applied) turn_back(r.stage2, C_turn);
+  if (r.stage2.base_estimated && r.stage2.base_observable) {
+    in.base_estimated = true;
+    in.base_n = rotvec_from_dcm(dcm_from_rotvec(r.stage2.base_n) * dcm_from_rotvec(in.base_n));
+    in.base_sigma_n = r.stage2.base_cov.diagonal().cwiseSqrt();
+  }
+  set_mounting(r.stage2, in);
   // The paper's literal closed forms, when the plan is its 8-orientation table.
   if (is_paper_plan(session, r.stage1)) {
     r.has_paper_forms = true;

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "filter/ins_error_model.hpp"
+#include "filter/installation.hpp"
 #include "filter/strapdown.hpp"
 #include "rig/imu_sample.hpp"
 #include "rig/session.hpp"
@@ -109,6 +110,10 @@ struct Stage2Options {
   TableAttitudeError table;
   double null_tolerance = 1e-9;  // relative singular value below which a direction is unobservable
   std::vector<int> parameters = stage2_parameters();
+  /// Three more parameters: the error of the table base attitude common to every dwell (rotation
+  /// vector, NED, true minus the dwells' known attitudes' base; docs/conventions.md "Table base
+  /// and mounting"), aliasing into every dwell as the table's attitude error does.
+  bool base_attitude = false;
 };
 
 struct Stage2Result {
@@ -123,6 +128,11 @@ struct Stage2Result {
   /// freedom (inputs minus rank); 1 when the model explains the dwells to their sigmas.
   double chi2_per_dof = 0.0;
   int dof = 0;
+  /// With Stage2Options::base_attitude: the base's error (rad, NED) and its covariance.
+  bool base_estimated = false;
+  bool base_observable = false;
+  Eigen::Vector3d base_n = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d base_cov = Eigen::Matrix3d::Zero();
 };
 
 Stage2Result solve_stage2(const std::vector<EquivalentInputs>& inputs, const Site& site,
@@ -144,6 +154,12 @@ std::vector<std::pair<std::string, double>> named(const PaperClosedForms& p);
 
 /// The whole method on a recorded session: navigation through every dwell, stage 1, stage 2.
 struct ClosedFormReport {
+  /// The alignment from the dwells (filter/installation.hpp); when applied, the samples were
+  /// turned by its mounting and the dwells' attitudes by its base before stage 1, and stage 2's
+  /// coefficients turned back relative to the platform.
+  /// The base attitude (the alignment's, if applied, turned by stage 2's correction), the
+  /// mounting of the stage-2 coefficients, and the alignment.
+  InstallationResult installation;
   Stage1Options stage1_options;
   Stage2Options stage2_options;
   std::vector<EquivalentInputs> stage1;
@@ -152,7 +168,9 @@ struct ClosedFormReport {
   PaperClosedForms paper{};
 };
 
+/// `align`: align from the dwells first and estimate the base in stage 2 (the command line's
+/// default); false: the plan's attitudes as they are, no base.
 ClosedFormReport run_closed_form(const Session& session, const Stage1Options& stage1,
-                                 const TableAttitudeError& table);
+                                 const TableAttitudeError& table, bool align = true);
 
 }  // namespace sinscal

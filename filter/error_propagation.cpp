@@ -19,7 +19,12 @@ double bias_wander(const TriadNoise& tn) {
 
 ErrorPropagator::ErrorPropagator(const StateLayout& layout, const InsSiteTerms& site,
                                  const NoiseModel& noise)
-    : layout_(layout), site_(site), noise_(noise), n_(layout.nav_size), m_(layout.size - n_) {
+    : layout_(layout),
+      site_(site),
+      noise_(noise),
+      n_(layout.nav_size),
+      m_(layout.size - n_),
+      coefficients_(layout.coefficient_states()) {
   if (n_ > kMaxNavStates || m_ > kMaxCoefficients)
     throw std::logic_error("state layout larger than the filter's fixed storage");
   wander_ = Eigen::VectorXd::Zero(m_);
@@ -60,8 +65,18 @@ void ErrorPropagator::step(const Eigen::Matrix3d& C, const KinematicSample& k,
   model.jacobian(k, f_dot, coefficient_catalog_, J_);
   // Coefficient coupling: gyro errors rotate the attitude (phi' = -C dw_b), accelerometer errors
   // add to the velocity (dv' = C df_b).
-  B_.middleRows(a.index, 3).noalias() = -(C.lazyProduct(J_.topRows<3>()));
-  B_.middleRows(v.index, v.size).noalias() = (C.lazyProduct(J_.bottomRows<3>())).topRows(v.size);
+  // The base attitude (after the coefficients) does not enter the dynamics: its columns stay 0.
+  // An output error J dtheta is an error A^-1 J dtheta of the compensated input (A the triad's
+  // linear part as estimated: a mounting makes it a rotation of up to degrees); the time delay
+  // acts on the compensated input already.
+  const Eigen::Matrix3d C_gyro = C * model.gyro.linear().inverse();
+  const Eigen::Matrix3d C_accel = C * model.accel.linear().inverse();
+  B_.block(a.index, 0, 3, coefficients_).noalias() = -(C_gyro.lazyProduct(J_.topRows<3>()));
+  B_.block(v.index, 0, v.size, coefficients_).noalias() =
+      (C_accel.lazyProduct(J_.bottomRows<3>())).topRows(v.size);
+  if (const auto* delay = layout_.block("time_delay"))
+    B_.block(v.index, delay->block.index - n_, v.size, 1).noalias() =
+        (C * J_.bottomRows<3>().col(delay->block.index - n_)).topRows(v.size);
   nonzero_ = 0;
   for (int j = 0; j < kMaxNavStates; ++j)
     for (int i = 0; i < kMaxNavStates; ++i)

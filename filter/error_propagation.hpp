@@ -53,7 +53,8 @@ class ErrorPropagator {
   StateLayout layout_;
   InsSiteTerms site_;
   NoiseModel noise_;
-  int n_ = 0, m_ = 0;
+  int n_ = 0, m_ = 0;     // navigation states, states after them (coefficients, base attitude)
+  int coefficients_ = 0;  // coefficient states (the first of the m_)
   std::vector<int> coefficient_catalog_;  // catalog index of each coefficient state, in order
   Eigen::VectorXd wander_;                // per coefficient state: random-walk density (SI^2/s)
   NavMatrix Phi_nn_, Q_nn_, work_nn_;

@@ -42,6 +42,8 @@ double initial_attitude_sigma(const CalibratorOptions& o) {
 StateLayoutOptions effective_layout(const CalibratorOptions& o) {
   StateLayoutOptions l = o.layout;
   if (o.attitude == CalibratorOptions::AttitudeUpdates::None) l.accel_triad_frame = true;
+  // Only an attitude update relates the navigation to the base.
+  l.base_attitude = o.base_attitude && o.attitude != CalibratorOptions::AttitudeUpdates::None;
   return l;
 }
 
@@ -54,6 +56,14 @@ Calibrator::Calibrator(PlanTimeline timeline, const Site& site, const Calibrator
       propagator_(layout_, site_terms_, options.noise),
       table_(timeline.table) {
   if (dwells_.empty()) throw std::invalid_argument("the Kalman calibrator needs the plan's dwells");
+  initialize_covariance();
+  if (o_.initial_model) model_ = *o_.initial_model;
+  C_base_ = dcm_from_rotvec(o_.initial_base_n);
+  if (o_.static_from == CalibratorOptions::StaticFrom::Data)
+    detector_.emplace(o_.noise, o_.detector);
+}
+
+void Calibrator::initialize_covariance() {
   const int n = layout_.size;
   const auto& cat = coefficient_catalog();
   prior_sigma_.assign(cat.size(), 0.0);
@@ -64,6 +74,17 @@ Calibrator::Calibrator(PlanTimeline timeline, const Site& site, const Calibrator
   diagonal(layout_.attitude, initial_attitude_sigma(o_));
   diagonal(layout_.velocity, kStartVelocitySigma);
   diagonal(layout_.position, kStartPositionSigma);
+  if (StateLayout::on(layout_.base)) {
+    // The navigation starts from the base's estimate: its error is the start attitude's too
+    // (phi_n = -d_base + the table's own start error).
+    const Eigen::Vector3d sigma(kBaseLevelPriorSigma, kBaseLevelPriorSigma, kBaseHeadingPriorSigma);
+    const Eigen::Matrix3d P_base = sigma.array().square().matrix().asDiagonal();
+    const int a = layout_.attitude.index, b = layout_.base.index;
+    P_.block<3, 3>(b, b) = P_base;
+    P_.block<3, 3>(a, a) += P_base;
+    P_.block<3, 3>(a, b) = -P_base;
+    P_.block<3, 3>(b, a) = -P_base;
+  }
   for (const auto& cb : layout_.coefficients)
     for (int k = 0; k < cb.block.size; ++k) {
       const auto c = static_cast<std::size_t>(cb.catalog[static_cast<std::size_t>(k)]);
@@ -72,9 +93,6 @@ Calibrator::Calibrator(PlanTimeline timeline, const Site& site, const Calibrator
       P_(cb.block.index + k, cb.block.index + k) = s0 * s0;
       prior_sigma_[c] = s0;
     }
-  if (o_.initial_model) model_ = *o_.initial_model;
-  if (o_.static_from == CalibratorOptions::StaticFrom::Data)
-    detector_.emplace(o_.noise, o_.detector);
 }
 
 void Calibrator::push(const ImuSample& s) {
@@ -124,10 +142,12 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot_ra
                          const Eigen::Vector3d& f_dot_raw, const Eigen::Vector3d& f_ddot_raw) {
   current_ = s;
   if (!started_) {
-    nav_.reset(NavState::at_rest(s.has_table && o_.use_table_angles
-                                     ? table_.C_b_n({s.table_outer, s.table_inner})
-                                     : dwells_.front().C_b_n_known,
-                                 site_));
+    nav_.reset(NavState::at_rest(
+        C_base_ *
+            (s.has_table && o_.use_table_angles ? table_.C_b_n({s.table_outer, s.table_inner})
+                                                : dwells_.front().C_b_n_known) *
+            dcm_from_rotvec(o_.start_mounting_b),
+        site_));
     started_ = true;
     if (pending_error_.size() > 0) inject_error(pending_error_);
   }
@@ -178,6 +198,7 @@ void Calibrator::inject_error(const Eigen::VectorXd& dx) {
   }
   NavState x = nav_.state();
   sinscal::inject_error(layout_, site_terms_, dx, x, model_);
+  inject_base_error(layout_, dx, C_base_);
   nav_.correct(x);
   pending_error_.resize(0);
 }
@@ -221,7 +242,7 @@ void Calibrator::update(double t_plan) {
       o_.attitude == CalibratorOptions::AttitudeUpdates::Every ||
       (o_.attitude == CalibratorOptions::AttitudeUpdates::First && dwell->index == 1);
   if (attitude_wanted && dwell->index > attitude_dwell_done_) {
-    m.append(known_attitude(layout_, x, dwell_attitude(*dwell), o_.attitude_sigma));
+    m.append(known_attitude(layout_, x, dwell_attitude(*dwell), o_.attitude_sigma, C_base_));
     attitude_dwell_done_ = dwell->index;
   }
   apply(m);
@@ -232,11 +253,26 @@ void Calibrator::apply(const Measurement& m) {
   const int r = m.rows(), n = layout_.size;
   const Eigen::Map<const Eigen::VectorXd> z(m.z.data(), r);
   const Eigen::VectorXd R = Eigen::Map<const Eigen::VectorXd>(m.sigma.data(), r).array().square();
-  // H selects states: H P is rows of P, H P H^T a submatrix (no products with H).
+  // H's rows are a state or a difference of two: H P is (differences of) rows of P, X H^T
+  // (differences of) columns of X (no products with H).
+  auto rows_of = [&](const Eigen::MatrixXd& X, Eigen::MatrixXd& out) {
+    for (int i = 0; i < r; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      out.row(i) = X.row(m.states[k]);
+      if (m.minus_states[k] >= 0) out.row(i) -= X.row(m.minus_states[k]);
+    }
+  };
+  auto columns_of = [&](const Eigen::MatrixXd& X, Eigen::MatrixXd& out) {
+    for (int j = 0; j < r; ++j) {
+      const auto k = static_cast<std::size_t>(j);
+      out.col(j) = X.col(m.states[k]);
+      if (m.minus_states[k] >= 0) out.col(j) -= X.col(m.minus_states[k]);
+    }
+  };
   Eigen::MatrixXd HP(r, n);
-  for (int i = 0; i < r; ++i) HP.row(i) = P_.row(m.states[static_cast<std::size_t>(i)]);
+  rows_of(P_, HP);
   Eigen::MatrixXd S(r, r);
-  for (int j = 0; j < r; ++j) S.col(j) = HP.col(m.states[static_cast<std::size_t>(j)]);
+  columns_of(HP, S);
   S.diagonal() += R;
   const Eigen::LLT<Eigen::MatrixXd> llt(S);
   if (llt.info() != Eigen::Success)
@@ -253,11 +289,13 @@ void Calibrator::apply(const Measurement& m) {
   // X (I - K H)^T = X - (X H^T) K^T.
   const Eigen::MatrixXd IKH_P = P_ - K * HP;
   Eigen::MatrixXd IKH_P_Ht(n, r);
-  for (int j = 0; j < r; ++j) IKH_P_Ht.col(j) = IKH_P.col(m.states[static_cast<std::size_t>(j)]);
+  columns_of(IKH_P, IKH_P_Ht);
   P_ = IKH_P - IKH_P_Ht * K.transpose() + K * R.asDiagonal() * K.transpose();
   P_ = 0.5 * (P_ + P_.transpose());
   NavState x = nav_.state();
-  feed_back(layout_, site_terms_, K * z, x, model_);
+  const Eigen::VectorXd dx = K * z;
+  feed_back(layout_, site_terms_, dx, x, model_);
+  feed_back_base(layout_, dx, C_base_);
   // Keep the coning/sculling memory: the correction is tiny and the increments unchanged.
   nav_.correct(x);
 }

@@ -48,6 +48,13 @@ constexpr double kDefaultTableAttitudeSigma = 2.5 * units::arcsec;
 /// Start of the navigation: attitude about the plan's start orientation (the body frame may
 /// differ from the table's by the mounting), velocity and position at rest on the site.
 constexpr double kDefaultStartAttitudeSigma = 0.5 * units::deg;
+/// Prior 1-sigma of the table base attitude (docs/conventions.md "Table base and mounting"):
+/// level (about North and East) and heading (about Down) of a table set up on its site.
+constexpr double kBaseLevelPriorSigma = 1.0 * units::deg;
+constexpr double kBaseHeadingPriorSigma = 5.0 * units::deg;
+/// The base heading is estimated when the gyro bias prior is below this fraction of the Earth
+/// rate (the gyros then find North); otherwise it is the plan's, to the table's accuracy.
+constexpr double kNorthSeekingBiasRatio = 0.1;
 constexpr double kStartVelocitySigma = 1e-3;  // m/s
 constexpr double kStartPositionSigma = 1e-2;  // m
 
@@ -68,7 +75,16 @@ struct CalibratorOptions {
   bool zero_velocity_in_motion = true;
   double motion_velocity_sigma = 1e-4;                 // m/s
   double attitude_sigma = kDefaultTableAttitudeSigma;  // rad, table attitude
-  double static_margin = 0.5;                          // s: updates only this far inside a dwell
+  /// The table base attitude estimated (states of the layout; only with attitude updates): the
+  /// attitude updates then measure the attitude relative to the base.
+  bool base_attitude = true;
+  /// The base attitude to start from (rotation vector, rad, NED: C_b_n_true = R(base) C_b_n of
+  /// the table), e.g. from an alignment (filter/alignment.hpp); the prior is centred on it.
+  Eigen::Vector3d initial_base_n = Eigen::Vector3d::Zero();
+  /// Without attitude updates (body frame = accelerometer triad): the start attitude is the
+  /// plan's turned by this mounting (rotation vector of C_b_p, rad), e.g. the alignment's.
+  Eigen::Vector3d start_mounting_b = Eigen::Vector3d::Zero();
+  double static_margin = 0.5;  // s: updates only this far inside a dwell
   /// 1-sigma of the start attitude about the plan's start orientation; zero: 0.5 deg. Not the
   /// table's attitude_sigma: the first attitude update measures the same table error again, and
   /// without attitude updates the body frame is the accelerometer triad's, which differs from
@@ -166,6 +182,8 @@ class Calibrator {
   const StaticDetector* detector() const { return detector_ ? &*detector_ : nullptr; }
   /// The navigator's state (the filter's reference trajectory).
   const NavState& navigation() const { return nav_.state(); }
+  /// The table base attitude's estimate (identity when not estimated nor given).
+  const Eigen::Matrix3d& base() const { return C_base_; }
   /// The error dynamics accumulated since the last covariance propagation.
   const ErrorPropagator& propagator() const { return propagator_; }
   /// Adds a known error `dx` (layout's states, the error-state convention of
@@ -180,6 +198,7 @@ class Calibrator {
   /// The known attitude of a dwell: the table's angles when the log has them, else the plan's.
   Eigen::Matrix3d dwell_attitude(const PlanDwell& dwell);
   void apply(const Measurement& m);
+  void initialize_covariance();
 
   std::vector<PlanDwell> dwells_;
   Site site_;
@@ -187,6 +206,7 @@ class Calibrator {
   CalibratorOptions o_;
   StateLayout layout_;
   ImuErrorModel model_;
+  Eigen::Matrix3d C_base_ = Eigen::Matrix3d::Identity();  // the base attitude's estimate
   Strapdown nav_;
   ErrorPropagator propagator_;
   bool started_ = false;

@@ -10,6 +10,7 @@
 #include <memory>
 #include <sstream>
 
+#include "models/attitude.hpp"
 #include "models/coefficient_families.hpp"
 
 namespace sinscal {
@@ -171,7 +172,7 @@ void check_against_plan(const Calibrator& kf, const PlanTimeline& timeline,
 std::vector<UnobservableDirection> unobservable_directions(const Calibrator& kf,
                                                            std::vector<CoefficientEstimate>& est) {
   const StateLayout& l = kf.layout();
-  const int m = l.size - l.nav_size;
+  const int m = l.coefficient_states();
   std::vector<int> catalog;
   for (const auto& cb : l.coefficients)
     catalog.insert(catalog.end(), cb.catalog.begin(), cb.catalog.end());
@@ -179,7 +180,7 @@ std::vector<UnobservableDirection> unobservable_directions(const Calibrator& kf,
   for (int k = 0; k < m; ++k)
     d(k) = 1.0 / est[static_cast<std::size_t>(catalog[static_cast<std::size_t>(k)])].prior_sigma;
   const Eigen::MatrixXd M =
-      d.asDiagonal() * kf.covariance().bottomRightCorner(m, m) * d.asDiagonal();
+      d.asDiagonal() * kf.covariance().block(l.nav_size, l.nav_size, m, m) * d.asDiagonal();
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(M);
   std::vector<UnobservableDirection> out;
   const auto& cat = coefficient_catalog();
@@ -236,6 +237,16 @@ void summarize(const Calibrator& kf, const PlanTimeline& timeline, const KalmanR
   r.has_targets = !run.sigma_targets.empty();
   r.above_target = above_target(r.estimates, run.sigma_targets);
   r.table_attitude_updates = kf.table_attitude_updates();
+  InstallationResult& in = r.installation;
+  in.base_estimated = StateLayout::on(kf.layout().base);
+  in.base_n = rotvec_from_dcm(kf.base());
+  if (in.base_estimated)
+    in.base_sigma_n = kf.covariance().diagonal().segment<3>(kf.layout().base.index).cwiseSqrt();
+  in.mounting_estimated = !kf.layout().accel_triad_frame;
+  if (in.mounting_estimated) {
+    in.mounting_b = mounting_of(kf.model());
+    in.mounting_sigma_b = mounting_sigma(kf.layout(), kf.covariance());
+  }
   r.dwells = static_cast<int>(timeline.dwells.size());
   r.model = kf.model();
   if (const StaticDetector* detector = kf.detector()) {
@@ -285,6 +296,63 @@ KalmanRun run_pass(const Session& session, const CalibratorOptions& options, Sam
   return r;
 }
 
+// The prior 1-sigma of a coefficient under the options (SI).
+double prior_of(const CalibratorOptions& o, const std::string& name) {
+  const auto& cat = coefficient_catalog();
+  for (std::size_t c = 0; c < cat.size(); ++c)
+    if (cat[c].name == name)
+      return o.initial_sigma.size() > c && o.initial_sigma[c] > 0.0
+                 ? o.initial_sigma[c]
+                 : coefficient_family_info(cat[c].family).default_prior;
+  return 0.0;
+}
+
+double largest_prior(const CalibratorOptions& o, const std::string& family) {
+  double out = 0.0;
+  for (const auto& c : coefficient_catalog())
+    if (c.family == family) out = std::max(out, prior_of(o, c.name));
+  return out;
+}
+
+// The alignment from the session's dwells; the options start from it when it is significant.
+CalibratorOptions aligned(const Session& session, const CalibratorOptions& options,
+                          InstallationResult& in) {
+  const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
+  std::vector<AlignmentDwell> means;
+  try {
+    // Bad samples left out of the means; the filter's pass reports them (stop or skip).
+    LogReader reader(session.log);
+    reader.skip_bad_samples([](const BadSampleError&) {});
+    means = dwell_means(reader, timeline, options.time_offset, options.static_margin);
+  } catch (const std::runtime_error&) {
+    return options;  // a log the filter's pass will refuse, with the reason
+  }
+  const double linear_a =
+      std::max(largest_prior(options, "accel.scale"), largest_prior(options, "accel.misalignment"));
+  const double linear_g =
+      std::max(largest_prior(options, "gyro.scale"), largest_prior(options, "gyro.misalignment"));
+  const Earth& earth = Earth::wgs84();
+  const Alignment a =
+      align(means, session.site, linear_a * earth.gravity_n(session.site.lat_rad, 0.0).norm(),
+            linear_g * earth.omega_ie_n(session.site.lat_rad).norm());
+  in.alignment = a;
+  const double threshold = std::max(
+      kAlignmentThreshold, kAlignmentPriorMultiple * largest_prior(options, "accel.misalignment"));
+  CalibratorOptions o = options;
+  if (!a.valid || std::max(a.mounting_b.norm(), a.base_n.norm()) <= threshold) return o;
+  in.alignment_applied = true;
+  o.initial_base_n = a.base_n;
+  if (o.attitude == CalibratorOptions::AttitudeUpdates::None) {
+    // The body frame is the accelerometer triad's: the mounting turns the start attitude.
+    o.start_mounting_b = a.mounting_b;
+  } else {
+    // Relative to the platform the triads carry the mounting: the coefficients start there.
+    o.initial_model =
+        in_platform_frame(o.initial_model.value_or(ImuErrorModel{}), dcm_from_rotvec(a.mounting_b));
+  }
+  return o;
+}
+
 // How far the estimates moved from one pass to the next, in the later pass's sigmas, over the
 // coefficients both passes observe.
 double largest_change(const KalmanRun& now, const KalmanRun& before) {
@@ -299,9 +367,21 @@ double largest_change(const KalmanRun& now, const KalmanRun& before) {
 
 }  // namespace
 
-KalmanRun run_kalman(const Session& session, const CalibratorOptions& options, SampleSource* source,
+KalmanRun run_kalman(const Session& session, const CalibratorOptions& given, SampleSource* source,
                      const KalmanRunOptions& run) {
-  if (run.passes <= 1) return run_pass(session, options, source, run);
+  InstallationResult installation;
+  // The alignment averages the plan's dwells: not for a stream (read once) nor for dwells
+  // found in the data (the plan's timing may not hold).
+  const bool align_first =
+      run.align && !source && given.static_from == CalibratorOptions::StaticFrom::Plan;
+  const CalibratorOptions options = align_first ? aligned(session, given, installation) : given;
+  auto with_installation = [&](KalmanRun r) {
+    r.installation.alignment = installation.alignment;
+    r.installation.alignment_applied = installation.alignment_applied;
+    r.options = given;
+    return r;
+  };
+  if (run.passes <= 1) return with_installation(run_pass(session, options, source, run));
   if (source) throw std::invalid_argument("several passes need the session's log, not a stream");
   // Earlier passes: quiet, no alarm (their linearization is what the later passes improve).
   KalmanRunOptions quiet = run;
@@ -318,11 +398,12 @@ KalmanRun run_kalman(const Session& session, const CalibratorOptions& options, S
     if (pass > 1) p.largest_change_over_sigma = largest_change(r, previous);
     passes.push_back(p);
     if (last || !r.stopped.empty() || !r.diverged.empty()) {  // bad input, an interruption
-      r.options = options;
       r.passes = passes;
       r.passes_requested = run.passes;
-      return r;
+      return with_installation(std::move(r));
     }
+    // The coefficients carry over; the base starts again where the first pass did (a pass
+    // far off, MEMS, leaves it anywhere, and its prior is wide enough).
     o.initial_model = r.model;
     previous = std::move(r);
   }

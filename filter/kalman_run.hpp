@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "filter/installation.hpp"
 #include "filter/kalman_calibrator.hpp"
 #include "rig/log_io.hpp"
 #include "rig/session.hpp"
@@ -42,6 +43,11 @@ struct KalmanRunOptions {
   /// the profile's prior sigmas, so the last is linearized about a close estimate (large errors:
   /// MEMS). The monitor, the divergence alarm and the verdicts are those of the last pass.
   int passes = 1;
+  /// Align from the plan's dwells before the first pass (filter/installation.hpp; from the log
+  /// with the plan's timing only: not a stream, read once, nor dwells found in the data): the
+  /// alignment's mounting and base become the filter's starting point when either is beyond
+  /// kAlignmentThreshold and 3 times the accelerometer misalignments' largest prior.
+  bool align = true;
   /// Set (e.g. from a signal handler) to stop reading: the run ends as if the log ended there,
   /// with `interrupted` and the estimates so far.
   const std::atomic<bool>* stop = nullptr;
@@ -109,6 +115,7 @@ struct KalmanRun {
   };
   std::vector<Pass> passes;  // several passes only
   int passes_requested = 1;
+  InstallationResult installation;
 };
 
 /// Runs the filter over `source` (the session's log when null; several passes need the log).

@@ -19,9 +19,11 @@
 
 namespace sinscal {
 
-/// z = H x + v, v ~ N(0, diag(sigma^2)); row i observes state `states[i]` (H = selection).
+/// z = H x + v, v ~ N(0, diag(sigma^2)); row i observes state `states[i]` minus state
+/// `minus_states[i]` when that is not -1 (H: +1 and -1 entries).
 struct Measurement {
   std::vector<int> states;
+  std::vector<int> minus_states;  // one per row, -1: none
   std::vector<double> z;
   std::vector<double> sigma;
   int rows() const { return static_cast<int>(states.size()); }
@@ -37,9 +39,17 @@ Measurement zero_velocity(const StateLayout& layout, const NavState& x, double s
 /// The known position of the site (the table does not move).
 Measurement known_position(const StateLayout& layout, const NavState& x, const Site& site,
                            double sigma);
-/// The attitude the table gives (C_b_n_known), per axis of the navigation frame.
+/// The attitude the table gives (C_b_n_known, relative to the table's base), per axis of the
+/// navigation frame. With the base attitude in the layout, the attitude in the navigation frame
+/// is C_base C_b_n_known (C_base: the base's estimate) and the rows observe phi_n - d_base.
 Measurement known_attitude(const StateLayout& layout, const NavState& x,
-                           const Eigen::Matrix3d& C_b_n_known, double sigma);
+                           const Eigen::Matrix3d& C_b_n_known, double sigma,
+                           const Eigen::Matrix3d& C_base = Eigen::Matrix3d::Identity());
+/// The base estimate that carries the estimated error `dx` (its base block): C_base <- R(d_base)
+/// C_base; inject_base_error() is its inverse. Nothing without a base block.
+void feed_back_base(const StateLayout& layout, const Eigen::VectorXd& dx, Eigen::Matrix3d& C_base);
+void inject_base_error(const StateLayout& layout, const Eigen::VectorXd& dx,
+                       Eigen::Matrix3d& C_base);
 
 /// The navigation state and model that carry the error `dx` (layout's states) on top of the true
 /// ones: the inverse of feed_back(). Tests and Monte Carlo use it to inject known errors.

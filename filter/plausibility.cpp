@@ -5,6 +5,8 @@
 #include <sstream>
 
 #include "filter/closed_form.hpp"
+#include "filter/installation.hpp"
+#include "filter/kalman_calibrator.hpp"
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"
 #include "rig/session.hpp"
@@ -18,6 +20,9 @@ constexpr double kDwellEdgeFraction = 0.1;
 // Floors of the bounds: a table may sit a few degrees off level or off the plan's heading, and
 // the IMU on its platform up to 2 deg off (docs/conventions.md).
 constexpr double kMinDirection = 5.0 * units::deg;
+// What the calibration admits (a base 3 sigma off level, the largest mounting) must pass it.
+static_assert(kAdmittedMounting + 3.0 * kBaseLevelPriorSigma <= kMinDirection * (1.0 + 1e-12),
+              "the gate's gravity-direction floor refuses installations the calibration admits");
 constexpr double kMinSpecificForce = 1e-3 * units::g0;
 constexpr double kMinRateFraction = 0.05;  // of the Earth rate
 // A ratio of measured to expected magnitude this close to a unit factor names the unit.

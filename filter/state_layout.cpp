@@ -61,6 +61,7 @@ StateLayout StateLayout::make(const StateLayoutOptions& o) {
     cb.block.size = static_cast<int>(cb.catalog.size());
     if (cb.block.size > 0) l.coefficients.push_back(cb);
   }
+  if (o.base_attitude) add(l.base, 3);
   l.size = next;
   return l;
 }

@@ -6,7 +6,10 @@
 // one block per coefficient family of the family table (models/coefficient_families.hpp), in its
 // order: base families always, extended ones when switched on (sensor profile or `--terms`).
 // Coefficients fixed by a convention (the accelerometer-triad body frame, a reference lever arm)
-// are not states.
+// are not states. Last, when on, the table base attitude (3, rad, NED: a random constant, not an
+// IMU coefficient; docs/conventions.md "Table base and mounting"): the coefficient states are
+// [nav_size, nav_size + coefficient_states()).
+
 #pragma once
 
 #include <set>
@@ -42,6 +45,9 @@ struct StateLayoutOptions {
   bool accel_triad_frame = false;
   /// Further coefficients fixed at zero by a stated convention (e.g. a reference lever arm).
   std::vector<std::string> fixed;
+  /// The table base attitude as states (the table-attitude updates then measure the attitude
+  /// relative to the base).
+  bool base_attitude = false;
 
   bool on(const std::string& family) const;
   /// Switches an extended family; throws std::invalid_argument for an unknown or base family.
@@ -72,6 +78,9 @@ struct StateLayout {
     std::vector<int> catalog;  // coefficient_catalog() index of each state of the block
   };
   std::vector<CoefficientBlock> coefficients;  // family-table order, on families only
+  /// The table base attitude's error (true minus estimated rotation vector, rad, NED), after the
+  /// coefficients; off (size 0) unless StateLayoutOptions::base_attitude.
+  Block base{-1, 0};
   int size = 0;
   int nav_size = 0;  // the navigation errors come first: states [0, nav_size)
   bool accel_triad_frame = false;
@@ -85,6 +94,8 @@ struct StateLayout {
   /// Coefficient blocks that are on, with the catalog family each one holds.
   const std::vector<CoefficientBlock>& coefficient_blocks() const { return coefficients; }
   static bool on(const Block& b) { return b.size > 0; }
+  /// Number of coefficient states (they follow the navigation errors).
+  int coefficient_states() const { return size - nav_size - base.size; }
   /// Catalog indices of the coefficients fixed at zero by a convention (not states).
   const std::vector<int>& fixed_by_convention() const { return fixed; }
 };

@@ -35,11 +35,15 @@ Eigen::Vector3d TriadErrors::invert_step(const Eigen::Vector3d& y, const Eigen::
 
 Eigen::Vector3d ImuErrorModel::size_effect(const Eigen::Vector3d& omega_ib_b,
                                            const Eigen::Vector3d& omega_dot_ib_b) const {
+  // Each accelerometer measures the specific force at its proof mass along its own sensitive
+  // axis, row i of the linear part: a rotation of the triad (a mounting) carries it exactly.
   Eigen::Vector3d out;
+  const Eigen::Matrix3d A = accel.linear();
   for (int i = 0; i < 3; ++i) {
     const Eigen::Vector3d r = accel_lever_arm_b.col(i);
-    out(i) =
-        r.isZero(0.0) ? 0.0 : (omega_dot_ib_b.cross(r) + omega_ib_b.cross(omega_ib_b.cross(r)))(i);
+    out(i) = r.isZero(0.0)
+                 ? 0.0
+                 : A.row(i).dot(omega_dot_ib_b.cross(r) + omega_ib_b.cross(omega_ib_b.cross(r)));
   }
   return out;
 }
@@ -117,7 +121,14 @@ void ImuErrorModel::jacobian(const KinematicSample& s, const Eigen::Vector3d& f_
   // only in TriadErrors::apply, size_effect and the g-sensitivity product. A gyro coefficient
   // enters only the gyro outputs, an accelerometer one only the accelerometer outputs (the
   // finite-difference test of the Jacobian checks this too).
+  // The accelerometers' linear part and lever arms stay the model's: the size effect is measured
+  // along each accelerometer's sensitive axis (row i of the linear part), bilinear in the two, so
+  // a lever arm's column carries the row (a mounting makes it a rotation of degrees) and a linear
+  // column the size effect. Every other term is additive: its column does not depend on them.
   ImuErrorModel zero;
+  zero.accel.scale = accel.scale;
+  zero.accel.misalignment = accel.misalignment;
+  zero.accel_lever_arm_b = accel_lever_arm_b;
   const auto& slots = coefficient_slots();
   J.setZero(6, static_cast<Eigen::Index>(columns.size()));
   const Eigen::Vector3d g0 = zero.gyro_output(s), a0 = zero.accel_output(s);
@@ -135,11 +146,13 @@ void ImuErrorModel::jacobian(const KinematicSample& s, const Eigen::Vector3d& f_
         J.col(col).head<3>() = zero.gyro_output(s) - g0;
         *value = 0.0;
         break;
-      case CoefficientSlot::Output::Accel:
-        *value = 1.0;
+      case CoefficientSlot::Output::Accel: {
+        const double held = *value;
+        *value = held + 1.0;
         J.col(col).tail<3>() = zero.accel_output(s) - a0;
-        *value = 0.0;
+        *value = held;
         break;
+      }
     }
   }
 }
@@ -223,6 +236,20 @@ ImuErrorModel in_accel_triad_frame(const ImuErrorModel& model, Eigen::Matrix3d* 
   out.gyro_g_sensitivity = model.gyro_g_sensitivity * Q;
   out.accel_lever_arm_b = Q.transpose() * model.accel_lever_arm_b;
   if (C_a_b) *C_a_b = Q;
+  return out;
+}
+
+ImuErrorModel in_platform_frame(const ImuErrorModel& model, const Eigen::Matrix3d& C_b_p) {
+  ImuErrorModel out = model;
+  auto split = [](TriadErrors& t, const Eigen::Matrix3d& linear) {
+    t.scale = linear.diagonal() - Eigen::Vector3d::Ones();
+    t.misalignment = linear;
+    t.misalignment.diagonal().setZero();
+  };
+  split(out.accel, model.accel.linear() * C_b_p.transpose());
+  split(out.gyro, model.gyro.linear() * C_b_p.transpose());
+  out.gyro_g_sensitivity = model.gyro_g_sensitivity * C_b_p.transpose();
+  out.accel_lever_arm_b = C_b_p * model.accel_lever_arm_b;
   return out;
 }
 

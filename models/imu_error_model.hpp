@@ -89,7 +89,8 @@ class ImuErrorModel {
   Eigen::Vector3d gyro_output(const KinematicSample& s) const;
   /// Accelerometer output for the kinematics at the accelerometer sampling instant (t - tau).
   Eigen::Vector3d accel_output(const KinematicSample& s) const;
-  /// Size-effect term added to the accelerometer outputs (m/s^2).
+  /// Size-effect term added to the accelerometer outputs (m/s^2): accelerometer i's
+  /// dw/dt x r_i + w x (w x r_i) along its sensitive axis, row i of accel.linear().
   Eigen::Vector3d size_effect(const Eigen::Vector3d& omega_ib_b,
                               const Eigen::Vector3d& omega_dot_ib_b) const;
   /// Inverse of the model for time-aligned outputs: solves for omega_ib_b and f_ib_b.
@@ -134,6 +135,13 @@ class ImuErrorModel {
 /// order in the misalignments). `C_a_b` (optional) receives the rotation from the new frame to
 /// the old body frame: x_b = C_a_b x_a.
 ImuErrorModel in_accel_triad_frame(const ImuErrorModel& model, Eigen::Matrix3d* C_a_b = nullptr);
+
+/// The same sensors described in the table platform's axes when the IMU sits on the platform
+/// with the mounting rotation C_b_p (x_b = C_b_p^T x_p): the misalignments relative to the
+/// platform include the mounting (docs/conventions.md "Table base and mounting"). Exact for the
+/// linear part of both triads (A_p = A_b C_b_p^T); g-sensitivity and lever arms are rotated
+/// (G C_b_p^T, C_b_p r); K2 and asymmetry keep their values (second order in the mounting).
+ImuErrorModel in_platform_frame(const ImuErrorModel& model, const Eigen::Matrix3d& C_b_p);
 
 /// The same sensors with the IMU reference point moved to the proof mass of accelerometer `axis`
 /// (0, 1, 2): every inner lever arm relative to that one's, which becomes zero (the convention

@@ -91,6 +91,44 @@ nlohmann::ordered_json kalman_method(const KalmanRun& r) {
   return m;
 }
 
+nlohmann::ordered_json angles_arcsec(const Eigen::Vector3d& v) {
+  return {v.x() / units::arcsec, v.y() / units::arcsec, v.z() / units::arcsec};
+}
+
+// The table base and the IMU's mounting (docs/formats.md "installation").
+nlohmann::ordered_json installation_section(const InstallationResult& in) {
+  nlohmann::ordered_json j;
+  nlohmann::ordered_json base = {{"estimated", in.base_estimated}};
+  if (in.base_estimated) {
+    base["level_north_arcsec"] = in.base_n.x() / units::arcsec;
+    base["level_east_arcsec"] = in.base_n.y() / units::arcsec;
+    base["heading_arcsec"] = in.base_n.z() / units::arcsec;
+    base["sigma_arcsec"] = angles_arcsec(in.base_sigma_n);
+  }
+  j["base"] = base;
+  nlohmann::ordered_json mounting = {{"estimated", in.mounting_estimated}};
+  if (in.mounting_estimated) {
+    mounting["rotation_vector_arcsec"] = angles_arcsec(in.mounting_b);
+    mounting["angle_deg"] = in.mounting_b.norm() / units::deg;
+    mounting["sigma_arcsec"] = angles_arcsec(in.mounting_sigma_b);
+    mounting["from"] = "polar decomposition of the accelerometer matrix";
+  }
+  j["mounting"] = mounting;
+  if (in.alignment) {
+    const Alignment& a = *in.alignment;
+    nlohmann::ordered_json al = {
+        {"valid", a.valid}, {"dwells", a.dwells}, {"applied", in.alignment_applied}};
+    if (a.valid) {
+      al["base_arcsec"] = angles_arcsec(a.base_n);
+      al["base_sigma_arcsec"] = angles_arcsec(a.base_sigma_n);
+      al["mounting_arcsec"] = angles_arcsec(a.mounting_b);
+      al["mounting_sigma_arcsec"] = angles_arcsec(a.mounting_sigma_b);
+    }
+    j["alignment"] = al;
+  }
+  return j;
+}
+
 nlohmann::ordered_json kalman_convergence(const KalmanRun& r) {
   nlohmann::ordered_json conv = {{"targets", r.has_targets},
                                  {"converged", r.converged_at.has_value()}};
@@ -110,6 +148,7 @@ nlohmann::ordered_json result_sections(const KalmanRun& r) {
   d["method"] = kalman_method(r);
   d["consistency"] = {{"nis_per_dof", r.nis_per_dof}, {"samples", r.samples}};
   d["convergence"] = kalman_convergence(r);
+  d["installation"] = installation_section(r.installation);
   if (r.detected) {
     // Where the data were static against where the plan says: the log's timing, measured.
     nlohmann::ordered_json dwells = nlohmann::ordered_json::array();
@@ -188,7 +227,9 @@ nlohmann::ordered_json result_sections(const ClosedFormReport& r) {
                           {"parameters", r.stage2.parameters.size()},
                           {"unobservable_directions", r.stage2.unobservable_directions},
                           {"chi2_per_dof", r.stage2.chi2_per_dof},
-                          {"dof", r.stage2.dof}};
+                          {"dof", r.stage2.dof},
+                          {"base_attitude_parameters", r.stage2.base_estimated ? 3 : 0}};
+  d["installation"] = installation_section(r.installation);
   return d;
 }
 

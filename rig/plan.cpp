@@ -528,6 +528,18 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
                   st.pause);
     }
   }
+  if (errors.has_installation_errors()) {
+    // C_b_n_true = R(base) C_b_n R(mounting): nav-fixed axes turn with the base, body-fixed axes
+    // are seen from the mounted IMU.
+    const Eigen::Matrix3d C_base = dcm_from_rotvec(errors.base_n());
+    const Eigen::Matrix3d C_b_p = dcm_from_rotvec(errors.mounting_b);
+    for (auto& s : segments) {
+      s.C_b_n_start = C_base * s.C_b_n_start * C_b_p;
+      s.axis_n = C_base * s.axis_n;
+      s.axis_b = C_b_p.transpose() * s.axis_b;
+    }
+    for (auto& d : dwells) d.C_b_n_true = C_base * d.C_b_n_true * C_b_p;
+  }
   return Motion(site, std::move(segments), std::move(dwells));
 }
 

@@ -87,6 +87,18 @@ struct TableErrors {
   double start_sigma = -1.0;       // rad, start attitude of rotation plans (< 0: angle_sigma)
   double non_orthogonality = 0.0;  // rad
   std::uint64_t seed = 0;
+  /// The table's base: a constant rotation of the whole table in the navigation frame,
+  /// C_b_n_true = R(base) C_b_n(plan), R(base) = dcm_from_rotvec(base_n()) (docs/conventions.md
+  /// "Table base and mounting"). Level about North and East, heading about Down (rad).
+  double base_level_north = 0.0;
+  double base_level_east = 0.0;
+  double base_heading = 0.0;
+  /// The IMU's mounting on the platform: C_b_p = dcm_from_rotvec(mounting_b), the rotation vector
+  /// of the IMU's axes relative to the platform's nominal ones (rad, body axes):
+  /// C_b_n_true = C_p_n C_b_p.
+  Eigen::Vector3d mounting_b = Eigen::Vector3d::Zero();
+  Eigen::Vector3d base_n() const { return {base_level_north, base_level_east, base_heading}; }
+  bool has_installation_errors() const { return base_n().norm() > 0.0 || mounting_b.norm() > 0.0; }
 };
 
 class IniFile;
@@ -96,7 +108,9 @@ class IniFile;
 /// file, line and key.
 Site read_site(const IniFile& ini);
 
-/// The motion a plan commands at `site`; with table errors, the truth differs from the plan.
+/// The motion a plan commands at `site`; with table errors, the truth differs from the plan (the
+/// base and mounting rotate the true attitude only: the dwells' known attitudes and the table's
+/// angles stay the plan's).
 Motion build_motion(const Plan& plan, const Site& site, const TableErrors& errors = {});
 
 }  // namespace sinscal

@@ -114,7 +114,11 @@ SimulatedSession simulate_session(const std::string& out_dir, const SessionSimul
   if (!r.plan.has_site)
     throw ConfigError(spec.plan_path + ": the plan has no [site] for the simulation");
   r.profile = SensorProfile::load(spec.data_sensor_path);
-  r.truth = spec.perfect ? ImuErrorModel{} : r.profile.draw(derive_seed(spec.seed, 1));
+  // The sensors' own errors (in the IMU's axes, what the simulator applies) and the truth an
+  // estimator must find: the same sensors relative to the platform, the mounting included.
+  const ImuErrorModel sensor_errors =
+      spec.perfect ? ImuErrorModel{} : r.profile.draw(derive_seed(spec.seed, 1));
+  r.truth = in_platform_frame(sensor_errors, dcm_from_rotvec(spec.table.mounting_b));
   const Motion motion = build_motion(r.plan, r.plan.site, spec.table);
   r.duration = motion.duration();
   r.dwells = motion.dwells().size();
@@ -125,7 +129,7 @@ SimulatedSession simulate_session(const std::string& out_dir, const SessionSimul
   so.gyro_range = r.profile.gyro_range;
   so.accel_range = r.profile.accel_range;
   so.table_angles = spec.table_angles;
-  ImuSimulator sim(motion, r.truth, r.profile.noise, so);
+  ImuSimulator sim(motion, sensor_errors, r.profile.noise, so);
 
   std::filesystem::create_directories(out_dir);
   LogWriter log(out_dir + "/imu.csv", spec.rate_hz, spec.table_angles);
@@ -153,7 +157,8 @@ SimulatedSession simulate_session(const std::string& out_dir, const SessionSimul
   }
   write_truth_json(out_dir + "/truth.json", r.truth,
                    "simulate --plan " + spec.plan_path + " --sensor " + spec.data_sensor_path +
-                       " --seed " + std::to_string(spec.seed) + (so.noise ? "" : " (no noise)"));
+                       " --seed " + std::to_string(spec.seed) + (so.noise ? "" : " (no noise)"),
+                   &spec.table);
   char site[256];
   std::snprintf(
       site, sizeof site, "latitude = %.12g deg\nlongitude = %.12g deg\nheight = %.12g m\n",
@@ -169,14 +174,22 @@ SimulatedSession simulate_session(const std::string& out_dir, const SessionSimul
   return r;
 }
 
-void write_truth_json(const std::string& path, const ImuErrorModel& model,
-                      const std::string& note) {
+void write_truth_json(const std::string& path, const ImuErrorModel& model, const std::string& note,
+                      const TableErrors* table) {
   nlohmann::ordered_json j;
   if (!note.empty()) j["note"] = note;
   auto& c = j["coefficients"];
   ImuErrorModel copy = model;
   for (const auto& [info, ptr] : copy.coefficient_refs())
     c[info.name] = {{"value", *ptr / info.si_per_unit}, {"unit", info.unit}};
+  if (table) {
+    const Eigen::Vector3d m = table->mounting_b / units::deg;
+    j["installation"] = {{"base_level_north_deg", table->base_level_north / units::deg},
+                         {"base_level_east_deg", table->base_level_east / units::deg},
+                         {"base_heading_deg", table->base_heading / units::deg},
+                         {"mounting_deg", {m.x(), m.y(), m.z()}},
+                         {"mounting_angle_deg", table->mounting_b.norm() / units::deg}};
+  }
   std::ofstream out(path);
   out << j.dump(2) << "\n";
   if (!out) throw std::runtime_error(path + ": cannot write");

@@ -60,7 +60,7 @@ struct SessionSimulation {
 
 struct SimulatedSession {
   std::string session_path;  // DIR/session.ini
-  ImuErrorModel truth;
+  ImuErrorModel truth;       // relative to the platform: the mounting included (in_platform_frame)
   std::size_t samples = 0;
   std::size_t saturated = 0;  // samples clipped at the sensor range
   std::size_t dwells = 0;
@@ -74,8 +74,9 @@ struct SimulatedSession {
 SimulatedSession simulate_session(const std::string& out_dir, const SessionSimulation& spec);
 
 /// Writes the coefficients of a model (engineering units) as a truth file (the result-file
-/// schema without sigmas, docs/formats.md).
+/// schema without sigmas, docs/formats.md); with `table`, its base and mounting errors as
+/// "installation" (the coefficients are then relative to the platform, mounting included).
 void write_truth_json(const std::string& path, const ImuErrorModel& model,
-                      const std::string& note = "");
+                      const std::string& note = "", const TableErrors* table = nullptr);
 
 }  // namespace sinscal

@@ -84,7 +84,8 @@ CalibratorOptions all_on() {
   CalibratorOptions o;
   for (const auto& f : coefficient_families())
     if (!f.base) o.layout.set(f.name, true);
-  o.update_interval = 1e9;  // no update: the transition accumulates over the whole window
+  o.layout.base_attitude = true;  // the table base too (the calibrator turns it on likewise)
+  o.update_interval = 1e9;        // no update: the transition accumulates over the whole window
   o.time_offset = 0.0;
   return o;
 }
@@ -122,7 +123,7 @@ TEST_CASE("Error dynamics: every column of the transition matches the perturbed 
     for (const auto& cb : l.coefficients)
       if (j >= cb.block.index && j < cb.block.index + cb.block.size)
         return coefficient_family_info(cb.family).default_prior;  // SI
-    return 0.0;
+    return 100.0 * units::arcsec;  // the table base (rad): no effect on the navigation
   };
   const double T = window().samples.back().t - window().samples.front().t + 0.01;  // s
   const double g = InsSiteTerms::at(window().plan.site).g;
@@ -171,7 +172,7 @@ TEST_CASE("Error dynamics: every column of the transition matches the perturbed 
     ++checked;
   }
   CHECK(checked == l.size);
-  CHECK(l.size == 9 + static_cast<int>(coefficient_catalog().size()));
+  CHECK(l.size == 9 + static_cast<int>(coefficient_catalog().size()) + 3);  // + the base
 }
 
 TEST_CASE(
@@ -186,22 +187,34 @@ TEST_CASE(
   const InsSiteTerms terms = InsSiteTerms::at(site);
   const NavState x0 = ref.navigation();
   const Eigen::Matrix3d C_known = window().motion.at(74.0).C_b_n;
-  const std::vector<std::pair<std::string, std::function<Measurement(const NavState&)>>> ms = {
-      {"zero velocity", [&](const NavState& x) { return zero_velocity(l, x, 1e-3); }},
-      {"position", [&](const NavState& x) { return known_position(l, x, site, 1e-2); }},
-      {"attitude", [&](const NavState& x) { return known_attitude(l, x, C_known, 1e-5); }}};
+  // The table's base: an estimate off the identity, its error a state (the attitude update
+  // measures the attitude relative to it).
+  REQUIRE(StateLayout::on(l.base));
+  const Eigen::Matrix3d C_base0 = dcm_from_rotvec(Eigen::Vector3d(2e-5, -3e-5, 5e-5));
+  using Function = std::function<Measurement(const NavState&, const Eigen::Matrix3d&)>;
+  const std::vector<std::pair<std::string, Function>> ms = {
+      {"zero velocity",
+       [&](const NavState& x, const Eigen::Matrix3d&) { return zero_velocity(l, x, 1e-3); }},
+      {"position",
+       [&](const NavState& x, const Eigen::Matrix3d&) { return known_position(l, x, site, 1e-2); }},
+      {"attitude", [&](const NavState& x, const Eigen::Matrix3d& C_base) {
+         return known_attitude(l, x, C_known, 1e-5, C_base);
+       }}};
   for (const auto& [name, h] : ms) {
     CAPTURE(name);
-    const Measurement m0 = h(x0);
+    const Measurement m0 = h(x0, C_base0);
     const Eigen::MatrixXd H = m0.H(l.size);
     for (int j = 0; j < l.size; ++j) {
-      const double eps = j < l.velocity.index ? 1e-6 : j < l.position.index ? 1e-4 : 1e-2;
+      const bool base = j >= l.base.index && j < l.base.index + l.base.size;
+      const double eps = j < l.velocity.index || base ? 1e-6 : j < l.position.index ? 1e-4 : 1e-2;
       Eigen::VectorXd dx = Eigen::VectorXd::Zero(l.size);
       dx(j) = eps;
       NavState x = x0;
       ImuErrorModel model = window().truth;
       inject_error(l, terms, dx, x, model);
-      const Measurement m1 = h(x);
+      Eigen::Matrix3d C_base = C_base0;
+      inject_base_error(l, dx, C_base);
+      const Measurement m1 = h(x, C_base);
       for (int i = 0; i < m0.rows(); ++i) {
         const double numeric =
             (m1.z[static_cast<std::size_t>(i)] - m0.z[static_cast<std::size_t>(i)]) / eps;
@@ -238,4 +251,14 @@ TEST_CASE("Feedback: a known error injected and fed back returns the truth", "[k
   feed_back(l, terms, dx, x, model);
   CHECK(nav_difference(l, x, truth).norm() < 1e-8);
   CHECK((model.vector() - theta_truth).norm() < 1e-15);
+  // The table base: the error injected is the rotation from the estimate to the truth, and the
+  // feedback of it returns the truth.
+  REQUIRE(StateLayout::on(l.base));
+  const Eigen::Matrix3d C_base_truth = dcm_from_rotvec(Eigen::Vector3d(0.01, -0.02, 0.08));
+  Eigen::Matrix3d C_base = C_base_truth;
+  inject_base_error(l, dx, C_base);
+  CHECK((rotvec_from_dcm(C_base_truth * C_base.transpose()) - dx.segment<3>(l.base.index)).norm() <
+        1e-12);
+  feed_back_base(l, dx, C_base);
+  CHECK((C_base - C_base_truth).norm() < 1e-14);
 }
