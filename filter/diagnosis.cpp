@@ -173,6 +173,23 @@ CandidateTest separability(const StaticDesign& design, const std::vector<int>& c
 
 namespace diagnosis_detail {
 
+std::vector<int> candidate_components(const std::vector<std::string>& candidates,
+                                      const std::vector<int>& current) {
+  std::vector<std::string> families = candidates;
+  if (families.empty())
+    for (const auto& f : coefficient_families())
+      if (!f.base) families.push_back(f.name);
+  const auto& cat = coefficient_catalog();
+  std::vector<int> out;
+  for (std::size_t k = 0; k < cat.size(); ++k) {
+    const int c = static_cast<int>(k);
+    if (std::find(families.begin(), families.end(), cat[k].family) != families.end() &&
+        std::find(current.begin(), current.end(), c) == current.end())
+      out.push_back(c);
+  }
+  return out;
+}
+
 double largest_shift(const FitFigures& before, const FitFigures& after,
                      const std::vector<int>& base) {
   double worst = 0.0;
@@ -292,23 +309,6 @@ void fill_residuals(const StaticDesign& design, const std::vector<int>& paramete
   }
 }
 
-// Catalog indices of the candidate families' components not yet in the model.
-std::vector<int> candidate_components(const DiagnosisOptions& o, const std::vector<int>& current) {
-  std::vector<std::string> families = o.candidates;
-  if (families.empty())
-    for (const auto& f : coefficient_families())
-      if (!f.base) families.push_back(f.name);
-  const auto& cat = coefficient_catalog();
-  std::vector<int> out;
-  for (std::size_t k = 0; k < cat.size(); ++k) {
-    const int c = static_cast<int>(k);
-    if (std::find(families.begin(), families.end(), cat[k].family) != families.end() &&
-        std::find(current.begin(), current.end(), c) == current.end())
-      out.push_back(c);
-  }
-  return out;
-}
-
 }  // namespace
 
 namespace {
@@ -318,7 +318,7 @@ namespace {
 std::vector<CandidateTest> run_round(const StaticDesign& design, const std::vector<int>& current,
                                      const FitFigures& now, const DiagnosisOptions& o) {
   std::vector<CandidateTest> round;
-  for (int component : candidate_components(o, current)) {
+  for (int component : diagnosis_detail::candidate_components(o.candidates, current)) {
     CandidateTest c = separability(design, current, component, o);
     if (!c.separable.empty()) test_candidate(design, current, now, c);
     round.push_back(std::move(c));

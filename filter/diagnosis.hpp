@@ -117,6 +117,10 @@ CandidateTest* best_of(std::vector<CandidateTest>& round, double alpha);
 CandidateTest* choose(std::vector<CandidateTest>& round, double alpha);
 /// What could not be separated (aliased components), one entry per family.
 std::vector<CandidateTest> not_separable(const std::vector<CandidateTest>& last_round);
+/// Catalog indices of the components of `families` (empty: every extended family of the family
+/// table) not yet in `current`.
+std::vector<int> candidate_components(const std::vector<std::string>& families,
+                                      const std::vector<int>& current);
 }  // namespace diagnosis_detail
 
 /// Diagnoses the stage-1 equivalent inputs of a session, starting from `base` (its parameters:

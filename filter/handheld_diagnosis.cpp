@@ -469,23 +469,6 @@ void test_candidate(const HandheldFitter& fit, const std::vector<int>& current,
   c.base_shift_sigma = largest_shift(now, c.with, current);
 }
 
-std::vector<int> candidate_components(const HandheldDiagnosisOptions& o,
-                                      const std::vector<int>& current) {
-  std::vector<std::string> families = o.candidates;
-  if (families.empty())
-    for (const auto& f : coefficient_families())
-      if (!f.base) families.push_back(f.name);
-  const auto& cat = coefficient_catalog();
-  std::vector<int> out;
-  for (std::size_t k = 0; k < cat.size(); ++k) {
-    const int c = static_cast<int>(k);
-    if (std::find(families.begin(), families.end(), cat[k].family) != families.end() &&
-        std::find(current.begin(), current.end(), c) == current.end())
-      out.push_back(c);
-  }
-  return out;
-}
-
 // Every family's separable components together (an effect on every axis shows only partly in
 // each one alone).
 void add_family_candidates(const HandheldFitter& fit, const std::vector<int>& current,
@@ -527,7 +510,7 @@ std::vector<CandidateTest> run_round(const RoundContext& ctx, const std::vector<
   const Eigen::MatrixXd inverse = ctx.fit.design().solve(s).inverse;
   const double scale = HandheldFitter::noise_scale(now);
   std::vector<CandidateTest> round;
-  for (int component : candidate_components(ctx.o, current)) {
+  for (int component : diagnosis_detail::candidate_components(ctx.o.candidates, current)) {
     const CoefficientFamily& info = family_of(component);
     CandidateTest c = separability(ctx.fit, current, inverse, scale, component, ctx.o);
     const int needed = poses_needed(info, 1);
