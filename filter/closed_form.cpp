@@ -403,9 +403,8 @@ void split_base(Stage2Result& r, int nc) {
   r.base_estimated = true;
   r.base_n = r.theta.tail<3>();
   r.base_cov = r.cov.bottomRightCorner<3, 3>();
-  r.base_observable = r.observable[static_cast<std::size_t>(nc)] &&
-                      r.observable[static_cast<std::size_t>(nc + 1)] &&
-                      r.observable[static_cast<std::size_t>(nc + 2)];
+  const auto first = static_cast<std::size_t>(nc);
+  r.base_observable = r.observable[first] && r.observable[first + 1] && r.observable[first + 2];
   r.theta.conservativeResize(nc);
   r.cov.conservativeResize(nc, nc);
   r.observable.resize(static_cast<std::size_t>(nc));
@@ -614,8 +613,7 @@ Eigen::Matrix3d apply_alignment(const Session& session, PlanTimeline& timeline,
             kAlignmentLinearError * earth.gravity_n(session.site.lat_rad, session.site.h_m).norm(),
             kAlignmentLinearError * earth.rate());
   const Alignment& a = *in.alignment;
-  if (!a.valid || std::max(a.mounting_b.norm(), a.base_n.norm()) <= kAlignmentThreshold)
-    return Eigen::Matrix3d::Identity();
+  if (!a.significant(kAlignmentThreshold)) return Eigen::Matrix3d::Identity();
   in.alignment_applied = true;
   const Eigen::Matrix3d C_base = dcm_from_rotvec(a.base_n);
   for (auto& d : timeline.dwells) d.C_b_n_known = C_base * d.C_b_n_known;

@@ -34,6 +34,10 @@ constexpr double kAdmittedMounting = 2.0 * units::deg;
 /// installation errors runs exactly as before.
 constexpr double kAlignmentThreshold = 0.1 * units::deg;
 constexpr double kAlignmentPriorMultiple = 3.0;
+/// ... and only when that angle is beyond this many of its own sigmas: a plan with few dwells
+/// (three orientations) determines the alignment poorly, and starting from a 2-sigma mounting
+/// made the filter worse than starting from the plan.
+constexpr double kAlignmentSignificance = 3.0;
 /// Without a sensor profile (the closed form): what the alignment's fit leaves unmodelled, the
 /// triads' scale factors and own misalignments, relative to the input (100 ppm, 20 arcsec: a
 /// navigation-grade unit), and the time left out at each end of a dwell (the table settling).
@@ -56,6 +60,14 @@ std::vector<AlignmentDwell> dwell_means(SampleSource& source, const PlanTimeline
 
 struct Alignment {
   bool valid = false;  // enough dwells of different attitudes to determine it
+  /// Whether the estimators start from it: valid, and its mounting or base angle beyond
+  /// `threshold` (rad) and beyond kAlignmentSignificance of its sigma.
+  bool significant(double threshold) const {
+    const auto beyond = [threshold](const Eigen::Vector3d& v, const Eigen::Vector3d& s) {
+      return v.norm() > threshold && v.norm() > kAlignmentSignificance * s.norm();
+    };
+    return valid && (beyond(mounting_b, mounting_sigma_b) || beyond(base_n, base_sigma_n));
+  }
   Eigen::Vector3d base_n = Eigen::Vector3d::Zero();  // rad, rotation vector (N, E level; D)
   Eigen::Vector3d base_sigma_n = Eigen::Vector3d::Zero();
   Eigen::Vector3d mounting_b = Eigen::Vector3d::Zero();  // rad, rotation vector of C_b_p

@@ -339,7 +339,7 @@ CalibratorOptions aligned(const Session& session, const CalibratorOptions& optio
   const double threshold = std::max(
       kAlignmentThreshold, kAlignmentPriorMultiple * largest_prior(options, "accel.misalignment"));
   CalibratorOptions o = options;
-  if (!a.valid || std::max(a.mounting_b.norm(), a.base_n.norm()) <= threshold) return o;
+  if (!a.significant(threshold)) return o;
   in.alignment_applied = true;
   o.initial_base_n = a.base_n;
   if (o.attitude == CalibratorOptions::AttitudeUpdates::None) {
