@@ -179,7 +179,7 @@ TEST_CASE("Alignment: base and mounting from the dwells' mean outputs", "[instal
 }
 
 TEST_CASE("Issue 10.5: a start 0.5 deg off in roll or 1 deg in heading is estimated, not absorbed",
-          "[installation][kalman]") {
+          "[long][installation][kalman]") {
   // Measured before the base states: attitude updates at every dwell left the gyro biases 16
   // sigma off (roll) and 32 sigma (heading) with nothing flagged; zero velocity only stayed
   // within 3 sigma.
@@ -211,7 +211,7 @@ TEST_CASE("Issue 10.5: a start 0.5 deg off in roll or 1 deg in heading is estima
 
 TEST_CASE(
     "Base up to 1 deg level and 5 deg heading, mounting up to 2 deg: every mode within 3 sigma",
-    "[installation][kalman]") {
+    "[long][installation][kalman]") {
   struct Case {
     const char* plan;
     const char* profile;
@@ -240,7 +240,7 @@ TEST_CASE(
 }
 
 TEST_CASE("Closed form: a base below the alignment's threshold is stage 2's alone",
-          "[installation][closed_form]") {
+          "[long][installation][closed_form]") {
   // 0.08 deg of heading and 0.05 deg of level: the alignment is not applied, stage 2 finds the
   // base from the Earth rate (heading) and gravity (level) by itself.
   TableErrors t;
@@ -256,7 +256,7 @@ TEST_CASE("Closed form: a base below the alignment's threshold is stage 2's alon
 
 TEST_CASE(
     "Closed form: base up to 1 deg level and 5 deg heading, mounting up to 2 deg, within 3 sigma",
-    "[installation][closed_form]") {
+    "[long][installation][closed_form]") {
   for (const char* plan : {"seed8.ini", "rot19.ini"})
     for (std::uint64_t seed : {31, 32}) {
       const TableErrors t = drawn_installation(seed);
