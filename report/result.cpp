@@ -303,7 +303,8 @@ ResultCoefficients read_result_json(const std::string& path) {
 
 ResultCoefficients load_truth(const Session& session, bool accel_triad_frame,
                               const std::string& lever_arm_reference) {
-  if (session.truth_file.empty() || !std::filesystem::exists(session.truth_file)) return {};
+  std::error_code ec;
+  if (session.truth_file.empty() || !std::filesystem::exists(session.truth_file, ec)) return {};
   ResultCoefficients truth = read_result_json(session.truth_file);
   if (!accel_triad_frame && lever_arm_reference.empty()) return truth;
   ImuErrorModel m;

@@ -189,7 +189,8 @@ std::vector<LogSegment> read_segments(const IniFile& ini, const std::string& bas
     LogSegment seg;
     seg.file = path_in(base_dir, files[i]);
     seg.dwell = dwells[i];
-    if (!std::filesystem::is_regular_file(seg.file))
+    std::error_code ec;  // a name the system refuses (too long, ...) reads as "no such file"
+    if (!std::filesystem::is_regular_file(seg.file, ec))
       throw ConfigError(ini.where("log.files") + "'" + files[i] + "': no such file (" + seg.file +
                         ")");
     if (seg.dwell > static_cast<int>(plan_dwells.size()))

@@ -204,7 +204,8 @@ Site read_site(const IniFile& ini) {
 
 Plan Plan::load(const std::string& path) {
   if (path.empty()) throw ConfigError("plan: no file name given");
-  if (std::filesystem::is_directory(path))
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
     throw ConfigError(path + ": is a directory, not a plan file");
   std::ifstream in(path);
   if (!in) throw ConfigError(path + ": cannot open plan file");

@@ -37,7 +37,8 @@ std::string named_file(const IniFile& ini, const std::string& dir, const std::st
   const std::string value = ini.get_string(key);
   if (value.empty()) throw ConfigError(ini.where(key) + "no file name given");
   std::string file = path_in(dir, value);
-  if (must_exist && !std::filesystem::is_regular_file(file))
+  std::error_code ec;  // a name the system refuses (too long, ...) reads as "no such file"
+  if (must_exist && !std::filesystem::is_regular_file(file, ec))
     throw ConfigError(ini.where(key) + "'" + value + "': no such file (" + file + ")");
   return file;
 }

@@ -149,6 +149,13 @@ TEST_CASE("Session: keys, sections, files and the site checked with file and lin
              Contains("session.ini:3: 'session.plan'") && Contains("no file name given"));
   CHECK_THAT(error_of("plan = nope.ini", ""),
              Contains("session.ini:3: 'session.plan'") && Contains("'nope.ini': no such file"));
+  // A file name the system refuses (longer than NAME_MAX; found by fuzzing): a ConfigError
+  // naming the key, not a std::filesystem error.
+  const std::string too_long(5000, 'n');
+  CHECK_THAT(error_of("plan = " + too_long, ""),
+             Contains("session.ini:3: 'session.plan'") && Contains("no such file"));
+  CHECK_THAT(error_of("plan = plan.ini\ntruth = " + too_long, ""),
+             Contains("session.ini:4: 'session.truth'") && Contains("no such file"));
   CHECK_THAT(error_of("plan = plan.ini\ntruth = truth.json", ""),
              Contains("session.ini:4: 'session.truth'") && Contains("no such file"));
   CHECK_THAT(error_of("plan = plan.ini\nsensor =", ""),
