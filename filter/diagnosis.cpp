@@ -268,6 +268,33 @@ std::vector<CandidateTest> not_separable(const std::vector<CandidateTest>& last_
   return out;
 }
 
+void run_rounds(DiagnosisReport& rep, int max_findings, const RoundRunner& run_round,
+                const BestCompleter& complete) {
+  std::vector<int> current = rep.initial_parameters;
+  FitFigures now = rep.initial;
+  while (static_cast<int>(rep.findings.size()) < max_findings) {
+    std::vector<CandidateTest> round = run_round(current, now);
+    CandidateTest* best = choose(round, rep.alpha);
+    if (best && complete) {
+      std::vector<int> with = current;
+      with.insert(with.end(), best->separable.begin(), best->separable.end());
+      complete(with, *best);
+    }
+    rep.rounds.push_back(round);
+    if (!best) break;
+    if (!best->named) {
+      rep.ambiguous.push_back(*best);
+      break;
+    }
+    rep.findings.push_back(*best);
+    current.insert(current.end(), best->separable.begin(), best->separable.end());
+    now = best->with;
+  }
+  if (!rep.rounds.empty()) rep.not_separable = not_separable(rep.rounds.back());
+  rep.final_parameters = current;
+  rep.final_fit = now;
+}
+
 }  // namespace diagnosis_detail
 
 using namespace diagnosis_detail;
@@ -359,26 +386,11 @@ DiagnosisReport diagnose_static(const std::vector<EquivalentInputs>& inputs, con
         std::to_string(rep.inputs) + " equivalent inputs, not more than the model's " +
         std::to_string(base.parameters.size()) + " coefficients: too few dwells to test anything");
   const StaticDesign design(inputs, site, base.table);
-  std::vector<int> current = base.parameters;
-  rep.initial_parameters = current;
-  rep.initial = figures(design, current);
-  FitFigures now = rep.initial;
-  while (static_cast<int>(rep.findings.size()) < o.max_findings) {
-    std::vector<CandidateTest> round = run_round(design, current, now, o);
-    const CandidateTest* best = choose(round, o.alpha);
-    rep.rounds.push_back(round);
-    if (!best) break;
-    if (!best->named) {
-      rep.ambiguous.push_back(*best);
-      break;
-    }
-    rep.findings.push_back(*best);
-    current.insert(current.end(), best->separable.begin(), best->separable.end());
-    now = best->with;
-  }
-  if (!rep.rounds.empty()) rep.not_separable = not_separable(rep.rounds.back());
-  rep.final_parameters = current;
-  rep.final_fit = now;
+  rep.initial_parameters = base.parameters;
+  rep.initial = figures(design, rep.initial_parameters);
+  run_rounds(rep, o.max_findings, [&](const std::vector<int>& current, const FitFigures& now) {
+    return run_round(design, current, now, o);
+  });
   for (const auto& in : inputs) rep.residuals.push_back(residual_of(in, site, base.table));
   fill_residuals(design, rep.initial_parameters, rep.residuals, false);
   fill_residuals(design, rep.final_parameters, rep.residuals, true);

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -121,6 +122,16 @@ std::vector<CandidateTest> not_separable(const std::vector<CandidateTest>& last_
 /// table) not yet in `current`.
 std::vector<int> candidate_components(const std::vector<std::string>& families,
                                       const std::vector<int>& current);
+/// Tests every candidate against the model `current` whose fit is `now`.
+using RoundRunner = std::function<std::vector<CandidateTest>(const std::vector<int>& current,
+                                                             const FitFigures& now)>;
+/// Adds figures to the round's best candidate (`with`: the model with it) before it is recorded.
+using BestCompleter = std::function<void(const std::vector<int>& with, CandidateTest& best)>;
+/// The rounds of a diagnosis, from rep.initial_parameters and rep.initial: the round's named best
+/// joins the model, until no candidate is significant, the best is ambiguous or `max_findings`
+/// are named. Fills rounds, findings, ambiguous, not_separable, final_parameters and final_fit.
+void run_rounds(DiagnosisReport& rep, int max_findings, const RoundRunner& run_round,
+                const BestCompleter& complete = {});
 }  // namespace diagnosis_detail
 
 /// Diagnoses the stage-1 equivalent inputs of a session, starting from `base` (its parameters:

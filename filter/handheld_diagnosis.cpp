@@ -622,37 +622,20 @@ HandheldDiagnosis diagnose_handheld(const std::vector<ImuReading>& readings,
       design.columns().begin() + static_cast<std::ptrdiff_t>(cal.covariance_names.size()));
   rep.initial_parameters = current;
   rep.initial = fit.figures(current, true);
-  FitFigures now = rep.initial;
   const RoundContext ctx{fit, o, static_cast<int>(design.poses()), &out.refused};
-  while (static_cast<int>(rep.findings.size()) < o.max_findings) {
-    std::vector<CandidateTest> round = run_round(ctx, current, now);
-    CandidateTest* best = choose(round, o.alpha);
-    if (best) {
-      const std::vector<int> with = [&] {
-        std::vector<int> w = current;
-        w.insert(w.end(), best->separable.begin(), best->separable.end());
-        return w;
-      }();
-      const FitFigures h = fit.figures(with, true);
-      best->with.heldout = h.heldout;
-      best->with.heldout_accel = h.heldout_accel;
-      best->with.heldout_gyro = h.heldout_gyro;
-      best->with.heldout_turn = h.heldout_turn;
-      best->with.heldout_dwells = h.heldout_dwells;
-    }
-    rep.rounds.push_back(round);
-    if (!best) break;
-    if (!best->named) {
-      rep.ambiguous.push_back(*best);
-      break;
-    }
-    rep.findings.push_back(*best);
-    current.insert(current.end(), best->separable.begin(), best->separable.end());
-    now = best->with;
-  }
-  if (!rep.rounds.empty()) rep.not_separable = not_separable(rep.rounds.back());
-  rep.final_parameters = current;
-  rep.final_fit = now;
+  // The held-out figures (a refit per held-out pose) only for the round's best.
+  auto add_heldout = [&](const std::vector<int>& with, CandidateTest& best) {
+    const FitFigures h = fit.figures(with, true);
+    best.with.heldout = h.heldout;
+    best.with.heldout_accel = h.heldout_accel;
+    best.with.heldout_gyro = h.heldout_gyro;
+    best.with.heldout_turn = h.heldout_turn;
+    best.with.heldout_dwells = h.heldout_dwells;
+  };
+  run_rounds(
+      rep, o.max_findings,
+      [&](const std::vector<int>& cur, const FitFigures& now) { return run_round(ctx, cur, now); },
+      add_heldout);
   fill_pose_residuals(fit, rep.initial_parameters, out.poses, false);
   fill_pose_residuals(fit, rep.final_parameters, out.poses, true);
   if (o.noise) noise_of_longest_pose(readings, cal, o, out);

@@ -8,6 +8,7 @@
 #include "models/coefficient_families.hpp"
 #include "models/imu_error_model.hpp"
 #include "models/units.hpp"
+#include "report/diagnosis_common.hpp"
 #include "report/diagnosis_kalman_report.hpp"
 #include "report/gnuplot.hpp"
 #include "report/output.hpp"
@@ -15,84 +16,16 @@
 
 namespace sinscal {
 
-namespace {
+using namespace diagnosis_output;
 
-using json = nlohmann::ordered_json;
+namespace {
 
 // Residual units: the accelerometers' in ug, the gyros' in deg/h.
 constexpr double kAccelUnit = units::ug;
 constexpr double kGyroUnit = units::deg_per_h;
 
-json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-
-json rms_json(double accel, double gyro) {
-  return {{"accel", finite_or_null(accel / kAccelUnit)},
-          {"gyro", finite_or_null(gyro / kGyroUnit)}};
-}
-
-json heldout_json(const FitFigures& f) {
-  return {{"sigmas", finite_or_null(f.heldout)},
-          {"accel", finite_or_null(f.heldout_accel / kAccelUnit)},
-          {"gyro", finite_or_null(f.heldout_gyro / kGyroUnit)}};
-}
-
-std::vector<std::string> names(const std::vector<int>& catalog) {
-  std::vector<std::string> out;
-  out.reserve(catalog.size());
-  for (int c : catalog) out.push_back(coefficient_catalog()[static_cast<std::size_t>(c)].name);
-  return out;
-}
-
-// The candidate's own coefficients from its fit.
-json candidate_coefficients(const CandidateTest& c) {
-  ResultCoefficients all = result_coefficients(c.with.fit), own;
-  for (const auto& n : names(c.separable)) own[n] = all[n];
-  return coefficients_json(own);
-}
-
-json statistic_json(const CandidateTest& c, double alpha) {
-  return {{"name", "likelihood_ratio"},
-          {"test", c.test},
-          {"value", c.likelihood_ratio},
-          {"dof", c.dof},
-          {"p_value", c.p_value},
-          {"threshold", c.threshold},
-          {"alpha", alpha}};
-}
-
-json finding_json(const CandidateTest& c, const FitFigures& before, double alpha) {
-  return {{"effect", c.family},
-          {"coefficients", candidate_coefficients(c)},
-          {"statistic", statistic_json(c, alpha)},
-          {"bic_change", c.with.bic - before.bic},
-          {"log_likelihood_change", c.with.log_likelihood - before.log_likelihood},
-          {"residual_unit", {{"accel", "ug"}, {"gyro", "deg/h"}}},
-          {"residual_rms_before", rms_json(before.accel_rms, before.gyro_rms)},
-          {"residual_rms_after", rms_json(c.with.accel_rms, c.with.gyro_rms)},
-          {"heldout_rms_before", heldout_json(before)},
-          {"heldout_rms_after", heldout_json(c.with)},
-          {"base_shift_sigma", c.base_shift_sigma}};
-}
-
-json candidate_json(const CandidateTest& c, double alpha) {
-  json j = {{"effect", c.family}, {"separable", names(c.separable)}};
-  if (!c.aliased.empty()) j["not_separable"] = names(c.aliased);
-  if (c.dof > 0) {
-    j["statistic"] = statistic_json(c, alpha);
-    j["significant"] = c.significant;
-    j["heldout_rms_after"] = heldout_json(c.with);
-  }
-  j["named"] = c.named;
-  return j;
-}
-
-json fit_json(const FitFigures& f) {
-  return {{"chi2_per_dof", f.fit.chi2_per_dof},
-          {"dof", f.fit.dof},
-          {"rank", f.fit.rank},
-          {"residual_rms", rms_json(f.accel_rms, f.gyro_rms)},
-          {"heldout_rms", heldout_json(f)}};
-}
+// The table diagnosis' residual units.
+ResidualUnits table_units() { return {"ug", "deg/h", kAccelUnit, kGyroUnit, false}; }
 
 json dwell_json(const DwellResidual& d) {
   auto triple = [](const Eigen::Matrix<double, 6, 1>& v, int at, double unit) {
@@ -109,19 +42,6 @@ json dwell_json(const DwellResidual& d) {
           {"gyro_before_deg_per_h", triple(d.before, G, kGyroUnit)},
           {"gyro_after_deg_per_h", triple(d.after, G, kGyroUnit)},
           {"gyro_sigma_deg_per_h", triple(d.sigma, G, kGyroUnit)}};
-}
-
-std::string fixed(double v, int decimals) {
-  if (!std::isfinite(v)) return "-";
-  char b[64];
-  std::snprintf(b, sizeof b, "%.*f", decimals, v);
-  return b;
-}
-
-std::string sci(double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.3g", v);
-  return b;
 }
 
 }  // namespace
@@ -142,44 +62,14 @@ json diagnosis_json(const DiagnosisReport& r, const std::string& session) {
                  {"alpha", r.alpha},
                  {"equivalent_inputs", r.inputs},
                  {"initial_model", names(r.initial_parameters)}};
-  json findings = json::array();
-  const FitFigures* before = &r.initial;
-  for (const auto& f : r.findings) {
-    findings.push_back(finding_json(f, *before, r.alpha));
-    before = &f.with;
-  }
-  j["findings"] = findings;
-  json hidden = json::array();
-  for (const auto& c : r.not_separable)
-    hidden.push_back({{"effect", c.family},
-                      {"components", names(c.aliased)},
-                      {"aliased_with", c.aliased_with},
-                      {"separated_by", c.separated_by}});
-  j["not_separable"] = hidden;
-  json ambiguous = json::array();
-  for (const auto& a : r.ambiguous) {
-    json effects = json::array({a.family});
-    json separated = json::array({a.separated_by});
-    for (const auto& b : a.ambiguous_with) {
-      effects.push_back(b.family);
-      separated.push_back(b.separated_by);
-    }
-    ambiguous.push_back({{"effects", effects},
-                         {"components", names(a.separable)},
-                         {"statistic", statistic_json(a, r.alpha)},
-                         {"separated_by", separated}});
-  }
-  j["ambiguous"] = ambiguous;
-  json rounds = json::array();
-  for (const auto& round : r.rounds) {
-    json one = json::array();
-    for (const auto& c : round) one.push_back(candidate_json(c, r.alpha));
-    rounds.push_back(one);
-  }
-  j["rounds"] = rounds;
-  j["initial"] = fit_json(r.initial);
+  const ResidualUnits u = table_units();
+  j["findings"] = findings_json(u, r);
+  j["not_separable"] = not_separable_json(r);
+  j["ambiguous"] = ambiguous_json(r);
+  j["rounds"] = rounds_json(u, r);
+  j["initial"] = fit_json(u, r.initial);
   j["calibration"] = {{"coefficients", coefficients_json(result_coefficients(r.final_fit.fit))},
-                      {"fit", fit_json(r.final_fit)}};
+                      {"fit", fit_json(u, r.final_fit)}};
   json dwells = json::array();
   for (const auto& d : r.residuals) dwells.push_back(dwell_json(d));
   j["dwells"] = dwells;
@@ -212,33 +102,11 @@ std::string diagnosis_markdown(const DiagnosisReport& r, const std::string& sess
       << fixed(f.with.heldout, 2) << " |\n"
       << "| BIC | " << fixed(before->bic, 1) << " | " << fixed(f.with.bic, 1) << " |\n\n"
       << "Base coefficients moved by up to " << fixed(f.base_shift_sigma, 1)
-      << " of their sigmas.\n\n| coefficient | value | sigma | unit |\n|---|---|---|---|\n";
-    const ResultCoefficients all = result_coefficients(f.with.fit);
-    for (const auto& n : names(f.separable)) {
-      const auto& c = all.at(n);
-      m << "| " << n << " | " << sci(c.value) << " | " << (c.sigma ? sci(*c.sigma) : "-") << " | "
-        << c.unit << " |\n";
-    }
-    m << "\n";
+      << " of their sigmas.\n\n";
+    markdown_coefficients(m, f);
     before = &f.with;
   }
-  for (const auto& a : r.ambiguous) {
-    m << "## Ambiguous\n\nA significant residual (likelihood ratio " << fixed(a.likelihood_ratio, 1)
-      << ", p = " << sci(a.p_value) << ") that " << a.family;
-    for (const auto& b : a.ambiguous_with) m << " and " << b.family;
-    m << " explain equally well on this plan: neither is named. Separated by: " << a.separated_by;
-    for (const auto& b : a.ambiguous_with) m << "; " << b.separated_by;
-    m << ".\n\n";
-  }
-  m << "## Not separable on this plan\n\n";
-  if (r.not_separable.empty()) m << "Every candidate is separable.\n";
-  for (const auto& c : r.not_separable) {
-    m << "- **" << c.family << "** (";
-    const auto n = names(c.aliased);
-    for (std::size_t i = 0; i < n.size(); ++i) m << (i ? ", " : "") << n[i];
-    m << ")" << (c.aliased_with.empty() ? "" : ": aliased with " + c.aliased_with)
-      << ". Separated by: " << c.separated_by << ".\n";
-  }
+  markdown_ambiguous_and_hidden(m, r, "plan", "this plan");
   m << "\nPer-dwell residuals before and after: `residuals.png`; every figure: `diagnosis.json`.\n";
   return m.str();
 }

@@ -13,116 +13,26 @@
 
 namespace sinscal {
 
+using namespace diagnosis_output;
+
 namespace {
-
-using json = nlohmann::ordered_json;
-
-json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-
-std::string fixed(double v, int decimals) {
-  if (!std::isfinite(v)) return "-";
-  char b[64];
-  std::snprintf(b, sizeof b, "%.*f", decimals, v);
-  return b;
-}
-
-std::string sci(double v) {
-  if (!std::isfinite(v)) return "-";
-  char b[64];
-  std::snprintf(b, sizeof b, "%.3g", v);
-  return b;
-}
-
-std::vector<std::string> names(const std::vector<int>& catalog) {
-  std::vector<std::string> out;
-  out.reserve(catalog.size());
-  for (int c : catalog) out.push_back(coefficient_catalog()[static_cast<std::size_t>(c)].name);
-  return out;
-}
-
-json rms_json(const HandheldUnits& u, double accel, double gyro, double turn) {
-  return {{"accel", num(accel / u.accel_si)},
-          {"gyro", num(gyro / u.gyro_si)},
-          {"turn", num(turn / units::deg)}};
-}
-
-json heldout_json(const HandheldUnits& u, const FitFigures& f) {
-  return {{"sigmas", num(f.heldout)},
-          {"accel", num(f.heldout_accel / u.accel_si)},
-          {"gyro", num(f.heldout_gyro / u.gyro_si)},
-          {"turn", num(f.heldout_turn / units::deg)}};
-}
-
-json unit_json(const HandheldUnits& u) {
-  return {{"accel", u.accel}, {"gyro", u.gyro}, {"turn", "deg"}};
-}
-
-json statistic_json(const CandidateTest& c, double alpha) {
-  return {{"name", "likelihood_ratio"},
-          {"test", c.test},
-          {"value", c.likelihood_ratio},
-          {"dof", c.dof},
-          {"p_value", c.p_value},
-          {"threshold", c.threshold},
-          {"alpha", alpha}};
-}
-
-json candidate_coefficients(const CandidateTest& c) {
-  ResultCoefficients all = result_coefficients(c.with.fit), own;
-  for (const auto& n : names(c.separable)) own[n] = all[n];
-  return coefficients_json(own);
-}
-
-json finding_json(const HandheldUnits& u, const CandidateTest& c, const FitFigures& before,
-                  double alpha) {
-  return {{"effect", c.family},
-          {"coefficients", candidate_coefficients(c)},
-          {"statistic", statistic_json(c, alpha)},
-          {"bic_change", c.with.bic - before.bic},
-          {"log_likelihood_change", c.with.log_likelihood - before.log_likelihood},
-          {"residual_unit", unit_json(u)},
-          {"residual_rms_before", rms_json(u, before.accel_rms, before.gyro_rms, before.turn_rms)},
-          {"residual_rms_after", rms_json(u, c.with.accel_rms, c.with.gyro_rms, c.with.turn_rms)},
-          {"heldout_rms_before", heldout_json(u, before)},
-          {"heldout_rms_after", heldout_json(u, c.with)},
-          {"base_shift_sigma", c.base_shift_sigma}};
-}
-
-json candidate_json(const HandheldUnits& u, const CandidateTest& c, double alpha) {
-  json j = {{"effect", c.family}, {"separable", names(c.separable)}};
-  if (!c.aliased.empty()) j["not_separable"] = names(c.aliased);
-  if (c.dof > 0) {
-    j["statistic"] = statistic_json(c, alpha);
-    j["significant"] = c.significant;
-    j["heldout_rms_after"] = heldout_json(u, c.with);
-  }
-  j["named"] = c.named;
-  return j;
-}
-
-json fit_json(const HandheldUnits& u, const FitFigures& f) {
-  return {{"chi2_per_dof", num(f.fit.chi2_per_dof)},
-          {"dof", f.fit.dof},
-          {"rank", f.fit.rank},
-          {"residual_rms", rms_json(u, f.accel_rms, f.gyro_rms, f.turn_rms)},
-          {"heldout_rms", heldout_json(u, f)}};
-}
 
 json pose_json(const HandheldUnits& u, const PoseResidual& p) {
   auto triple = [&](const Eigen::Vector3d& v) {
-    return json::array({num(v(0) / u.gyro_si), num(v(1) / u.gyro_si), num(v(2) / u.gyro_si)});
+    return json::array({finite_or_null(v(0) / u.gyro_si), finite_or_null(v(1) / u.gyro_si),
+                        finite_or_null(v(2) / u.gyro_si)});
   };
   return {{"pose", p.pose},
           {"t_s", p.t_mid},
-          {"gravity_before", num(p.gravity_before / u.accel_si)},
-          {"gravity_after", num(p.gravity_after / u.accel_si)},
-          {"gravity_sigma", num(p.gravity_sigma / u.accel_si)},
+          {"gravity_before", finite_or_null(p.gravity_before / u.accel_si)},
+          {"gravity_after", finite_or_null(p.gravity_after / u.accel_si)},
+          {"gravity_sigma", finite_or_null(p.gravity_sigma / u.accel_si)},
           {"rate_before", triple(p.rate_before)},
           {"rate_after", triple(p.rate_after)},
           {"rate_sigma", triple(p.rate_sigma)},
-          {"turn_before_deg", num(p.turn_before / units::deg)},
-          {"turn_after_deg", num(p.turn_after / units::deg)},
-          {"turn_sigma_deg", num(p.turn_sigma / units::deg)}};
+          {"turn_before_deg", finite_or_null(p.turn_before / units::deg)},
+          {"turn_after_deg", finite_or_null(p.turn_after / units::deg)},
+          {"turn_sigma_deg", finite_or_null(p.turn_sigma / units::deg)}};
 }
 
 // Noise candidates: B in the rate unit, K in the rate unit per sqrt(s) (gyros deg/h and
@@ -139,42 +49,15 @@ json noise_json(const HandheldDiagnosis& d) {
     arr.push_back({{"effect", c.effect},
                    {"channel", c.channel},
                    {"significant", c.significant},
-                   {"value", num(c.value / unit)},
-                   {"sigma", num(c.sigma / unit)},
+                   {"value", finite_or_null(c.value / unit)},
+                   {"sigma", finite_or_null(c.sigma / unit)},
                    {"unit", uname},
                    {"tau_s", c.significant ? json(c.tau) : json(nullptr)},
-                   {"largest_ratio_to_white", num(c.ratio)},
+                   {"largest_ratio_to_white", finite_or_null(c.ratio)},
                    {"confidence", c.confidence},
                    {"cluster_times", c.points}});
   }
   return arr;
-}
-
-json not_separable_json(const DiagnosisReport& r) {
-  json hidden = json::array();
-  for (const auto& c : r.not_separable)
-    hidden.push_back({{"effect", c.family},
-                      {"components", names(c.aliased)},
-                      {"aliased_with", c.aliased_with},
-                      {"separated_by", c.separated_by}});
-  return hidden;
-}
-
-json ambiguous_json(const DiagnosisReport& r) {
-  json ambiguous = json::array();
-  for (const auto& a : r.ambiguous) {
-    json effects = json::array({a.family});
-    json separated = json::array({a.separated_by});
-    for (const auto& b : a.ambiguous_with) {
-      effects.push_back(b.family);
-      separated.push_back(b.separated_by);
-    }
-    ambiguous.push_back({{"effects", effects},
-                         {"components", names(a.separable)},
-                         {"statistic", statistic_json(a, r.alpha)},
-                         {"separated_by", separated}});
-  }
-  return ambiguous;
 }
 
 json validation_json(const HandheldUnits& u, const HandheldDiagnosisInput& in) {
@@ -184,15 +67,17 @@ json validation_json(const HandheldUnits& u, const HandheldDiagnosisInput& in) {
         {{"session", before.session},
          {"poses", before.poses.size()},
          {"turns", before.turns.size()},
-         {"gravity_rms_nominal", num(before.gravity_rms_nominal / u.accel_si)},
-         {"gravity_rms_before", num(before.gravity_rms_calibrated / u.accel_si)},
-         {"gravity_rms_after", num(after.gravity_rms_calibrated / u.accel_si)},
-         {"rate_rms_before", num(before.rate_rms_calibrated / u.gyro_si)},
-         {"rate_rms_after", num(after.rate_rms_calibrated / u.gyro_si)},
-         {"turn_rms_before_deg",
-          before.turns.empty() ? json(nullptr) : num(before.turn_rms_calibrated / units::deg)},
-         {"turn_rms_after_deg",
-          before.turns.empty() ? json(nullptr) : num(after.turn_rms_calibrated / units::deg)}});
+         {"gravity_rms_nominal", finite_or_null(before.gravity_rms_nominal / u.accel_si)},
+         {"gravity_rms_before", finite_or_null(before.gravity_rms_calibrated / u.accel_si)},
+         {"gravity_rms_after", finite_or_null(after.gravity_rms_calibrated / u.accel_si)},
+         {"rate_rms_before", finite_or_null(before.rate_rms_calibrated / u.gyro_si)},
+         {"rate_rms_after", finite_or_null(after.rate_rms_calibrated / u.gyro_si)},
+         {"turn_rms_before_deg", before.turns.empty()
+                                     ? json(nullptr)
+                                     : finite_or_null(before.turn_rms_calibrated / units::deg)},
+         {"turn_rms_after_deg", before.turns.empty()
+                                    ? json(nullptr)
+                                    : finite_or_null(after.turn_rms_calibrated / units::deg)}});
   return arr;
 }
 
@@ -219,6 +104,7 @@ HandheldUnits handheld_units(const TableFreeResult& cal) {
   u.accel_si = coarse_accel ? 1.0 : units::ug;
   u.gyro = coarse_gyro ? "deg/s" : "deg/h";
   u.gyro_si = coarse_gyro ? units::deg_per_s : units::deg_per_h;
+  u.turns = true;
   return u;
 }
 
@@ -234,23 +120,11 @@ json handheld_diagnosis_json(const HandheldDiagnosisInput& in) {
                  {"turns", in.diagnosis.turns},
                  {"initial_model", names(r.initial_parameters)}};
   j["residual_unit"] = unit_json(u);
-  json findings = json::array();
-  const FitFigures* before = &r.initial;
-  for (const auto& f : r.findings) {
-    findings.push_back(finding_json(u, f, *before, r.alpha));
-    before = &f.with;
-  }
-  j["findings"] = findings;
+  j["findings"] = findings_json(u, r);
   j["not_separable"] = not_separable_json(r);
   j["ambiguous"] = ambiguous_json(r);
   j["noise"] = {{"pose", in.diagnosis.noise_pose}, {"candidates", noise_json(in.diagnosis)}};
-  json rounds = json::array();
-  for (const auto& round : r.rounds) {
-    json one = json::array();
-    for (const auto& c : round) one.push_back(candidate_json(u, c, r.alpha));
-    rounds.push_back(one);
-  }
-  j["rounds"] = rounds;
+  j["rounds"] = rounds_json(u, r);
   j["validation"] = validation_json(u, in);
   j["initial"] = fit_json(u, r.initial);
   j["calibration"] = calibration_json(u, r);
@@ -315,42 +189,15 @@ void markdown_findings(std::ostringstream& m, const HandheldUnits& u, const Diag
       << " (threshold " << sci(f.threshold) << ").\n\n";
     markdown_fit_table(m, u, *before, f.with);
     m << "Base coefficients moved by up to " << fixed(f.base_shift_sigma, 1)
-      << " of their sigmas.\n\n| coefficient | value | sigma | unit |\n|---|---|---|---|\n";
-    const ResultCoefficients all = result_coefficients(f.with.fit);
-    for (const auto& n : names(f.separable)) {
-      const auto& c = all.at(n);
-      m << "| " << n << " | " << sci(c.value) << " | " << (c.sigma ? sci(*c.sigma) : "-") << " | "
-        << c.unit << " |\n";
-    }
-    m << "\n";
+      << " of their sigmas.\n\n";
+    markdown_coefficients(m, f);
     before = &f.with;
   }
 }
 
 void markdown_rest(std::ostringstream& m, const HandheldDiagnosisInput& in) {
   const DiagnosisReport& r = in.diagnosis.report;
-  for (const auto& a : r.ambiguous) {
-    m << "## Ambiguous\n\nA significant residual (statistic " << fixed(a.likelihood_ratio, 1)
-      << ", p = " << sci(a.p_value) << ") that " << a.family;
-    for (const auto& b : a.ambiguous_with) m << " and " << b.family;
-    m << " explain equally well on these poses: neither is named. Separated by: " << a.separated_by;
-    for (const auto& b : a.ambiguous_with) m << "; " << b.separated_by;
-    m << ".\n\n";
-  }
-  m << "## Not separable on this session\n\n";
-  if (r.not_separable.empty()) m << "Every candidate is separable.\n";
-  for (const auto& c : r.not_separable) {
-    m << "- **" << c.family << "** (";
-    const auto n = names(c.aliased);
-    for (std::size_t i = 0; i < n.size(); ++i) m << (i ? ", " : "") << n[i];
-    const bool reason =
-        c.aliased_with.rfind("too few poses", 0) == 0 || c.aliased_with.rfind("nothing", 0) == 0;
-    m << ")"
-      << (c.aliased_with.empty() ? ""
-          : reason               ? ": " + c.aliased_with
-                                 : ": aliased with " + c.aliased_with)
-      << ". Separated by: " << c.separated_by << ".\n";
-  }
+  markdown_ambiguous_and_hidden(m, r, "session", "these poses");
   m << "\n";
   if (!in.validations.empty()) {
     const HandheldUnits u = handheld_units(in.calibration);

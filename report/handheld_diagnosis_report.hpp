@@ -11,16 +11,15 @@
 
 #include "filter/handheld_diagnosis.hpp"
 #include "filter/handheld_run.hpp"
+#include "report/diagnosis_common.hpp"
 #include "report/diagnosis_report.hpp"
 
 namespace sinscal {
 
 /// The units of the residuals of a hand-held diagnosis: the accelerometers' in ug or m/s^2 and
 /// the gyros' in deg/h or deg/s, chosen by the size of the calibration's noise; turns in deg.
-struct HandheldUnits {
-  std::string accel, gyro;
-  double accel_si = 1.0, gyro_si = 1.0;
-};
+/// Residual units of a hand-held session (turn residuals included).
+using HandheldUnits = diagnosis_output::ResidualUnits;
 HandheldUnits handheld_units(const TableFreeResult& calibration);
 
 struct HandheldDiagnosisInput {
