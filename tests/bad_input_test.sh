@@ -334,11 +334,13 @@ fixed 2 "nope.csv:0: cannot open log file" nav
 new plot-session-latitude-90; mini; cp "$base/mini/monitor.jsonl" "$d/"; set_key "$d/session.ini" latitude "90 deg"
 fixed 2 "session.ini:$L: 'site.latitude'" S plot-convergence --monitor monitor.jsonl --session session.ini --out out/c.png
 # The fuzzing run's reproducers (tests/fuzz/crashes/fuzz_session), with their log.
-for f in log-time-unit-error-without-file log-table-unit-error-without-file empty-plan-key-error-without-file; do
+for f in log-time-unit-error-without-file log-table-unit-error-without-file empty-plan-key-error-without-file \
+  plan-name-too-long; do
   new "fuzz-$f"; mini; cp "$src/tests/fuzz/crashes/fuzz_session/$f.ini" "$d/session.ini"
   case $f in
     log-time*) fixed 2 "session.ini:$(lno "$d/session.ini" '^time_unit'): 'log.time_unit'|parsec" nav ;;
     log-table*) fixed 2 "session.ini:$(lno "$d/session.ini" '^table_unit'): 'log.table_unit'|furlong" nav ;;
+    plan-name*) fixed 2 "session.ini:$(lno "$d/session.ini" '^plan'): 'session.plan'|no such file" nav ;;
     *) fixed 2 "session.ini:$(lno "$d/session.ini" '^plan'): 'session.plan'|no file name given" nav ;;
   esac
 done
