@@ -92,6 +92,7 @@ std::map<int, double> detection_sigmas(const HandheldDiagnosis& d, const std::st
 
 struct Tally {
   int runs = 0, named_first = 0, within_3_sigma = 0, ambiguous = 0, wrong = 0;
+  std::vector<double> missed_at;  // the hidden size, in the pilot's detection sigmas, of misses
 };
 
 // One hidden effect over `runs` seeds at 5-10 of its detection sigmas (a pilot session's), a
@@ -130,6 +131,7 @@ Tally monte_carlo(const std::string& family, int runs, std::uint64_t seed0,
       t.wrong += ok ? 0 : 1;
     } else {
       ++t.wrong;
+      t.missed_at.push_back(size / it->second);
       UNSCOPED_INFO(family << " seed " << seed0 + static_cast<std::uint64_t>(k) << ": first "
                            << (rep.findings.empty() ? "nothing" : rep.findings.front().family));
     }
@@ -243,6 +245,14 @@ TEST_CASE("Hand-held diagnosis Monte Carlo: hidden effects named, clean sessions
   CHECK(quiet >= 38);
   std::printf("hand-held diagnosis Monte Carlo: %.1f s\n",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+}
+
+// The issue's aim is 95 % named first; 30 seeds cannot tell 93 % from 95 %. Measured (README).
+TEST_CASE("Hand-held diagnosis measured: gyro scale asymmetry over 300 seeds", "[.][measure]") {
+  const Tally t = monte_carlo("gyro.scale_asym", 300, 4000, {});
+  for (double s : t.missed_at) std::printf("missed at %.2f detection sigmas\n", s);
+  std::printf("gyro.scale_asym: %d of %d named first, %d not named or wrong\n", t.named_first,
+              t.runs, t.wrong);
 }
 
 TEST_CASE("Hand-held diagnosis: noise candidates from the Allan deviation",
