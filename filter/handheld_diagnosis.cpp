@@ -617,11 +617,10 @@ HandheldDiagnosis diagnose_handheld(const std::vector<ImuReading>& readings,
   DiagnosisReport& rep = out.report;
   rep.alpha = o.alpha;
   rep.inputs = out.rows;
-  std::vector<int> current(
+  rep.initial_parameters.assign(
       design.columns().begin(),
       design.columns().begin() + static_cast<std::ptrdiff_t>(cal.covariance_names.size()));
-  rep.initial_parameters = current;
-  rep.initial = fit.figures(current, true);
+  rep.initial = fit.figures(rep.initial_parameters, true);
   const RoundContext ctx{fit, o, static_cast<int>(design.poses()), &out.refused};
   // The held-out figures (a refit per held-out pose) only for the round's best.
   auto add_heldout = [&](const std::vector<int>& with, CandidateTest& best) {
@@ -634,7 +633,9 @@ HandheldDiagnosis diagnose_handheld(const std::vector<ImuReading>& readings,
   };
   run_rounds(
       rep, o.max_findings,
-      [&](const std::vector<int>& cur, const FitFigures& now) { return run_round(ctx, cur, now); },
+      [&](const std::vector<int>& current, const FitFigures& now) {
+        return run_round(ctx, current, now);
+      },
       add_heldout);
   fill_pose_residuals(fit, rep.initial_parameters, out.poses, false);
   fill_pose_residuals(fit, rep.final_parameters, out.poses, true);
