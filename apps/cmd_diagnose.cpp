@@ -8,9 +8,9 @@
 #include "apps/cli.hpp"
 #include "apps/commands.hpp"
 #include "apps/diagnose.hpp"
-#include "filter/diagnosis.hpp"
-#include "filter/diagnosis_kalman.hpp"
+#include "filter/diagnosis_table.hpp"
 #include "filter/plausibility.hpp"
+#include "models/coefficient_families.hpp"
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"
 #include "report/diagnosis_report.hpp"
@@ -18,6 +18,13 @@
 namespace sinscal::cli {
 
 namespace {
+
+// An extended family of the family table.
+bool is_extended_family(const std::string& name) {
+  for (const auto& f : coefficient_families())
+    if (f.name == name) return !f.base;
+  return false;
+}
 
 const std::vector<std::string> kHandheldOnly = {
     "gravity", "pose-window", "min-pose", "edge-trim", "validate", "candidates", "pose-accel-only"};
@@ -48,61 +55,50 @@ void add_handheld_options(po::options_description& d, HandheldDiagnoseOptions& h
   // clang-format on
 }
 
-void print_diagnosis(const DiagnosisReport& r) {
-  std::printf("Calibrated model: %zu coefficients, residual chi2 per dof %.3f over %zu dwells\n",
+void print_diagnosis(const TableDiagnosis& d) {
+  const DiagnosisReport& r = d.dwells;
+  std::printf("Calibrated model: %zu coefficients, residual chi2 per dof %.3f over %zu dwells",
               r.initial_parameters.size(), r.initial.fit.chi2_per_dof, r.residuals.size());
-  if (r.findings.empty())
+  if (d.turns) std::printf("; the filter's NIS per dof %.3f", d.turns->initial_nis_per_dof);
+  std::printf("\n");
+  if (d.findings.empty())
     std::printf("Findings: none (no candidate significant at the family-wise level %g)\n", r.alpha);
-  const FitFigures* before = &r.initial;
-  for (const auto& f : r.findings) {
-    std::printf(
-        "Found %s: likelihood ratio %.1f on %d dof, p = %.3g; residual RMS %.2f -> %.2f ug, "
-        "%.4f -> %.4f deg/h; held-out %.2f -> %.2f sigma; base moved up to %.1f sigma\n",
-        f.family.c_str(), f.likelihood_ratio, f.dof, f.p_value, before->accel_rms / units::ug,
-        f.with.accel_rms / units::ug, before->gyro_rms / units::deg_per_h,
-        f.with.gyro_rms / units::deg_per_h, before->heldout, f.with.heldout, f.base_shift_sigma);
-    before = &f.with;
+  int number = 0;
+  for (const auto& f : d.findings) {
+    std::printf("%d. %s: %s\n", ++number, finding_title(f).c_str(), finding_summary(f).c_str());
+    const CoefficientFamily& info = coefficient_family_info(f.family);
+    int undetermined = 0;
+    for (const auto& c : f.coefficients) {
+      if (c.source.empty()) {
+        ++undetermined;
+        continue;
+      }
+      std::printf("     %-26s %12.4g +- %-10.3g %s\n",
+                  coefficient_catalog()[static_cast<std::size_t>(c.catalog)].name.c_str(),
+                  c.value / info.si_per_unit(), c.sigma / info.si_per_unit(), info.unit().c_str());
+    }
+    for (const auto& c : f.combinations)
+      std::printf("     %s = %.4g +- %.3g %s\n", c.text().c_str(), c.value / info.si_per_unit(),
+                  c.sigma / info.si_per_unit(), info.unit().c_str());
+    if (undetermined > 0 && f.combinations.empty())
+      std::printf("     (%d components not determined on this plan)\n", undetermined);
+    if (!f.ambiguous_with.empty()) {
+      std::printf("   Separated by: %s: %s", f.family.c_str(), f.separated_by.front().c_str());
+      for (std::size_t i = 0; i < f.ambiguous_with.size(); ++i)
+        std::printf("; %s: %s", f.ambiguous_with[i].c_str(), f.separated_by[i + 1].c_str());
+      std::printf("\n");
+    }
   }
-  for (const auto& a : r.ambiguous) {
-    std::printf("Ambiguous: a significant residual (p = %.3g) that %s", a.p_value,
-                a.family.c_str());
-    for (const auto& b : a.ambiguous_with) std::printf(" and %s", b.family.c_str());
-    std::printf(" explain equally well on this plan: neither is named\n");
-  }
-  for (const auto& c : r.not_separable)
+  for (const auto& c : r.not_separable) {
+    bool turns_tested = false;
+    if (d.turns)
+      for (const auto& round : d.turns->rounds)
+        for (const auto& k : round)
+          turns_tested = turns_tested || (k.family == c.family && k.dof > 0);
+    if (turns_tested) continue;  // the turns separate it
     std::printf("Not separable on this plan: %s (%zu of its components); separated by %s\n",
                 c.family.c_str(), c.aliased.size(), c.separated_by.c_str());
-}
-
-void print_kalman(const KalmanDiagnosis& k) {
-  std::printf("Turns (Kalman-filter innovations, NIS per dof %.3f):\n", k.initial_nis_per_dof);
-  for (const auto& f : k.findings)
-    std::printf(
-        "Found %s: W = %.1f on %d dof, p = %.3g; NIS per dof -> %.3f; base moved up to "
-        "%.1f sigma\n",
-        f.family.c_str(), f.wald, f.dof, f.p_value, f.nis_per_dof, f.base_shift_sigma);
-  if (k.findings.empty()) std::printf("Findings: none\n");
-  for (const auto& c : k.not_separable)
-    std::printf("Not separable by the filter either: %s; separated by %s\n", c.family.c_str(),
-                c.separated_by.c_str());
-}
-
-// The Kalman-filter test of the families the static dwells cannot separate.
-std::optional<KalmanDiagnosis> diagnose_turns(const Session& session, const SensorProfile& profile,
-                                              const DiagnosisReport& report, double alpha,
-                                              double table_sigma) {
-  CalibratorOptions ko = calibrator_options_from_profile(profile);
-  ko.attitude_sigma = table_sigma;
-  ko.time_offset = session.time_offset;
-  // The effects the static dwells named are part of the model the filter runs with.
-  for (const auto& f : report.findings)
-    if (!ko.layout.on(f.family)) ko.layout.set(f.family, true);
-  KalmanDiagnosisOptions ko_diag;
-  ko_diag.alpha = alpha;
-  for (const auto& c : report.not_separable)
-    if (!ko.layout.on(c.family)) ko_diag.candidates.push_back(c.family);
-  if (ko_diag.candidates.empty()) return std::nullopt;
-  return diagnose_kalman(session, ko, ko_diag);
+  }
 }
 
 }  // namespace
@@ -111,7 +107,7 @@ int cmd_diagnose(const std::vector<std::string>& args) {
   po::options_description d("sinscal diagnose options");
   std::string session_path, out_dir;
   DiagnosisOptions o;
-  double table_sigma = 2.5;
+  double table_sigma = 2.5, min_dwell = 20.0;
   // clang-format off
   d.add_options()
       ("help,h", "this help")
@@ -122,6 +118,11 @@ int cmd_diagnose(const std::vector<std::string>& args) {
        "family-wise false-alarm level of each round of candidate tests")
       ("table-sigma", po::value(&table_sigma)->default_value(2.5),
        "table attitude error per orientation and axis, 1-sigma [arcsec]")
+      ("min-dwell", po::value(&min_dwell)->default_value(20.0),
+       "shortest static dwell stage 1 takes [s] (as calibrate --method closed-form)")
+      ("prefer", po::value(&o.prefer)->multitoken()->composing(),
+       "out of an ambiguous set (effects this plan cannot tell apart), extend the model with "
+       "this family (repeatable; default: the member with the best fit)")
       ("no-plot", "write no PNG (no gnuplot needed)")
       ("no-kalman", "skip the Kalman-filter test of the effects of the turns")
       ("force", "run even when the plausibility gate fails");
@@ -142,9 +143,11 @@ int cmd_diagnose(const std::vector<std::string>& args) {
   if (!(o.alpha > 0.0 && o.alpha < 0.5)) throw UsageError("--alpha must be in (0, 0.5)");
   const Session any = Session::load(session_path, Session::PlanNeed::Optional);
   if (!any.has_plan) {
-    if (given(*vm, "table-sigma") || vm->count("force") || vm->count("no-kalman"))
-      throw UsageError("--table-sigma, --force and --no-kalman act on table sessions; " +
-                       session_path + " has no plan (a hand-held session)");
+    if (given(*vm, "table-sigma") || vm->count("force") || vm->count("no-kalman") ||
+        given(*vm, "min-dwell") || vm->count("prefer"))
+      throw UsageError(
+          "--table-sigma, --min-dwell, --prefer, --force and --no-kalman act on table sessions; " +
+          session_path + " has no plan (a hand-held session)");
     if (given(*vm, "gravity") && !(h.run.gravity >= 9.7 && h.run.gravity <= 9.9))
       throw UsageError("--gravity must be within 9.7 and 9.9 m/s^2 (the Earth's surface)");
     if (!(h.run.detector.window > 0.0 && h.run.detector.window <= 60.0) ||
@@ -165,6 +168,12 @@ int cmd_diagnose(const std::vector<std::string>& args) {
                        " has a plan");
   if (!(table_sigma > 0.0 && table_sigma < 3600.0))
     throw UsageError("--table-sigma must be above 0 and below 3600 arcsec");
+  if (!(min_dwell > 0.0 && min_dwell < 1e6)) throw UsageError("--min-dwell must be positive");
+  for (const auto& f : o.prefer) {
+    if (!is_extended_family(f))
+      throw UsageError("--prefer " + f + ": not an extended family of the family table (" +
+                       extended_terms_help() + ")");
+  }
   const Session session = Session::load(session_path);
   const DiagnosisFiles files = diagnosis_files(out_dir);
   refuse_overwrite(session_inputs(session), {{"diagnosis.json", files.json},
@@ -173,7 +182,8 @@ int cmd_diagnose(const std::vector<std::string>& args) {
                                              {"gnuplot script", files.script}});
   std::optional<SensorProfile> profile;
   if (!session.sensor_file.empty()) profile = SensorProfile::load(session.sensor_file);
-  const Stage1Options s1 = default_stage1(profile ? &*profile : nullptr);
+  Stage1Options s1 = default_stage1(profile ? &*profile : nullptr);
+  s1.min_dwell = min_dwell;
   const PlausibilityLimits limits = PlausibilityLimits::from_profile(profile ? &*profile : nullptr);
   const bool force = vm->count("force") > 0;
   PlausibilityReport gate = check_plausibility(session, limits);
@@ -182,18 +192,19 @@ int cmd_diagnose(const std::vector<std::string>& args) {
   const ClosedFormReport calibration = run_closed_form(session, s1, table);
   gate.checks.push_back(check_stage1_fit(calibration.stage1, limits, session.log.file));
   enforce(gate, force);
-  const DiagnosisReport report =
-      diagnose_static(calibration.stage1, session.site, calibration.stage2_options, o);
-  print_diagnosis(report);
-  std::optional<KalmanDiagnosis> turns;
-  if (profile && !vm->count("no-kalman")) {
-    turns = diagnose_turns(session, *profile, report, o.alpha, table.sigma);
-    if (turns) print_kalman(*turns);
+  TableDiagnosisOptions to;
+  to.dwells = o;
+  std::optional<TurnModel> turns;
+  if (profile) {
+    turns = turn_model_of(session, *profile, table.sigma);
+    turns->run_filter = vm->count("no-kalman") == 0;
   }
+  const TableDiagnosis diagnosis = diagnose_table(
+      calibration.stage1, session.site, calibration.stage2_options, to, turns ? &*turns : nullptr);
+  print_diagnosis(diagnosis);
   std::filesystem::create_directories(out_dir);
   const DiagnosisFiles written =
-      write_diagnosis(report, session.path, out_dir, vm->count("no-plot") ? "" : "gnuplot",
-                      turns ? &*turns : nullptr);
+      write_diagnosis(diagnosis, session.path, out_dir, vm->count("no-plot") ? "" : "gnuplot");
   std::printf("Written: %s, %s%s%s\n", written.json.c_str(), written.markdown.c_str(),
               written.png.empty() ? "" : ", ", written.png.c_str());
   return 0;

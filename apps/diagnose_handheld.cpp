@@ -10,6 +10,7 @@
 #include "filter/handheld_diagnosis.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/units.hpp"
+#include "report/diagnosis_common.hpp"
 #include "report/handheld_diagnosis_report.hpp"
 
 namespace sinscal::cli {
@@ -59,9 +60,9 @@ void print(const HandheldDiagnosisInput& in, const HandheldDiagnosisFiles& files
   const FitFigures* before = &r.initial;
   for (const auto& f : r.findings) {
     std::printf(
-        "Found %s: %s statistic %.1f on %d dof, p = %.3g; gravity residual %.5g -> %.5g %s, "
+        "Found %s: %s, p = %.3g; gravity residual %.5g -> %.5g %s, "
         "turns %.4f -> %.4f deg; held-out %.3f -> %.3f sigma; base moved up to %.1f sigma\n",
-        f.family.c_str(), f.test.c_str(), f.likelihood_ratio, f.dof, f.p_value,
+        f.family.c_str(), diagnosis_output::statistic_text(f).c_str(), f.p_value,
         before->accel_rms / u.accel_si, f.with.accel_rms / u.accel_si, u.accel.c_str(),
         before->turn_rms / units::deg, f.with.turn_rms / units::deg, before->heldout,
         f.with.heldout, f.base_shift_sigma);

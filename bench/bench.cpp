@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "filter/closed_form.hpp"
-#include "filter/diagnosis.hpp"
+#include "filter/diagnosis_table.hpp"
 #include "filter/diagnosis_kalman.hpp"
 #include "filter/handheld_diagnosis.hpp"
 #include "filter/handheld_run.hpp"

@@ -444,6 +444,8 @@ Stage2Result solve_stage2(const std::vector<EquivalentInputs>& inputs, const Sit
   }
   r.theta = d.asDiagonal() * pinv * d.asDiagonal() * ne.b;
   r.cov = d.asDiagonal() * pinv * d.asDiagonal();
+  r.theta_min_norm = r.theta;
+  r.cov_min_norm = r.cov;
   r.dof = ne.inputs - r.rank;
   r.chi2_per_dof = r.dof > 0 ? std::max(0.0, ne.uWu - ne.b.dot(r.theta)) / r.dof : 0.0;
   r.observable.assign(static_cast<std::size_t>(n), true);

@@ -124,6 +124,12 @@ struct Stage2Result {
   int rank = 0;
   std::vector<std::string> unobservable_directions;  // e.g. "+0.577 accel.scale.x +0.577 ..."
   std::vector<Eigen::VectorXd> null_vectors;         // in coefficient space (unit norm)
+  /// The minimum-norm solution (Jacobi-scaled) and its covariance, every entry finite: a
+  /// combination c of the coefficients orthogonal to every null vector is determined by the
+  /// data, c^T theta_min_norm with variance c^T cov_min_norm c (the coefficients first, as in
+  /// `parameters`, then the base's three when estimated).
+  Eigen::VectorXd theta_min_norm;
+  Eigen::MatrixXd cov_min_norm;
   /// Stage-2 residual: chi-square of the equivalent inputs against the solution per degree of
   /// freedom (inputs minus rank); 1 when the model explains the dwells to their sigmas.
   double chi2_per_dof = 0.0;

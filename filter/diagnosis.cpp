@@ -1,10 +1,12 @@
 #include "filter/diagnosis.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/fisher_f.hpp>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
@@ -171,6 +173,77 @@ CandidateTest separability(const StaticDesign& design, const std::vector<int>& c
 
 }  // namespace
 
+std::string DeterminedCombination::text() const {
+  std::string out;
+  const auto& cat = coefficient_catalog();
+  for (const auto& [k, w] : weights) {
+    if (std::abs(w) < 5e-4) continue;
+    char b[32];
+    std::snprintf(b, sizeof b, "%s%+.3f ", out.empty() ? "" : " ", w);
+    out += b + cat[static_cast<std::size_t>(k)].name;
+  }
+  return out.empty() ? out : out.substr(out[0] == ' ' ? 1 : 0);
+}
+
+std::vector<DeterminedCombination> determined_combinations(const Stage2Result& fit,
+                                                           const std::vector<int>& components) {
+  std::vector<Eigen::Index> at;  // positions of the components not observable one by one
+  for (int k : components) {
+    const auto it = std::find(fit.parameters.begin(), fit.parameters.end(), k);
+    if (it == fit.parameters.end()) continue;
+    const auto i = it - fit.parameters.begin();
+    if (!fit.observable[static_cast<std::size_t>(i)]) at.push_back(i);
+  }
+  if (at.empty() || fit.theta_min_norm.size() == 0) return {};
+  const auto a = static_cast<Eigen::Index>(at.size());
+  // Z: the null vectors restricted to these components; a determined combination c has Z c = 0.
+  Eigen::MatrixXd Z(static_cast<Eigen::Index>(fit.null_vectors.size()), a);
+  for (std::size_t r = 0; r < fit.null_vectors.size(); ++r)
+    for (Eigen::Index j = 0; j < a; ++j)
+      Z(static_cast<Eigen::Index>(r), j) = fit.null_vectors[r](at[static_cast<std::size_t>(j)]);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(Z, Eigen::ComputeFullV);
+  const double smax = svd.singularValues().size() ? svd.singularValues()(0) : 0.0;
+  Eigen::Index rank = 0;
+  for (Eigen::Index k = 0; k < svd.singularValues().size(); ++k)
+    if (svd.singularValues()(k) > 1e-8 * std::max(1.0, smax)) ++rank;
+  std::vector<DeterminedCombination> out;
+  for (Eigen::Index k = rank; k < a; ++k) {
+    Eigen::VectorXd c = svd.matrixV().col(k);
+    Eigen::Index lead = 0;
+    c.cwiseAbs().maxCoeff(&lead);
+    if (c(lead) < 0.0) c = -c;
+    DeterminedCombination d;
+    Eigen::VectorXd full = Eigen::VectorXd::Zero(fit.theta_min_norm.size());
+    for (Eigen::Index j = 0; j < a; ++j) {
+      const auto i = at[static_cast<std::size_t>(j)];
+      full(i) = c(j);
+      d.weights.emplace_back(fit.parameters[static_cast<std::size_t>(i)], c(j));
+    }
+    d.value = full.dot(fit.theta_min_norm);
+    d.sigma = std::sqrt(std::max(0.0, full.dot(fit.cov_min_norm * full)));
+    out.push_back(std::move(d));
+  }
+  return out;
+}
+
+double log10_chi2_tail(double x, int dof) {
+  if (dof <= 0) return 0.0;
+  if (!(x > 0.0)) return 0.0;
+  const double p = boost::math::cdf(boost::math::complement(boost::math::chi_squared(dof), x));
+  if (p > 1e-280) return std::log10(p);
+  // Q(s, y) = Gamma(s, y) / Gamma(s) ~ y^(s-1) e^-y / Gamma(s) (1 + (s-1)/y + ...), y = x/2.
+  const double s = 0.5 * dof, y = 0.5 * x;
+  const double ln = (s - 1.0) * std::log(y) - y - std::lgamma(s) + std::log1p((s - 1.0) / y);
+  return ln / std::log(10.0);
+}
+
+double log10_f_tail(double f, int dof1, int dof2) {
+  if (dof1 <= 0 || dof2 <= 0 || !(f > 0.0)) return 0.0;
+  const double p = boost::math::cdf(boost::math::complement(boost::math::fisher_f(dof1, dof2), f));
+  if (p > 1e-280) return std::log10(p);
+  return log10_chi2_tail(f * dof1, dof1);
+}
+
 namespace diagnosis_detail {
 
 std::vector<int> candidate_components(const std::vector<std::string>& candidates,
@@ -209,15 +282,20 @@ double largest_shift(const FitFigures& before, const FitFigures& after,
 void test_statistic(const FitFigures& now, CandidateTest& c) {
   const double lr = std::max(0.0, now.chi2 - c.with.chi2);
   const int dof1 = c.with.fit.dof;
+  c.likelihood_ratio = lr;
   if (c.with.chi2 <= boost::math::quantile(boost::math::chi_squared(dof1), kNoiseModelLevel)) {
     c.test = "chi2";
-    c.likelihood_ratio = lr;
+    c.statistic = lr;
+    c.dof2 = 0;
     c.p_value = boost::math::cdf(boost::math::complement(boost::math::chi_squared(c.dof), lr));
+    c.log10_p = log10_chi2_tail(lr, c.dof);
   } else {
     c.test = "F";
-    c.likelihood_ratio = lr / c.with.fit.chi2_per_dof;
-    c.p_value = boost::math::cdf(
-        boost::math::complement(boost::math::fisher_f(c.dof, dof1), c.likelihood_ratio / c.dof));
+    c.statistic = (lr / c.dof) / c.with.fit.chi2_per_dof;
+    c.dof2 = dof1;
+    c.p_value =
+        boost::math::cdf(boost::math::complement(boost::math::fisher_f(c.dof, dof1), c.statistic));
+    c.log10_p = log10_f_tail(c.statistic, c.dof, dof1);
   }
 }
 
@@ -230,8 +308,8 @@ CandidateTest* best_of(std::vector<CandidateTest>& round, double alpha) {
     c.threshold = alpha / static_cast<double>(std::max<std::ptrdiff_t>(1, tested));
     c.significant = c.dof > 0 && c.p_value < c.threshold;
     if (c.significant &&
-        (!best || c.p_value < best->p_value ||
-         (c.p_value == best->p_value && c.likelihood_ratio > best->likelihood_ratio)))
+        (!best || c.log10_p < best->log10_p ||
+         (c.log10_p == best->log10_p && c.likelihood_ratio > best->likelihood_ratio)))
       best = &c;
   }
   return best;
@@ -310,6 +388,12 @@ void test_candidate(const StaticDesign& design, const std::vector<int>& current,
   if (c.dof <= 0 || c.with.fit.dof <= 0) return;
   test_statistic(now, c);
   c.base_shift_sigma = largest_shift(now, c.with, current);
+  const auto& p = c.with.fit.parameters;
+  for (int k : c.separable) {
+    const auto at = std::find(p.begin(), p.end(), k) - p.begin();
+    if (c.with.fit.observable[static_cast<std::size_t>(at)]) c.determined.push_back(k);
+  }
+  c.combinations = determined_combinations(c.with.fit, c.separable);
 }
 
 DwellResidual residual_of(const EquivalentInputs& in, const Site& site,
@@ -372,29 +456,37 @@ std::vector<CandidateTest> run_round(const StaticDesign& design, const std::vect
 
 }  // namespace
 
-DiagnosisReport diagnose_static(const std::vector<EquivalentInputs>& inputs, const Site& site,
-                                const Stage2Options& base, const DiagnosisOptions& o) {
+DwellTests::DwellTests(std::vector<EquivalentInputs> inputs, const Site& site,
+                       const Stage2Options& base, const DiagnosisOptions& o)
+    : inputs_(std::move(inputs)), site_(site), base_(base), options_(o) {
   if (!(o.alpha > 0.0 && o.alpha < 1.0) || !(o.separable_ratio >= 1.0))
     throw std::invalid_argument("diagnosis: alpha must be in (0, 1), separable_ratio >= 1");
-  DiagnosisReport rep;
-  rep.alpha = o.alpha;
-  for (const auto& in : inputs)
-    for (bool e : in.estimated) rep.inputs += e ? 1 : 0;
-  if (rep.inputs <= static_cast<int>(base.parameters.size()))
+  for (const auto& in : inputs_)
+    for (bool e : in.estimated) inputs_count_ += e ? 1 : 0;
+  if (inputs_count_ <= static_cast<int>(base.parameters.size()))
     throw std::invalid_argument(
-        "diagnosis: " + std::to_string(inputs.size()) + " dwells give " +
-        std::to_string(rep.inputs) + " equivalent inputs, not more than the model's " +
+        "diagnosis: " + std::to_string(inputs_.size()) + " dwells give " +
+        std::to_string(inputs_count_) + " equivalent inputs, not more than the model's " +
         std::to_string(base.parameters.size()) + " coefficients: too few dwells to test anything");
-  const StaticDesign design(inputs, site, base.table);
-  rep.initial_parameters = base.parameters;
-  rep.initial = figures(design, rep.initial_parameters);
-  run_rounds(rep, o.max_findings, [&](const std::vector<int>& current, const FitFigures& now) {
-    return run_round(design, current, now, o);
-  });
-  for (const auto& in : inputs) rep.residuals.push_back(residual_of(in, site, base.table));
-  fill_residuals(design, rep.initial_parameters, rep.residuals, false);
-  fill_residuals(design, rep.final_parameters, rep.residuals, true);
-  return rep;
+}
+
+FitFigures DwellTests::fit(const std::vector<int>& parameters) const {
+  return figures(StaticDesign(inputs_, site_, base_.table), parameters);
+}
+
+std::vector<CandidateTest> DwellTests::round(const std::vector<int>& current,
+                                             const FitFigures& now) const {
+  return run_round(StaticDesign(inputs_, site_, base_.table), current, now, options_);
+}
+
+std::vector<DwellResidual> DwellTests::residuals(const std::vector<int>& initial,
+                                                 const std::vector<int>& final) const {
+  const StaticDesign design(inputs_, site_, base_.table);
+  std::vector<DwellResidual> out;
+  for (const auto& in : inputs_) out.push_back(residual_of(in, site_, base_.table));
+  fill_residuals(design, initial, out, false);
+  fill_residuals(design, final, out, true);
+  return out;
 }
 
 }  // namespace sinscal

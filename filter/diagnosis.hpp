@@ -36,6 +36,9 @@ struct DiagnosisOptions {
   /// Candidate families (each of their components is a candidate); empty: every extended family
   /// of the family table.
   std::vector<std::string> candidates;
+  /// Families the user picks out of an ambiguous set (the first of them in the set extends the
+  /// model; none: the data's pick, the member with the best fit).
+  std::vector<std::string> prefer;
 };
 
 /// Residuals of one dwell, measured minus model: df_n (m/s^2) and dw_n (rad/s), NED.
@@ -65,6 +68,30 @@ struct FitFigures {
   double bic = 0.0;             // chi2 + rank log(inputs)
 };
 
+/// A combination of a family's coefficients that the data determine although the coefficients
+/// alone are not (each is aliased with base coefficients or the family's others): sum of
+/// weight x coefficient (SI), with its value and sigma.
+struct DeterminedCombination {
+  std::vector<std::pair<int, double>> weights;  // catalog index, weight (unit norm)
+  double value = 0.0;                           // SI
+  double sigma = 0.0;                           // SI
+  std::string text() const;                     // "+0.707 gyro.g_sensitivity.xx -0.707 ..."
+};
+
+/// The combinations of `components` (catalog indices) that `fit` determines although they are not
+/// observable one by one: an orthonormal basis of the combinations orthogonal to every null
+/// vector of the fit. Empty when every component is observable.
+std::vector<DeterminedCombination> determined_combinations(const Stage2Result& fit,
+                                                           const std::vector<int>& components);
+
+/// log10 of the upper tail of chi-square(dof) at x, finite where the tail underflows (the
+/// leading term of the incomplete gamma function's asymptotic expansion): p-values of different
+/// tests and dof ranked on one scale.
+double log10_chi2_tail(double x, int dof);
+/// log10 of the upper tail of F(dof1, dof2) at f; where it underflows, that of chi-square(dof1)
+/// at dof1 f (the limit of a large dof2).
+double log10_f_tail(double f, int dof1, int dof2);
+
 /// One candidate (a component of an extended family) tested against the current model.
 struct CandidateTest {
   std::string family;
@@ -73,11 +100,16 @@ struct CandidateTest {
   std::string aliased_with;    // the base combination an aliased component hides in
   std::string separated_by;    // the plan feature that would separate it (family table)
   int dof = 0;                 // extra parameters fitted (rank increase)
-  /// chi2_0 - chi2_1 (test "chi2": the noise model holds), or that over chi2_1/dof_1 (test "F":
-  /// the fit's residual rejects the noise model, which is rescaled by it).
+  /// chi2_0 - chi2_1: the whitened residual's decrease (twice the log-likelihood ratio).
   double likelihood_ratio = 0.0;
+  /// "chi2" while the noise model holds: the statistic is likelihood_ratio, chi-square(dof);
+  /// "F" when the fit's residual rejects the noise model: the statistic is
+  /// (likelihood_ratio / dof) / (chi2_1 / dof2), F(dof, dof2).
   std::string test;
-  double p_value = 1.0;    // upper tail: chi-square(dof), or F(dof, dof_1) of likelihood_ratio/dof
+  double statistic = 0.0;
+  int dof2 = 0;            // F: the extended fit's degrees of freedom
+  double p_value = 1.0;    // upper tail of the statistic's distribution
+  double log10_p = 0.0;    // log10 of p_value, finite where p underflows (ranks across tests)
   double threshold = 0.0;  // p below this is significant (alpha / candidates)
   bool significant = false;
   bool named = false;  // the most significant, and no other family explains it
@@ -86,6 +118,13 @@ struct CandidateTest {
   std::vector<CandidateTest> ambiguous_with;
   FitFigures with;                // the fit with the candidate
   double base_shift_sigma = 0.0;  // largest move of a base coefficient, in its sigma
+  /// The candidate's components that `with` determines one by one, and the combinations of the
+  /// others it determines.
+  std::vector<int> determined;
+  std::vector<DeterminedCombination> combinations;
+  /// A finding out of an ambiguous set (ambiguous_with holds other families): who picked this
+  /// member to extend the model, "data" (the best fit) or "user" (DiagnosisOptions::prefer).
+  std::string picked_by;
 };
 
 struct DiagnosisReport {
@@ -134,10 +173,33 @@ void run_rounds(DiagnosisReport& rep, int max_findings, const RoundRunner& run_r
                 const BestCompleter& complete = {});
 }  // namespace diagnosis_detail
 
-/// Diagnoses the stage-1 equivalent inputs of a session, starting from `base` (its parameters:
-/// the session's model). Throws std::invalid_argument when the dwells are too few for the base
-/// model (fewer inputs than parameters plus one).
-DiagnosisReport diagnose_static(const std::vector<EquivalentInputs>& inputs, const Site& site,
-                                const Stage2Options& base, const DiagnosisOptions& options = {});
+/// The static dwells' side of a table diagnosis: fits of parameter sets to stage 1's equivalent
+/// inputs and the tests of candidates against a current model (filter/diagnosis_table.hpp runs
+/// the rounds).
+class DwellTests {
+ public:
+  /// Throws std::invalid_argument when the dwells are too few for the base model (fewer inputs
+  /// than parameters plus one) or the options are out of range.
+  DwellTests(std::vector<EquivalentInputs> inputs, const Site& site, const Stage2Options& base,
+             const DiagnosisOptions& options);
+  /// Fit, residuals and leave-one-dwell-out prediction of a parameter set.
+  FitFigures fit(const std::vector<int>& parameters) const;
+  /// Every candidate component against the current model, then each family's separable
+  /// components together.
+  std::vector<CandidateTest> round(const std::vector<int>& current, const FitFigures& now) const;
+  /// Per-dwell residuals under the initial and the final parameter sets.
+  std::vector<DwellResidual> residuals(const std::vector<int>& initial,
+                                       const std::vector<int>& final) const;
+  int inputs() const { return inputs_count_; }
+  const Stage2Options& base() const { return base_; }
+  const DiagnosisOptions& options() const { return options_; }
+
+ private:
+  std::vector<EquivalentInputs> inputs_;
+  Site site_;
+  Stage2Options base_;
+  DiagnosisOptions options_;
+  int inputs_count_ = 0;
+};
 
 }  // namespace sinscal

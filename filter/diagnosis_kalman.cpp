@@ -8,7 +8,9 @@
 #include <stdexcept>
 #include <utility>
 
+#include "filter/diagnosis.hpp"
 #include "models/coefficient_families.hpp"
+#include "rig/timeline.hpp"
 
 namespace sinscal {
 
@@ -66,8 +68,10 @@ void wald(const KalmanRun& r, double separable_remaining, KalmanCandidateTest& c
   }
   c.nis_scale = std::max(1.0, r.nis_per_dof);
   c.wald /= c.nis_scale;
-  if (c.dof > 0)
+  if (c.dof > 0) {
     c.p_value = boost::math::cdf(boost::math::complement(boost::math::chi_squared(c.dof), c.wald));
+    c.log10_p = log10_chi2_tail(c.wald, c.dof);
+  }
 }
 
 // Largest move of an estimated coefficient of `before` (other than the candidate's), in sigma.
@@ -114,36 +118,86 @@ void check_candidates(const CalibratorOptions& base, const std::vector<std::stri
 
 }  // namespace
 
+HeldoutTurns heldout_turns(const Session& session, const CalibratorOptions& options) {
+  const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
+  // The turns: from inside the end margin of a dwell to inside the start margin of the next.
+  std::vector<std::pair<double, double>> turns;
+  for (std::size_t k = 1; k < timeline.dwells.size(); ++k) {
+    const double t0 = timeline.dwells[k - 1].t_end - options.static_margin;
+    const double t1 = timeline.dwells[k].t_start + options.static_margin;
+    if (t1 > t0) turns.emplace_back(t0, t1);
+  }
+  HeldoutTurns h;
+  if (turns.size() < 2) return h;
+  double nis = 0.0, vel = 0.0;
+  for (std::size_t fold = 0; fold < 2; ++fold) {
+    CalibratorOptions o = options;
+    for (std::size_t k = fold; k < turns.size(); k += 2) o.holdout.push_back(turns[k]);
+    const KalmanRun r = run_checked(session, o, "with turns held out");
+    for (const auto& p : r.holdout) {
+      if (p.dof == 0) continue;
+      nis += p.nis / p.dof;
+      vel += p.velocity_innovation.squaredNorm();
+      ++h.turns;
+    }
+  }
+  if (h.turns > 0) {
+    h.sigmas = std::sqrt(nis / h.turns);
+    h.velocity = std::sqrt(vel / h.turns);
+  }
+  return h;
+}
+
+TurnTests::TurnTests(const Session& session, const CalibratorOptions& base,
+                     const KalmanDiagnosisOptions& options)
+    : session_(session),
+      options_(options),
+      model_(base),
+      now_(run_checked(session, base, "with the session's model")) {}
+
+std::vector<KalmanCandidateTest> TurnTests::round(const std::vector<std::string>& families) {
+  check_candidates(model_, families);
+  last_round_.clear();
+  std::vector<KalmanCandidateTest> out;
+  for (const auto& f : families) {
+    KalmanRun r;
+    out.push_back(test_candidate(session_, model_, now_, f, options_, r));
+    last_round_.emplace_back(f, std::move(r));
+  }
+  return out;
+}
+
+void TurnTests::extend(const std::string& family) {
+  if (model_.layout.on(family)) return;
+  model_.layout.set(family, true);
+  for (auto& [f, r] : last_round_)
+    if (f == family) {
+      now_ = std::move(r);
+      last_round_.clear();
+      return;
+    }
+  last_round_.clear();
+  now_ = run_checked(session_, model_, "with " + family);
+}
+
 KalmanDiagnosis diagnose_kalman(const Session& session, const CalibratorOptions& base,
                                 const KalmanDiagnosisOptions& o) {
   check_candidates(base, o.candidates);
   KalmanDiagnosis d;
   d.alpha = o.alpha;
   d.initial_families.assign(base.layout.extended.begin(), base.layout.extended.end());
-  CalibratorOptions current = base;
-  KalmanRun now = run_checked(session, current, "with the session's model");
-  d.initial_nis_per_dof = now.nis_per_dof;
-  d.initial_log_likelihood = now.log_likelihood;
+  TurnTests tests(session, base, o);
+  d.initial_nis_per_dof = tests.now().nis_per_dof;
+  d.initial_log_likelihood = tests.now().log_likelihood;
   std::vector<std::string> remaining = o.candidates;
   while (!remaining.empty() && static_cast<int>(d.findings.size()) < o.max_findings) {
-    std::vector<KalmanCandidateTest> round(remaining.size());
-    std::vector<KalmanRun> runs(remaining.size());
-    for (std::size_t k = 0; k < remaining.size(); ++k)
-      round[k] = test_candidate(session, current, now, remaining[k], o, runs[k]);
+    std::vector<KalmanCandidateTest> round = tests.round(remaining);
     const double threshold = o.alpha / static_cast<double>(round.size());
     KalmanCandidateTest* best = nullptr;
-    std::size_t best_k = 0;
-    for (std::size_t k = 0; k < round.size(); ++k) {
-      KalmanCandidateTest& c = round[k];
+    for (auto& c : round) {
       c.threshold = threshold;
       c.significant = c.dof > 0 && c.p_value < threshold;
-      // Ties of the p-value (both underflow to 0): the larger statistic per degree of freedom.
-      if (c.significant &&
-          (!best || c.p_value < best->p_value ||
-           (c.p_value == best->p_value && c.wald / c.dof > best->wald / best->dof))) {
-        best = &c;
-        best_k = k;
-      }
+      if (c.significant && (!best || c.log10_p < best->log10_p)) best = &c;
     }
     if (!best) {
       for (const auto& c : round)
@@ -153,12 +207,11 @@ KalmanDiagnosis diagnose_kalman(const Session& session, const CalibratorOptions&
     }
     best->named = true;
     d.findings.push_back(*best);
-    current.layout.set(best->family, true);
+    tests.extend(best->family);
     remaining.erase(std::find(remaining.begin(), remaining.end(), best->family));
     d.rounds.push_back(round);
-    now = std::move(runs[best_k]);
   }
-  d.final_run = now;
+  d.final_run = tests.now();
   return d;
 }
 

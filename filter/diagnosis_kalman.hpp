@@ -45,6 +45,7 @@ struct KalmanCandidateTest {
   double wald = 0.0;         // W (after the NIS scaling)
   double nis_scale = 1.0;    // the NIS per dof W was divided by (1: none)
   double p_value = 1.0;      // upper tail of chi-square(dof)
+  double log10_p = 0.0;      // log10 of p_value, finite where p underflows
   double threshold = 0.0;    // p below this is significant (alpha / candidates)
   bool significant = false;
   bool named = false;
@@ -65,6 +66,44 @@ struct KalmanDiagnosis {
   std::vector<KalmanCandidateTest> not_separable;  // no direction the data determine
   KalmanRun final_run;                             // the model with the findings
   double alpha = 0.0;
+};
+
+/// The turns' held-out prediction of one model: the filter run twice, each time without any
+/// update during every other turn between dwells (the odd turns, then the even ones), and the
+/// first update after each held-out turn scored: how well the coefficients learnt from the other
+/// turns and the dwells predict the navigation error a turn accumulates.
+struct HeldoutTurns {
+  int turns = 0;          // held-out turns scored
+  double sigmas = 0.0;    // RMS of sqrt(NIS / dof) of those updates (1: as predicted)
+  double velocity = 0.0;  // m/s: RMS of the zero-velocity innovation's norm
+};
+
+/// The held-out turns of `options`' model on the session (two runs of the filter). Turns with
+/// no time between their dwells' update margins are skipped; none: turns = 0.
+HeldoutTurns heldout_turns(const Session& session, const CalibratorOptions& options);
+
+/// The turns' side of a table diagnosis: the filter run with the current model, then with each
+/// candidate family added (filter/diagnosis_table.hpp runs the rounds).
+class TurnTests {
+ public:
+  /// Runs the filter with `base`. Throws std::runtime_error when the run stops early.
+  TurnTests(const Session& session, const CalibratorOptions& base,
+            const KalmanDiagnosisOptions& options);
+  const KalmanRun& now() const { return now_; }
+  const CalibratorOptions& model() const { return model_; }
+  /// Tests each family against the current model (the runs are kept for extend()). Throws
+  /// std::invalid_argument for a family that is not extended or already in the model.
+  std::vector<KalmanCandidateTest> round(const std::vector<std::string>& families);
+  /// Adds a family to the model: the last round's run with it, else a new run.
+  void extend(const std::string& family);
+  HeldoutTurns heldout() const { return heldout_turns(session_, model_); }
+
+ private:
+  const Session& session_;
+  KalmanDiagnosisOptions options_;
+  CalibratorOptions model_;
+  KalmanRun now_;
+  std::vector<std::pair<std::string, KalmanRun>> last_round_;
 };
 
 /// Runs the filter on the session with `base`, then each candidate family added. Throws

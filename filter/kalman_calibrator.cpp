@@ -221,6 +221,15 @@ Eigen::Matrix3d Calibrator::dwell_attitude(const PlanDwell& dwell) {
 }
 
 void Calibrator::update(double t_plan) {
+  for (const auto& [t0, t1] : o_.holdout)
+    if (t_plan >= t0 && t_plan <= t1) {
+      after_holdout_ = true;
+      return;
+    }
+  if (after_holdout_) {
+    after_holdout_ = false;
+    holdout_.push_back({t_plan, 0.0, 0, Eigen::Vector3d::Zero()});
+  }
   const PlanDwell* dwell = nullptr;
   if (detector_) {
     if (detector_->dwell() > 0) dwell = &dwells_[static_cast<std::size_t>(detector_->dwell() - 1)];
@@ -280,6 +289,16 @@ void Calibrator::apply(const Measurement& m) {
   const Eigen::MatrixXd K = llt.solve(HP).transpose();
   last_nis_ = z.dot(llt.solve(z));
   last_nis_dof_ = r;
+  if (!holdout_.empty() && holdout_.back().dof == 0) {
+    HoldoutPrediction& h = holdout_.back();
+    h.nis = last_nis_;
+    h.dof = r;
+    for (int i = 0; i < r; ++i) {
+      const int v = m.states[static_cast<std::size_t>(i)] - layout_.velocity.index;
+      if (m.minus_states[static_cast<std::size_t>(i)] < 0 && v >= 0 && v < 3)
+        h.velocity_innovation(v) = z(i);
+    }
+  }
   nis_sum_ += last_nis_;
   nis_dof_ += r;
   // Prediction-error decomposition: log N(z; 0, S) summed over the updates (log 2 pi dropped).

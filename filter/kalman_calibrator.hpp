@@ -112,6 +112,20 @@ struct CalibratorOptions {
   /// a plan mismatch.
   bool use_table_angles = true;
   double table_plan_tolerance = 1.0 * units::deg;  // rad
+  /// Held-out intervals of plan time (s, start and end): no measurement update inside them, and
+  /// the first update after each is recorded as a prediction (HoldoutPrediction). The
+  /// diagnosis leaves turns out this way to measure how well a model predicts them.
+  std::vector<std::pair<double, double>> holdout;
+};
+
+/// The first update after a held-out interval: how well the filter, which saw no measurement
+/// over the interval, predicted the navigation error accumulated in it.
+struct HoldoutPrediction {
+  double t_plan = 0.0;  // s, plan time of the update
+  double nis = 0.0;     // normalized innovation squared of the update
+  int dof = 0;          // its rows
+  /// The zero-velocity rows' innovation (m/s, NED; zero when the update has none).
+  Eigen::Vector3d velocity_innovation = Eigen::Vector3d::Zero();
 };
 
 /// The data do not match the plan (a log shorter than the plan, more or fewer static intervals
@@ -178,6 +192,8 @@ class Calibrator {
   int last_nis_dof() const { return last_nis_dof_; }
   /// Attitude updates that took the attitude from the table's angles.
   int table_attitude_updates() const { return table_updates_; }
+  /// The first update after each held-out interval (CalibratorOptions::holdout).
+  const std::vector<HoldoutPrediction>& holdout_predictions() const { return holdout_; }
   /// With static intervals from the data: the detector (its dwells found so far); else null.
   const StaticDetector* detector() const { return detector_ ? &*detector_ : nullptr; }
   /// The navigator's state (the filter's reference trajectory).
@@ -226,6 +242,8 @@ class Calibrator {
   double last_nis_ = 0.0;
   int last_nis_dof_ = 0;
   std::vector<double> prior_sigma_;  // catalog order, SI
+  bool after_holdout_ = false;       // the next update is the first after a held-out interval
+  std::vector<HoldoutPrediction> holdout_;
 };
 
 }  // namespace sinscal

@@ -237,6 +237,7 @@ void summarize(const Calibrator& kf, const PlanTimeline& timeline, const KalmanR
   r.has_targets = !run.sigma_targets.empty();
   r.above_target = above_target(r.estimates, run.sigma_targets);
   r.table_attitude_updates = kf.table_attitude_updates();
+  r.holdout = kf.holdout_predictions();
   InstallationResult& in = r.installation;
   in.base_estimated = StateLayout::on(kf.layout().base);
   in.base_n = rotvec_from_dcm(kf.base());

@@ -96,6 +96,8 @@ struct KalmanRun {
   static constexpr std::size_t kSkippedExamples = 20;
   std::vector<std::string> skipped_examples;  // the first few, "FILE:LINE: cause"
   int table_attitude_updates = 0;
+  /// The first update after each held-out interval (CalibratorOptions::holdout).
+  std::vector<HoldoutPrediction> holdout;
   int dwells = 0;  // the plan's
   /// With static intervals from the data: the detector's bounds and the intervals it took.
   struct Detected {

@@ -32,6 +32,13 @@ std::vector<std::string> names(const std::vector<int>& catalog) {
   return out;
 }
 
+std::string statistic_text(const CandidateTest& c) {
+  if (c.test == "F")
+    return "F(" + std::to_string(c.dof) + ", " + std::to_string(c.dof2) +
+           ") = " + fixed(c.statistic, 2) + " (noise rescaled by the fit's residual)";
+  return "likelihood ratio " + fixed(c.statistic, 1) + " on " + std::to_string(c.dof) + " dof";
+}
+
 json unit_json(const ResidualUnits& u) {
   json j = {{"accel", u.accel}, {"gyro", u.gyro}};
   if (u.turns) j["turn"] = "deg";
@@ -54,13 +61,17 @@ json heldout_json(const ResidualUnits& u, const FitFigures& f) {
 }
 
 json statistic_json(const CandidateTest& c, double alpha) {
-  return {{"name", "likelihood_ratio"},
-          {"test", c.test},
-          {"value", c.likelihood_ratio},
-          {"dof", c.dof},
-          {"p_value", c.p_value},
-          {"threshold", c.threshold},
-          {"alpha", alpha}};
+  json j = {{"name", c.test == "F" ? "F" : "likelihood_ratio"},
+            {"test", c.test},
+            {"value", c.statistic},
+            {"dof", c.dof}};
+  if (c.test == "F") j["dof2"] = c.dof2;
+  j["likelihood_ratio"] = c.likelihood_ratio;
+  j["p_value"] = c.p_value;
+  j["log10_p"] = c.log10_p;
+  j["threshold"] = c.threshold;
+  j["alpha"] = alpha;
+  return j;
 }
 
 json fit_json(const ResidualUnits& u, const FitFigures& f) {
@@ -168,8 +179,7 @@ void markdown_coefficients(std::ostringstream& m, const CandidateTest& f) {
 void markdown_ambiguous_and_hidden(std::ostringstream& m, const DiagnosisReport& r,
                                    const std::string& what, const std::string& poses_word) {
   for (const auto& a : r.ambiguous) {
-    m << "## Ambiguous\n\nA significant residual ("
-      << (a.test == "F" ? "F statistic " : "likelihood ratio ") << fixed(a.likelihood_ratio, 1)
+    m << "## Ambiguous\n\nA significant residual (" << statistic_text(a)
       << ", p = " << sci(a.p_value) << ") that " << a.family;
     for (const auto& b : a.ambiguous_with) m << " and " << b.family;
     m << " explain equally well on " << poses_word

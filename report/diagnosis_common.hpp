@@ -28,6 +28,10 @@ std::string sci(double v);
 /// Coefficient names of catalog indices.
 std::vector<std::string> names(const std::vector<int>& catalog);
 
+/// The test's statistic as a reader takes it: "likelihood ratio 152.1 on 6 dof" or
+/// "F(9, 40) = 0.41 (noise rescaled by the fit's residual)".
+std::string statistic_text(const CandidateTest& c);
+
 json unit_json(const ResidualUnits& u);
 json rms_json(const ResidualUnits& u, const FitFigures& f);
 json heldout_json(const ResidualUnits& u, const FitFigures& f);

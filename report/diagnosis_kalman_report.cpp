@@ -12,10 +12,9 @@ namespace {
 using json = nlohmann::ordered_json;
 
 json statistic_json(const KalmanCandidateTest& c, double alpha) {
-  return {{"name", "wald_kalman"}, {"value", c.wald},
-          {"dof", c.dof},          {"nis_scale", c.nis_scale},
-          {"p_value", c.p_value},  {"threshold", c.threshold},
-          {"alpha", alpha}};
+  return {{"name", "wald_kalman"},    {"value", c.wald},      {"dof", c.dof},
+          {"nis_scale", c.nis_scale}, {"p_value", c.p_value}, {"log10_p", c.log10_p},
+          {"threshold", c.threshold}, {"alpha", alpha}};
 }
 
 json own_coefficients(const KalmanCandidateTest& c) {
@@ -27,8 +26,10 @@ json own_coefficients(const KalmanCandidateTest& c) {
   return coefficients_json(own);
 }
 
-json finding_json(const KalmanCandidateTest& c, double nis_before, double log_likelihood_before,
-                  double alpha) {
+}  // namespace
+
+json kalman_finding_json(const KalmanCandidateTest& c, double nis_before,
+                         double log_likelihood_before, double alpha) {
   return {{"effect", c.family},
           {"method", "kalman_innovations"},
           {"coefficients", own_coefficients(c)},
@@ -38,6 +39,8 @@ json finding_json(const KalmanCandidateTest& c, double nis_before, double log_li
           {"log_likelihood_change", c.log_likelihood - log_likelihood_before},
           {"base_shift_sigma", c.base_shift_sigma}};
 }
+
+namespace {
 
 json candidate_json(const KalmanCandidateTest& c, double alpha) {
   json j = {{"effect", c.family}, {"separable", c.dof > 0}};
@@ -54,10 +57,10 @@ json candidate_json(const KalmanCandidateTest& c, double alpha) {
 
 }  // namespace
 
-void add_kalman_diagnosis(json& d, const KalmanDiagnosis& k) {
+void add_kalman_diagnosis(json& d, const KalmanDiagnosis& k, bool findings) {
   double nis = k.initial_nis_per_dof, ll = k.initial_log_likelihood;
   for (const auto& f : k.findings) {
-    d["findings"].push_back(finding_json(f, nis, ll, k.alpha));
+    if (findings) d["findings"].push_back(kalman_finding_json(f, nis, ll, k.alpha));
     nis = f.nis_per_dof;
     ll = f.log_likelihood;
   }
@@ -94,7 +97,7 @@ void add_kalman_diagnosis(json& d, const KalmanDiagnosis& k) {
 std::string kalman_diagnosis_markdown(const KalmanDiagnosis& k) {
   std::ostringstream m;
   char line[512];
-  m << "\n## Effects of the turns (Kalman-filter innovations)\n\n"
+  m << "\n## The turns' test (Kalman-filter innovations)\n\n"
     << "Each candidate family is added to the filter and the session run again; its estimate is "
        "tested against zero (Wald statistic over the directions the data determine, chi-square; "
        "family-wise level "

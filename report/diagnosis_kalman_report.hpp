@@ -10,9 +10,14 @@
 
 namespace sinscal {
 
-/// Adds the Kalman-filter diagnosis to a diagnosis.json document (its "findings", a "kalman"
-/// section, and on each "not_separable" entry the filter tested, a "kalman" verdict).
-void add_kalman_diagnosis(nlohmann::ordered_json& diagnosis, const KalmanDiagnosis& kalman);
+/// One finding of the filter's test as a "findings" entry (its statistic "wald_kalman").
+nlohmann::ordered_json kalman_finding_json(const KalmanCandidateTest& finding, double nis_before,
+                                           double log_likelihood_before, double alpha);
+/// Adds the Kalman-filter diagnosis to a diagnosis.json document (a "kalman" section, and on each
+/// "not_separable" entry the filter tested, a "kalman" verdict); `findings` too: its findings
+/// appended to "findings" (a diagnosis of the turns alone).
+void add_kalman_diagnosis(nlohmann::ordered_json& diagnosis, const KalmanDiagnosis& kalman,
+                          bool findings = true);
 /// The report.md section of the Kalman-filter diagnosis.
 std::string kalman_diagnosis_markdown(const KalmanDiagnosis& kalman);
 

@@ -55,15 +55,134 @@ DiagnosisFiles diagnosis_files(const std::string& dir) {
   return f;
 }
 
-json diagnosis_json(const DiagnosisReport& r, const std::string& session) {
+namespace {
+
+json heldout_turns_json(const std::optional<HeldoutTurns>& h) {
+  if (!h || h->turns == 0) return nullptr;
+  return {{"turns", h->turns}, {"sigmas", h->sigmas}, {"velocity_mm_per_s", h->velocity / 1e-3}};
+}
+
+// The extended calibration's coefficients of a finding, in the family's unit.
+json finding_coefficients_json(const TableFinding& f) {
+  json j = json::object();
+  const auto& cat = coefficient_catalog();
+  for (const auto& c : f.coefficients) {
+    const CoefficientFamily& info = coefficient_family_info(f.family);
+    const double unit = info.si_per_unit();
+    const std::string& name = cat[static_cast<std::size_t>(c.catalog)].name;
+    if (c.source.empty())
+      j[name] = {
+          {"value", nullptr}, {"sigma", nullptr}, {"unit", info.unit()}, {"determined", false}};
+    else
+      j[name] = {{"value", c.value / unit},
+                 {"sigma", c.sigma / unit},
+                 {"unit", info.unit()},
+                 {"determined", true},
+                 {"source", c.source}};
+  }
+  return j;
+}
+
+json combinations_json(const TableFinding& f) {
+  json a = json::array();
+  const CoefficientFamily& info = coefficient_family_info(f.family);
+  for (const auto& c : f.combinations) {
+    json w = json::object();
+    for (const auto& [k, weight] : c.weights)
+      w[coefficient_catalog()[static_cast<std::size_t>(k)].name] = weight;
+    a.push_back({{"weights", w},
+                 {"text", c.text()},
+                 {"value", c.value / info.si_per_unit()},
+                 {"sigma", c.sigma / info.si_per_unit()},
+                 {"unit", info.unit()}});
+  }
+  return a;
+}
+
+// The fields every finding of the story has, beside its method's own.
+void add_story_fields(json& j, const TableFinding& f) {
+  j["round"] = f.round;
+  j["source"] = f.source == TableFinding::Source::Dwells ? "dwells" : "turns";
+  j["title"] = finding_title(f);
+  j["ambiguous_with"] = f.ambiguous_with;
+  if (!f.picked_by.empty()) j["picked_by"] = f.picked_by;
+  j["separated_by"] = f.separated_by;
+  j["coefficients"] = finding_coefficients_json(f);
+  j["combinations"] = combinations_json(f);
+  if (f.filter) {
+    j["filter"] = {{"nis_per_dof_before", f.nis_before},
+                   {"nis_per_dof_after", f.nis_after},
+                   {"log_likelihood_change", f.log_likelihood_after - f.log_likelihood_before}};
+    j["heldout_turns_before"] = heldout_turns_json(f.turns_before);
+    j["heldout_turns_after"] = heldout_turns_json(f.turns_after);
+  }
+}
+
+}  // namespace
+
+std::string finding_title(const TableFinding& f) {
+  if (f.ambiguous_with.empty()) return f.family;
+  std::string t = f.family;
+  for (const auto& a : f.ambiguous_with) t += " / " + a;
+  return t + " (ambiguous on this plan; the model extended with " + f.family +
+         (f.picked_by == "user" ? ", the user's pick)" : ", the data's pick)");
+}
+
+std::string finding_summary(const TableFinding& f) {
+  std::ostringstream m;
+  if (f.test == "wald")
+    m << "W = " << fixed(f.statistic, 1) << " on " << f.dof << " dof";
+  else if (f.test == "F")
+    m << "F(" << f.dof << ", " << f.dof2 << ") = " << fixed(f.statistic, 2);
+  else
+    m << "likelihood ratio " << fixed(f.statistic, 1) << " on " << f.dof << " dof";
+  m << ", p = " << sci(f.p_value) << " ("
+    << (f.source == TableFinding::Source::Dwells ? "dwells" : "turns") << ")";
+  if (f.dwells_before && f.dwells_after)
+    m << "; held-out dwells " << fixed(f.dwells_before->heldout, 2) << " -> "
+      << fixed(f.dwells_after->heldout, 2) << " sigma";
+  if (f.turns_before && f.turns_after && f.turns_before->turns > 0)
+    m << "; held-out turns " << fixed(f.turns_before->sigmas, 2) << " -> "
+      << fixed(f.turns_after->sigmas, 2) << " sigma, " << fixed(f.turns_before->velocity / 1e-3, 3)
+      << " -> " << fixed(f.turns_after->velocity / 1e-3, 3) << " mm/s";
+  return m.str();
+}
+
+json diagnosis_json(const TableDiagnosis& d, const std::string& session) {
+  const DiagnosisReport& r = d.dwells;
   json j;
   j["session"] = session;
-  j["method"] = {{"name", "static dwells (closed-form stage 2)"},
+  j["method"] = {{"name", d.turns ? "static dwells (closed-form stage 2) and turns (Kalman-filter "
+                                    "innovations), one ranking"
+                                  : "static dwells (closed-form stage 2)"},
                  {"alpha", r.alpha},
                  {"equivalent_inputs", r.inputs},
+                 {"rounds", d.rounds},
                  {"initial_model", names(r.initial_parameters)}};
   const ResidualUnits u = table_units();
-  j["findings"] = findings_json(u, r);
+  json findings = json::array();
+  std::size_t dwell_k = 0, turn_k = 0;
+  const FitFigures* before = &r.initial;
+  double nis = d.turns ? d.turns->initial_nis_per_dof : 0.0;
+  double ll = d.turns ? d.turns->initial_log_likelihood : 0.0;
+  for (const auto& f : d.findings) {
+    json one;
+    if (f.source == TableFinding::Source::Dwells) {
+      const CandidateTest& c = r.findings[dwell_k++];
+      one = finding_json(u, c, *before, r.alpha);
+      before = &c.with;
+    } else {
+      const KalmanCandidateTest& c = d.turns->findings[turn_k++];
+      one = kalman_finding_json(c, nis, ll, r.alpha);
+    }
+    if (f.filter) {
+      nis = f.nis_after;
+      ll = f.log_likelihood_after;
+    }
+    add_story_fields(one, f);
+    findings.push_back(one);
+  }
+  j["findings"] = findings;
   j["not_separable"] = not_separable_json(r);
   j["ambiguous"] = ambiguous_json(r);
   j["rounds"] = rounds_json(u, r);
@@ -71,12 +190,83 @@ json diagnosis_json(const DiagnosisReport& r, const std::string& session) {
   j["calibration"] = {{"coefficients", coefficients_json(result_coefficients(r.final_fit.fit))},
                       {"fit", fit_json(u, r.final_fit)}};
   json dwells = json::array();
-  for (const auto& d : r.residuals) dwells.push_back(dwell_json(d));
+  for (const auto& w : r.residuals) dwells.push_back(dwell_json(w));
   j["dwells"] = dwells;
+  if (d.turns) add_kalman_diagnosis(j, *d.turns, false);
   return j;
 }
 
-std::string diagnosis_markdown(const DiagnosisReport& r, const std::string& session) {
+namespace {
+
+void markdown_finding(std::ostringstream& m, const TableFinding& f, int number) {
+  m << "### " << number << ". " << finding_title(f) << "\n\n"
+    << "Round " << f.round << ", found by "
+    << (f.source == TableFinding::Source::Dwells
+            ? "the static dwells (closed-form stage 2 residuals)"
+            : "the turns (the Kalman filter's estimate of the family against zero)")
+    << ": ";
+  if (f.test == "wald")
+    m << "W = " << fixed(f.statistic, 1) << " on " << f.dof << " dof";
+  else if (f.test == "F")
+    m << "F(" << f.dof << ", " << f.dof2 << ") = " << fixed(f.statistic, 2)
+      << " (noise rescaled by the fit's residual)";
+  else
+    m << "likelihood ratio " << fixed(f.statistic, 1) << " on " << f.dof << " dof";
+  m << ", p = " << sci(f.p_value) << " (threshold " << sci(f.threshold) << ").\n\n";
+  if (!f.ambiguous_with.empty()) {
+    m << "This plan cannot tell " << f.family;
+    for (const auto& a : f.ambiguous_with) m << " from " << a;
+    m << ": each explains the dwells as well. The model was extended with " << f.family << " ("
+      << (f.picked_by == "user" ? "`--prefer`" : "the best fit; `--prefer FAMILY` picks another")
+      << "); later rounds test the rest against it. What separates them: " << f.family << ": "
+      << f.separated_by.front();
+    for (std::size_t i = 0; i < f.ambiguous_with.size(); ++i)
+      m << "; " << f.ambiguous_with[i] << ": " << f.separated_by[i + 1];
+    m << ".\n\n";
+  }
+  m << "| held-out prediction | before | after |\n|---|---|---|\n";
+  if (f.dwells_before && f.dwells_after)
+    m << "| dwells, leave-one-out [sigma] | " << fixed(f.dwells_before->heldout, 2) << " | "
+      << fixed(f.dwells_after->heldout, 2) << " |\n"
+      << "| dwells, accel [ug] | " << fixed(f.dwells_before->heldout_accel / kAccelUnit, 2) << " | "
+      << fixed(f.dwells_after->heldout_accel / kAccelUnit, 2) << " |\n"
+      << "| dwells, gyro [deg/h] | " << fixed(f.dwells_before->heldout_gyro / kGyroUnit, 4) << " | "
+      << fixed(f.dwells_after->heldout_gyro / kGyroUnit, 4) << " |\n";
+  if (f.turns_before && f.turns_after && f.turns_before->turns > 0)
+    m << "| turns held out of the filter [sigma] | " << fixed(f.turns_before->sigmas, 2) << " | "
+      << fixed(f.turns_after->sigmas, 2) << " |\n"
+      << "| turns, velocity error [mm/s] | " << fixed(f.turns_before->velocity / 1e-3, 3) << " | "
+      << fixed(f.turns_after->velocity / 1e-3, 3) << " |\n";
+  if (f.filter)
+    m << "| filter NIS per dof (all updates) | " << fixed(f.nis_before, 3) << " | "
+      << fixed(f.nis_after, 3) << " |\n";
+  m << "\nCoefficients already in the model moved by up to " << fixed(f.base_shift_sigma, 1)
+    << " of their sigmas. The extended calibration's " << f.family << ":\n\n"
+    << "| coefficient | value | sigma | unit | from |\n|---|---|---|---|---|\n";
+  const CoefficientFamily& info = coefficient_family_info(f.family);
+  for (const auto& c : f.coefficients) {
+    m << "| " << coefficient_catalog()[static_cast<std::size_t>(c.catalog)].name << " | ";
+    if (c.source.empty())
+      m << "not determined alone | - | " << info.unit() << " | - |\n";
+    else
+      m << sci(c.value / info.si_per_unit()) << " | " << sci(c.sigma / info.si_per_unit()) << " | "
+        << info.unit() << " | " << (c.source == "kalman" ? "filter (dwells and turns)" : "dwells")
+        << " |\n";
+  }
+  if (!f.combinations.empty()) {
+    m << "\nDetermined only in combination (the dwells' fit):\n\n"
+      << "| combination | value | sigma | unit |\n|---|---|---|---|\n";
+    for (const auto& c : f.combinations)
+      m << "| " << c.text() << " | " << sci(c.value / info.si_per_unit()) << " | "
+        << sci(c.sigma / info.si_per_unit()) << " | " << info.unit() << " |\n";
+  }
+  m << "\n";
+}
+
+}  // namespace
+
+std::string diagnosis_markdown(const TableDiagnosis& d, const std::string& session) {
+  const DiagnosisReport& r = d.dwells;
   std::ostringstream m;
   m << "# Diagnosis of " << session << "\n\n"
     << "Static dwells: " << r.residuals.size() << ", " << r.inputs
@@ -84,30 +274,24 @@ std::string diagnosis_markdown(const DiagnosisReport& r, const std::string& sess
     << " coefficients) leaves a residual chi2 per dof of " << fixed(r.initial.fit.chi2_per_dof, 3)
     << " (1 when it explains the dwells to their sigmas); residual RMS "
     << fixed(r.initial.accel_rms / kAccelUnit, 2) << " ug (accelerometers), "
-    << fixed(r.initial.gyro_rms / kGyroUnit, 4) << " deg/h (gyros).\n\n"
+    << fixed(r.initial.gyro_rms / kGyroUnit, 4) << " deg/h (gyros).";
+  if (d.turns)
+    m << " The Kalman filter with the same model: NIS per dof "
+      << fixed(d.turns->initial_nis_per_dof, 3) << ".";
+  m << "\n\nEach round tests every candidate of the dwells" << (d.turns ? " and of the turns" : "")
+    << " against one model at the family-wise level " << r.alpha
+    << " (Bonferroni over the round's tests); the dwells' finding comes first, the "
+       "round's finding joins the model and the next round tests the rest against it.\n\n"
     << "## Findings\n\n";
-  if (r.findings.empty())
+  if (d.findings.empty())
     m << "None: no candidate effect is significant at the family-wise level " << r.alpha << ".\n\n";
-  const FitFigures* before = &r.initial;
-  for (const auto& f : r.findings) {
-    m << "### " << f.family << "\n\n"
-      << "Likelihood ratio " << fixed(f.likelihood_ratio, 1) << " on " << f.dof
-      << " dof, p = " << sci(f.p_value) << " (threshold " << sci(f.threshold) << ").\n\n"
-      << "| | before | after |\n|---|---|---|\n"
-      << "| residual RMS accel [ug] | " << fixed(before->accel_rms / kAccelUnit, 2) << " | "
-      << fixed(f.with.accel_rms / kAccelUnit, 2) << " |\n"
-      << "| residual RMS gyro [deg/h] | " << fixed(before->gyro_rms / kGyroUnit, 4) << " | "
-      << fixed(f.with.gyro_rms / kGyroUnit, 4) << " |\n"
-      << "| held-out error [sigma] | " << fixed(before->heldout, 2) << " | "
-      << fixed(f.with.heldout, 2) << " |\n"
-      << "| BIC | " << fixed(before->bic, 1) << " | " << fixed(f.with.bic, 1) << " |\n\n"
-      << "Base coefficients moved by up to " << fixed(f.base_shift_sigma, 1)
-      << " of their sigmas.\n\n";
-    markdown_coefficients(m, f);
-    before = &f.with;
-  }
-  markdown_ambiguous_and_hidden(m, r, "plan", "this plan");
+  int number = 0;
+  for (const auto& f : d.findings) markdown_finding(m, f, ++number);
+  DiagnosisReport hidden = r;
+  hidden.ambiguous.clear();  // ambiguous sets are findings of their own above
+  markdown_ambiguous_and_hidden(m, hidden, "plan's static dwells", "this plan");
   m << "\nPer-dwell residuals before and after: `residuals.png`; every figure: `diagnosis.json`.\n";
+  if (d.turns) m << kalman_diagnosis_markdown(*d.turns);
   return m.str();
 }
 
@@ -140,16 +324,12 @@ std::string residual_plot_script(const DiagnosisReport& r, const std::string& pn
   return g.str();
 }
 
-DiagnosisFiles write_diagnosis(const DiagnosisReport& r, const std::string& session,
-                               const std::string& dir, const std::string& gnuplot,
-                               const KalmanDiagnosis* kalman) {
+DiagnosisFiles write_diagnosis(const TableDiagnosis& d, const std::string& session,
+                               const std::string& dir, const std::string& gnuplot) {
+  const DiagnosisReport& r = d.dwells;
   DiagnosisFiles f = diagnosis_files(dir);
-  json j = diagnosis_json(r, session);
-  std::string markdown = diagnosis_markdown(r, session);
-  if (kalman) {
-    add_kalman_diagnosis(j, *kalman);
-    markdown += kalman_diagnosis_markdown(*kalman);
-  }
+  const json j = diagnosis_json(d, session);
+  const std::string markdown = diagnosis_markdown(d, session);
   write_atomically(f.json, [&](std::ostream& o) { o << j.dump(2) << "\n"; });
   write_atomically(f.markdown, [&](std::ostream& o) { o << markdown; });
   if (!gnuplot.empty()) {

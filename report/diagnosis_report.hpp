@@ -6,8 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "filter/diagnosis.hpp"
-#include "filter/diagnosis_kalman.hpp"
+#include "filter/diagnosis_table.hpp"
 
 namespace sinscal {
 
@@ -18,16 +17,20 @@ struct DiagnosisFiles {
 /// The paths a diagnosis writes into `dir`.
 DiagnosisFiles diagnosis_files(const std::string& dir);
 
-nlohmann::ordered_json diagnosis_json(const DiagnosisReport& report, const std::string& session);
-std::string diagnosis_markdown(const DiagnosisReport& report, const std::string& session);
+nlohmann::ordered_json diagnosis_json(const TableDiagnosis& diagnosis, const std::string& session);
+std::string diagnosis_markdown(const TableDiagnosis& diagnosis, const std::string& session);
 /// The gnuplot script drawing the per-dwell residuals before and after into `png_path`.
 std::string residual_plot_script(const DiagnosisReport& report, const std::string& png_path);
 
 /// Writes the three files (each to a temporary name, then renamed); `gnuplot` empty: no PNG.
-/// With `kalman`, the Kalman-filter diagnosis of the turns joins them
-/// (report/diagnosis_kalman_report.hpp).
-DiagnosisFiles write_diagnosis(const DiagnosisReport& report, const std::string& session,
-                               const std::string& dir, const std::string& gnuplot = "gnuplot",
-                               const KalmanDiagnosis* kalman = nullptr);
+/// The turns' test, when run, joins them (report/diagnosis_kalman_report.hpp).
+DiagnosisFiles write_diagnosis(const TableDiagnosis& diagnosis, const std::string& session,
+                               const std::string& dir, const std::string& gnuplot = "gnuplot");
+
+/// "accel.k2 / accel.scale_asym (ambiguous on this plan; the model extended with accel.k2, the
+/// data's pick)" or the family alone: a finding's name as the user reads it.
+std::string finding_title(const TableFinding& finding);
+/// The gain of a finding in one line for the terminal.
+std::string finding_summary(const TableFinding& finding);
 
 }  // namespace sinscal

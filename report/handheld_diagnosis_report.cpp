@@ -183,10 +183,8 @@ void markdown_findings(std::ostringstream& m, const HandheldUnits& u, const Diag
   const FitFigures* before = &r.initial;
   for (const auto& f : r.findings) {
     m << "### " << f.family << "\n\n"
-      << (f.test == "F" ? "F statistic (noise rescaled by the fit's residual) "
-                        : "Likelihood ratio ")
-      << fixed(f.likelihood_ratio, 1) << " on " << f.dof << " dof, p = " << sci(f.p_value)
-      << " (threshold " << sci(f.threshold) << ").\n\n";
+      << "Test: " << statistic_text(f) << ", p = " << sci(f.p_value) << " (threshold "
+      << sci(f.threshold) << ").\n\n";
     markdown_fit_table(m, u, *before, f.with);
     m << "Base coefficients moved by up to " << fixed(f.base_shift_sigma, 1)
       << " of their sigmas.\n\n";

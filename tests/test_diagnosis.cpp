@@ -1,13 +1,14 @@
 // Model discovery on the static dwells (filter/diagnosis.hpp): an effect hidden in a simulated
 // session, which the calibrating model lacks, must be named first with its magnitude; a clean
 // session must name nothing; effects the plan cannot separate must be said to be so.
+#include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdio>
 #include <random>
 
-#include "filter/diagnosis.hpp"
+#include "filter/diagnosis_table.hpp"
 #include "helpers.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/units.hpp"
@@ -81,14 +82,23 @@ Outcome hide_and_diagnose(const SimSession& s, std::uint64_t seed, const std::st
   Outcome out;
   const std::string family = coefficient_family(coefficient);
   if (rep.findings.empty()) {
-    for (const auto& a : rep.ambiguous) {
-      out.ambiguous = a.family == family;
-      for (const auto& b : a.ambiguous_with) out.ambiguous = out.ambiguous || b.family == family;
-      out.first = "ambiguous: " + a.family;
-      for (const auto& b : a.ambiguous_with) out.first += " | " + b.family;
-    }
-    out.wrong = !out.ambiguous;
+    out.wrong = true;
+    out.first = "nothing";
     return out;
+  }
+  {
+    // An ambiguous set is a finding of its own: right when the hidden family is in it.
+    const CandidateTest& f = rep.findings.front();
+    std::vector<std::string> set = {f.family};
+    for (const auto& b : f.ambiguous_with)
+      if (std::find(set.begin(), set.end(), b.family) == set.end()) set.push_back(b.family);
+    if (set.size() > 1) {
+      out.ambiguous = std::find(set.begin(), set.end(), family) != set.end();
+      out.first = "ambiguous: " + set[0];
+      for (std::size_t i = 1; i < set.size(); ++i) out.first += " | " + set[i];
+      out.wrong = !out.ambiguous;
+      return out;
+    }
   }
   const CandidateTest& f = rep.findings.front();
   out.first = f.family;

@@ -1,0 +1,209 @@
+// The table diagnosis' Monte Carlo matrix (README "Diagnosis matrix"): every family of the
+// family table that a profile can lack, hidden alone in rot19 and seed8 sessions of the nav-fog
+// and mems profiles, plus pairs of a dwell effect and a turn effect, plus clean sessions; each
+// cell's magnitudes a band of the family's detection sigma on that plan and profile, each
+// coefficient's sign random. Scored strictly: the hidden family (or an ambiguous set holding it)
+// named first, no family the data lack named anywhere, every determined magnitude within 3
+// sigma.
+//
+// The full matrix is a documented command (hidden test, [.]):
+//   SINSCAL_MATRIX_SEEDS=30 build/tests/sinscal_tests "[matrix]"
+// with SINSCAL_MATRIX_FILTER=TEXT (cells whose name contains it), SINSCAL_MATRIX_BAND=strong|limit
+// (5-10 or 3-5 detection sigmas; default both) and SINSCAL_MATRIX_OUT=FILE (rows appended).
+// CI runs a slice ([matrix_slice]).
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+
+#include "diagnosis_cases.hpp"
+
+using namespace sinscal;
+using namespace sinscal::test;
+
+namespace {
+
+constexpr double kMatrixRate = 20.0;  // Hz: the detection sigmas scale with the noise densities
+
+struct Cell {
+  std::string plan, profile;          // config/plans/..., config/sensors/...
+  std::vector<std::string> families;  // hidden; none: a clean session
+  std::string name() const {
+    std::string n =
+        plan.substr(0, plan.find('.')) + " " + profile.substr(0, profile.find('.')) + " ";
+    if (families.empty()) return n + "clean";
+    for (std::size_t i = 0; i < families.size(); ++i) n += (i ? "+" : "") + families[i];
+    return n;
+  }
+};
+
+// The family's profile key as a section and a key ("accel.k2" -> [accel] k2).
+ProfileLine profile_line(const std::string& family, double lo_si, double hi_si) {
+  const CoefficientFamily& info = coefficient_family_info(family);
+  const auto dot = info.profile_key.find('.');
+  char b[160];
+  std::snprintf(b, sizeof b, "%s = %.6g %.6g %s", info.profile_key.substr(dot + 1).c_str(),
+                lo_si / info.si_per_unit(), hi_si / info.si_per_unit(), info.unit().c_str());
+  return {info.profile_key.substr(0, dot), b};
+}
+
+// The family's detection sigma on the plan and profile (SI): the median sigma of its components
+// in the dwells' fit with it added (families with a static signature), else in the filter run
+// with it switched on (the effects of the turns), on a clean session.
+double detection_sigma(const std::string& plan, const std::string& profile,
+                       const std::string& family) {
+  static std::map<std::string, double> cache;
+  const std::string key = plan + "|" + profile + "|" + family;
+  if (cache.count(key)) return cache[key];
+  // The profile without the family (as the sessions' filter profile), a session without it.
+  const HiddenCase c = hidden_case("matrix_sigma", plan, profile, {profile_line(family, 0.0, 0.0)},
+                                   999, kMatrixRate);
+  const Stage1Options s1 = default_stage1(&c.filter_profile);
+  const TableAttitudeError table{kDefaultTableAttitudeSigma};
+  const ClosedFormReport cal = run_closed_form(c.session, s1, table);
+  Stage2Options o = cal.stage2_options;
+  const auto& cat = coefficient_catalog();
+  std::vector<int> components;
+  for (std::size_t k = 0; k < cat.size(); ++k)
+    if (cat[k].family == family) components.push_back(static_cast<int>(k));
+  const auto first = static_cast<Eigen::Index>(o.parameters.size());
+  o.parameters.insert(o.parameters.end(), components.begin(), components.end());
+  const Stage2Result r = solve_stage2(cal.stage1, c.session.site, o);
+  std::vector<double> sigmas;
+  const double prior = coefficient_family_info(family).default_prior;
+  for (std::size_t j = 0; j < components.size(); ++j) {
+    const auto i = first + static_cast<Eigen::Index>(j);
+    const double s = std::sqrt(r.cov(i, i));
+    if (r.observable[static_cast<std::size_t>(i)] && s < prior / 3.0) sigmas.push_back(s);
+  }
+  if (sigmas.empty()) {
+    CalibratorOptions ko = turn_model_of(c.session, c.filter_profile, table.sigma).base;
+    ko.layout.set(family, true);
+    const KalmanRun run = run_kalman(c.session, ko);
+    for (int k : components) {
+      const auto& e = run.estimates[static_cast<std::size_t>(k)];
+      if (e.observed()) sigmas.push_back(e.sigma);
+    }
+  }
+  REQUIRE(!sigmas.empty());
+  std::sort(sigmas.begin(), sigmas.end());
+  return cache[key] = sigmas[sigmas.size() / 2];
+}
+
+struct CellScore {
+  int seeds = 0, first_right = 0, false_named = 0, all_named = 0, magnitudes = 0, covered = 0;
+  int ambiguous_first = 0;
+  std::string worst_story;
+};
+
+// Runs `seeds` sessions of the cell, magnitudes in [lo, hi] detection sigmas.
+CellScore run_cell(const Cell& cell, int seeds, double lo, double hi, std::uint64_t seed0) {
+  std::vector<ProfileLine> lines;
+  for (const auto& f : cell.families) {
+    const double s = detection_sigma(cell.plan, cell.profile, f);
+    lines.push_back(profile_line(f, lo * s, hi * s));
+  }
+  CellScore score;
+  for (int k = 0; k < seeds; ++k) {
+    const HiddenCase c = hidden_case("matrix", cell.plan, cell.profile, lines,
+                                     seed0 + static_cast<std::uint64_t>(k), kMatrixRate);
+    const DiagnosisOutcome o = diagnose_hidden(c, cell.families);
+    ++score.seeds;
+    const bool right = cell.families.empty() ? o.result.findings.empty() : o.first_right;
+    score.first_right += right ? 1 : 0;
+    score.ambiguous_first += o.ambiguous_first ? 1 : 0;
+    score.false_named += o.false_names.empty() ? 0 : 1;
+    score.all_named += o.all_named ? 1 : 0;
+    if (o.magnitudes_checked > 0) {
+      ++score.magnitudes;
+      score.covered += o.worst_sigma < 3.0 ? 1 : 0;
+    }
+    if ((!right || !o.false_names.empty()) && score.worst_story.empty())
+      score.worst_story =
+          "seed " + std::to_string(seed0 + static_cast<std::uint64_t>(k)) + ": " + o.story;
+  }
+  return score;
+}
+
+std::string row(const Cell& cell, const char* band, const CellScore& s) {
+  char b[512];
+  std::snprintf(b, sizeof b, "| %s | %s | %d/%d | %d | %d | %d/%d | %d |", cell.name().c_str(),
+                band, s.first_right, s.seeds, s.ambiguous_first, s.false_named, s.covered,
+                s.magnitudes, cell.families.size() > 1 ? s.all_named : -1);
+  return b;
+}
+
+std::vector<Cell> matrix_cells() {
+  std::vector<Cell> cells;
+  const std::vector<std::string> families = {
+      "accel.k2",        "gyro.scale_asym", "accel.scale_asym", "gyro.g_sensitivity",
+      "accel.lever_arm", "time_delay",      "gyro.bias_drift",  "accel.bias_drift"};
+  for (const std::string profile : {"nav-fog.ini", "mems.ini"})
+    for (const std::string plan : {"rot19.ini", "seed8.ini"}) {
+      cells.push_back({plan, profile, {}});
+      for (const auto& f : families) cells.push_back({plan, profile, {f}});
+      // Pairs: a dwell effect and a turn effect together.
+      cells.push_back({plan, profile, {"accel.k2", "time_delay"}});
+      cells.push_back({plan, profile, {"gyro.g_sensitivity", "accel.lever_arm"}});
+      cells.push_back({plan, profile, {"gyro.bias_drift", "gyro.scale_asym"}});
+    }
+  return cells;
+}
+
+}  // namespace
+
+TEST_CASE("Diagnosis matrix: every family hidden, both plans, both profiles", "[.][matrix]") {
+  const char* env_seeds = std::getenv("SINSCAL_MATRIX_SEEDS");
+  const char* env_filter = std::getenv("SINSCAL_MATRIX_FILTER");
+  const char* env_band = std::getenv("SINSCAL_MATRIX_BAND");
+  const char* env_out = std::getenv("SINSCAL_MATRIX_OUT");
+  const int seeds = env_seeds ? std::atoi(env_seeds) : 30;
+  const std::string band = env_band ? env_band : "";
+  std::printf(
+      "| cell | band | named first | of which ambiguous | false name | magnitudes within 3 "
+      "sigma | pair both named |\n|---|---|---|---|---|---|---|\n");
+  for (const auto& cell : matrix_cells()) {
+    if (env_filter && cell.name().find(env_filter) == std::string::npos) continue;
+    const std::vector<std::pair<const char*, std::pair<double, double>>> bands =
+        cell.families.empty()
+            ? std::vector<std::pair<const char*, std::pair<double, double>>>{{"-", {0.0, 0.0}}}
+            : std::vector<std::pair<const char*, std::pair<double, double>>>{
+                  {"strong", {5.0, 10.0}}, {"limit", {3.0, 5.0}}};
+    for (const auto& [name, range] : bands) {
+      if (!band.empty() && name != band && !cell.families.empty()) continue;
+      const CellScore s = run_cell(cell, seeds, range.first, range.second, 5000);
+      const std::string r = row(cell, name, s);
+      std::printf("%s\n", r.c_str());
+      if (!s.worst_story.empty()) std::printf("    first miss: %s\n", s.worst_story.c_str());
+      std::fflush(stdout);
+      if (env_out) {
+        std::FILE* f = std::fopen(env_out, "a");
+        if (f) {
+          std::fprintf(f, "%s\n", r.c_str());
+          if (!s.worst_story.empty())
+            std::fprintf(f, "    first miss: %s\n", s.worst_story.c_str());
+          std::fclose(f);
+        }
+      }
+    }
+  }
+}
+
+// CI's slice: the hardest cells a few seeds each, every seed right (a dwell effect under the
+// turns' test, an effect of the turns on the 8-orientation plan, a pair, a clean session).
+TEST_CASE("Diagnosis matrix slice: dwell effect under the turns' test, pair, clean",
+          "[diagnosis][matrix_slice]") {
+  const std::vector<Cell> slice = {
+      {"rot19.ini", "nav-fog.ini", {"accel.k2"}},
+      {"seed8.ini", "nav-fog.ini", {"time_delay"}},
+      {"rot19.ini", "nav-fog.ini", {"gyro.g_sensitivity", "accel.lever_arm"}},
+      {"rot19.ini", "nav-fog.ini", {}}};
+  for (const auto& cell : slice) {
+    const CellScore s = run_cell(cell, 2, 5.0, 10.0, 7000);
+    INFO(row(cell, "strong", s) << " " << s.worst_story);
+    CHECK(s.first_right == s.seeds);
+    CHECK(s.false_named == 0);
+    CHECK(s.covered == s.magnitudes);
+    if (cell.families.size() > 1) CHECK(s.all_named == s.seeds);
+  }
+}
