@@ -11,8 +11,11 @@
 #include <stdexcept>
 
 #include "filter/ins_error_model.hpp"
+#include "models/attitude.hpp"
 #include "models/coefficient_families.hpp"
+#include "models/earth.hpp"
 #include "models/imu_error_model.hpp"
+#include "models/units.hpp"
 
 namespace sinscal {
 
@@ -36,14 +39,24 @@ struct WhiteDwell {
 class StaticDesign {
  public:
   StaticDesign(const std::vector<EquivalentInputs>& inputs, const Site& site,
-               const TableAttitudeError& table)
-      : inputs_(inputs), site_(site), table_(table) {}
+               const TableAttitudeError& table, bool base_attitude)
+      : inputs_(inputs), site_(site), table_(table), base_attitude_(base_attitude) {}
 
   std::vector<WhiteDwell> whiten(const std::vector<int>& parameters) const {
     std::vector<WhiteDwell> out;
     for (const auto& in : inputs_) {
-      const auto H6 = equivalent_input_map(in.dwell.C_b_n_known, site_, parameters,
+      const auto Hc = equivalent_input_map(in.dwell.C_b_n_known, site_, parameters,
                                            0.5 * (in.dwell.t_start + in.dwell.t_end));
+      // The table base's error (closed form's stage 2 with a base): three more columns.
+      Eigen::Matrix<double, 6, Eigen::Dynamic> H6(6, Hc.cols() + (base_attitude_ ? 3 : 0));
+      H6.leftCols(Hc.cols()) = Hc;
+      if (base_attitude_) {
+        const Earth& earth = Earth::wgs84();
+        H6.rightCols(3).setZero();
+        H6.block<3, 3>(ins_input::kAccel.index, Hc.cols()) =
+            skew(-earth.gravity_n(site_.lat_rad, site_.h_m));
+        H6.block<3, 3>(ins_input::kGyro.index, Hc.cols()) = skew(earth.omega_ie_n(site_.lat_rad));
+      }
       const Matrix6d R6 = stage2_input_covariance(in, site_, table_);
       WhiteDwell w;
       for (int i = 0; i < 6; ++i)
@@ -72,18 +85,22 @@ class StaticDesign {
   const std::vector<EquivalentInputs>& inputs() const { return inputs_; }
   const Site& site() const { return site_; }
   const TableAttitudeError& table() const { return table_; }
+  bool base_attitude() const { return base_attitude_; }
 
  private:
   const std::vector<EquivalentInputs>& inputs_;
   const Site& site_;
   const TableAttitudeError& table_;
+  bool base_attitude_ = false;
 };
 
 // The families' default priors (SI) of the parameters: a weak prior that makes every fit
 // determinate (a direction no dwell sees is predicted as zero) without pulling observed ones.
-Eigen::VectorXd prior_sigmas(const std::vector<int>& parameters) {
+Eigen::VectorXd prior_sigmas(const std::vector<int>& parameters, bool base_attitude) {
   const auto& cat = coefficient_catalog();
-  Eigen::VectorXd s(static_cast<Eigen::Index>(parameters.size()));
+  Eigen::VectorXd s(static_cast<Eigen::Index>(parameters.size()) + (base_attitude ? 3 : 0));
+  // The base's three angles: a weak prior of a table set up on its site (1 deg).
+  if (base_attitude) s.tail<3>().setConstant(units::deg);
   for (std::size_t k = 0; k < parameters.size(); ++k)
     s(static_cast<Eigen::Index>(k)) =
         coefficient_family_info(cat[static_cast<std::size_t>(parameters[k])].family).default_prior;
@@ -110,11 +127,12 @@ FitFigures figures(const StaticDesign& design, const std::vector<int>& parameter
   FitFigures f;
   Stage2Options o;
   o.table = design.table();
+  o.base_attitude = design.base_attitude();
   o.parameters = parameters;
   f.fit = solve_stage2(design.inputs(), design.site(), o);
   f.chi2 = f.fit.chi2_per_dof * f.fit.dof;
   const auto dwells = design.whiten(parameters);
-  const Eigen::VectorXd p0 = prior_sigmas(parameters);
+  const Eigen::VectorXd p0 = prior_sigmas(parameters, design.base_attitude());
   const Eigen::VectorXd theta = solve_with_prior(dwells, p0, -1);
   double sa = 0.0, sg = 0.0, ha = 0.0, hg = 0.0, hz = 0.0;
   int na = 0, ng = 0, nha = 0, nhg = 0, nz = 0, inputs = 0;
@@ -157,6 +175,7 @@ CandidateTest separability(const StaticDesign& design, const std::vector<int>& c
   c.separated_by = info.separated_by;
   Stage2Options so;
   so.table = design.table();
+  so.base_attitude = design.base_attitude();
   so.parameters = current;
   so.parameters.push_back(component);
   const Stage2Result r = solve_stage2(design.inputs(), design.site(), so);
@@ -410,7 +429,8 @@ DwellResidual residual_of(const EquivalentInputs& in, const Site& site,
 void fill_residuals(const StaticDesign& design, const std::vector<int>& parameters,
                     std::vector<DwellResidual>& out, bool after) {
   const auto dwells = design.whiten(parameters);
-  const Eigen::VectorXd theta = solve_with_prior(dwells, prior_sigmas(parameters), -1);
+  const Eigen::VectorXd theta =
+      solve_with_prior(dwells, prior_sigmas(parameters, design.base_attitude()), -1);
   for (std::size_t i = 0; i < dwells.size(); ++i) {
     const Eigen::VectorXd r = dwells[i].u - dwells[i].H * theta;
     auto& target = after ? out[i].after : out[i].before;
@@ -471,17 +491,18 @@ DwellTests::DwellTests(std::vector<EquivalentInputs> inputs, const Site& site,
 }
 
 FitFigures DwellTests::fit(const std::vector<int>& parameters) const {
-  return figures(StaticDesign(inputs_, site_, base_.table), parameters);
+  return figures(StaticDesign(inputs_, site_, base_.table, base_.base_attitude), parameters);
 }
 
 std::vector<CandidateTest> DwellTests::round(const std::vector<int>& current,
                                              const FitFigures& now) const {
-  return run_round(StaticDesign(inputs_, site_, base_.table), current, now, options_);
+  return run_round(StaticDesign(inputs_, site_, base_.table, base_.base_attitude), current, now,
+                   options_);
 }
 
 std::vector<DwellResidual> DwellTests::residuals(const std::vector<int>& initial,
                                                  const std::vector<int>& final) const {
-  const StaticDesign design(inputs_, site_, base_.table);
+  const StaticDesign design(inputs_, site_, base_.table, base_.base_attitude);
   std::vector<DwellResidual> out;
   for (const auto& in : inputs_) out.push_back(residual_of(in, site_, base_.table));
   fill_residuals(design, initial, out, false);
