@@ -108,6 +108,7 @@ int cmd_diagnose(const std::vector<std::string>& args) {
   std::string session_path, out_dir;
   DiagnosisOptions o;
   double table_sigma = 2.5, min_dwell = 20.0;
+  int passes = 0;
   // clang-format off
   d.add_options()
       ("help,h", "this help")
@@ -123,6 +124,9 @@ int cmd_diagnose(const std::vector<std::string>& args) {
       ("prefer", po::value(&o.prefer)->multitoken()->composing(),
        "out of an ambiguous set (effects this plan cannot tell apart), extend the model with "
        "this family (repeatable; default: the member with the best fit)")
+      ("passes", po::value(&passes)->default_value(0),
+       "linearize both tests about the filter's calibration after this many passes (large "
+       "errors: MEMS); 0: automatic (3 when one pass's NIS per dof is above 1.5), 1: about zero")
       ("no-plot", "write no PNG (no gnuplot needed)")
       ("no-kalman", "skip the Kalman-filter test of the effects of the turns")
       ("force", "run even when the plausibility gate fails");
@@ -144,9 +148,10 @@ int cmd_diagnose(const std::vector<std::string>& args) {
   const Session any = Session::load(session_path, Session::PlanNeed::Optional);
   if (!any.has_plan) {
     if (given(*vm, "table-sigma") || vm->count("force") || vm->count("no-kalman") ||
-        given(*vm, "min-dwell") || vm->count("prefer"))
+        given(*vm, "min-dwell") || vm->count("prefer") || given(*vm, "passes"))
       throw UsageError(
-          "--table-sigma, --min-dwell, --prefer, --force and --no-kalman act on table sessions; " +
+          "--table-sigma, --min-dwell, --prefer, --passes, --force and --no-kalman act on table "
+          "sessions; " +
           session_path + " has no plan (a hand-held session)");
     if (given(*vm, "gravity") && !(h.run.gravity >= 9.7 && h.run.gravity <= 9.9))
       throw UsageError("--gravity must be within 9.7 and 9.9 m/s^2 (the Earth's surface)");
@@ -169,6 +174,7 @@ int cmd_diagnose(const std::vector<std::string>& args) {
   if (!(table_sigma > 0.0 && table_sigma < 3600.0))
     throw UsageError("--table-sigma must be above 0 and below 3600 arcsec");
   if (!(min_dwell > 0.0 && min_dwell < 1e6)) throw UsageError("--min-dwell must be positive");
+  if (passes < 0 || passes > 20) throw UsageError("--passes must be 0 (automatic) to 20");
   for (const auto& f : o.prefer) {
     if (!is_extended_family(f))
       throw UsageError("--prefer " + f + ": not an extended family of the family table (" +
@@ -189,16 +195,24 @@ int cmd_diagnose(const std::vector<std::string>& args) {
   PlausibilityReport gate = check_plausibility(session, limits);
   enforce(gate, force);
   const TableAttitudeError table{table_sigma * units::arcsec};
-  const ClosedFormReport calibration = run_closed_form(session, s1, table);
+  std::optional<TurnModel> turns;
+  std::optional<ImuErrorModel> about;
+  if (profile) {
+    turns = turn_model_of(session, *profile, table.sigma);
+    turns->run_filter = vm->count("no-kalman") == 0;
+    about = linearize(*turns, passes);
+    if (about)
+      std::printf(
+          "Linearized about the filter's calibration (%d passes): the session's errors "
+          "are beyond one linearization about zero\n",
+          passes == 0 ? 3 : passes);
+  }
+  const ClosedFormReport calibration =
+      run_closed_form(session, s1, table, !about, about ? &*about : nullptr);
   gate.checks.push_back(check_stage1_fit(calibration.stage1, limits, session.log.file));
   enforce(gate, force);
   TableDiagnosisOptions to;
   to.dwells = o;
-  std::optional<TurnModel> turns;
-  if (profile) {
-    turns = turn_model_of(session, *profile, table.sigma);
-    turns->run_filter = vm->count("no-kalman") == 0;
-  }
   const TableDiagnosis diagnosis = diagnose_table(
       calibration.stage1, session.site, calibration.stage2_options, to, turns ? &*turns : nullptr);
   print_diagnosis(diagnosis);

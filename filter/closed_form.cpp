@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <optional>
 #include <stdexcept>
 
 #include "filter/dwell_navigation.hpp"
@@ -534,6 +535,28 @@ bool is_paper_plan(const Session& session, const std::vector<EquivalentInputs>& 
 
 namespace {
 // The samples turned by a rotation, both triads: the alignment's mounting taken out.
+// The samples compensated with a model (rates at the static dwells: no angular acceleration).
+class CompensatedSource : public SampleSource {
+ public:
+  CompensatedSource(SampleSource& in, const ImuErrorModel& model, double time_offset)
+      : in_(in), model_(model), time_offset_(time_offset) {}
+  bool next(ImuSample& s) override {
+    if (!in_.next(s)) return false;
+    if (!(s.dt > 0.0)) return true;  // stage 1 refuses it with the reason
+    Eigen::Vector3d omega, f;
+    model_.compensate(s.dtheta_b / s.dt, s.dv_b / s.dt, Eigen::Vector3d::Zero(), omega, f,
+                      s.t - time_offset_);
+    s.dtheta_b = omega * s.dt;
+    s.dv_b = f * s.dt;
+    return true;
+  }
+
+ private:
+  SampleSource& in_;
+  const ImuErrorModel& model_;
+  double time_offset_;
+};
+
 class TurnedSource : public SampleSource {
  public:
   TurnedSource(SampleSource& in, const Eigen::Matrix3d& C) : in_(in), C_(C) {}
@@ -597,14 +620,19 @@ void turn_back(Stage2Result& r, const Eigen::Matrix3d& C) {
 
 // The alignment from the session's dwells; when significant, the dwells' attitudes turned by its
 // base. Returns the turn of the samples (its mounting taken out), identity otherwise.
-Eigen::Matrix3d apply_alignment(const Session& session, PlanTimeline& timeline,
-                                ClosedFormReport& r) {
+Eigen::Matrix3d apply_alignment(const Session& session, PlanTimeline& timeline, ClosedFormReport& r,
+                                const ImuErrorModel* about) {
   std::vector<AlignmentDwell> means;
   try {
     // Bad samples left out of the means; stage 1 reports them.
     LogReader reader(session.log);
     reader.skip_bad_samples([](const BadSampleError&) {});
-    means = dwell_means(reader, timeline, session.time_offset, kAlignmentEdge);
+    if (about) {
+      CompensatedSource compensated(reader, *about, session.time_offset);
+      means = dwell_means(compensated, timeline, session.time_offset, kAlignmentEdge);
+    } else {
+      means = dwell_means(reader, timeline, session.time_offset, kAlignmentEdge);
+    }
   } catch (const std::runtime_error&) {
     return Eigen::Matrix3d::Identity();  // a log stage 1 will refuse, with the reason
   }
@@ -640,14 +668,17 @@ void set_mounting(const Stage2Result& r, InstallationResult& in) {
 }  // namespace
 
 ClosedFormReport run_closed_form(const Session& session, const Stage1Options& stage1,
-                                 const TableAttitudeError& table, bool align_first) {
+                                 const TableAttitudeError& table, bool align_first,
+                                 const ImuErrorModel* about) {
   ClosedFormReport r;
   r.stage1_options = stage1;
   PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
   const Eigen::Matrix3d C_turn =
-      align_first ? apply_alignment(session, timeline, r) : Eigen::Matrix3d::Identity();
+      align_first ? apply_alignment(session, timeline, r, about) : Eigen::Matrix3d::Identity();
   LogReader reader(session.log);
-  TurnedSource turned(reader, C_turn);
+  std::optional<CompensatedSource> compensated;
+  if (about) compensated.emplace(reader, *about, session.time_offset);
+  TurnedSource turned(compensated ? static_cast<SampleSource&>(*compensated) : reader, C_turn);
   r.stage1 = run_stage1(turned, timeline.dwells, session.site, stage1, session.time_offset,
                         session.log.file);
   r.stage2_options.table = table;

@@ -175,8 +175,12 @@ struct ClosedFormReport {
 };
 
 /// `align`: align from the dwells first and estimate the base in stage 2 (the command line's
-/// default); false: the plan's attitudes as they are, no base.
+/// default); false: the plan's attitudes as they are, no base. `about`: the samples compensated
+/// with this model first (its inverse, ImuErrorModel::compensate), so that stage 1 linearizes
+/// about it and stage 2 gives corrections to it (errors too large for one linearization about
+/// zero: MEMS).
 ClosedFormReport run_closed_form(const Session& session, const Stage1Options& stage1,
-                                 const TableAttitudeError& table, bool align = true);
+                                 const TableAttitudeError& table, bool align = true,
+                                 const class ImuErrorModel* about = nullptr);
 
 }  // namespace sinscal

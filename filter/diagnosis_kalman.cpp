@@ -22,6 +22,8 @@ KalmanRun run_checked(const Session& session, const CalibratorOptions& options,
   // the innovations of the whole session.
   KalmanRunOptions run;
   run.nis_alarm_z = std::numeric_limits<double>::infinity();
+  // A model to start from (filter/diagnosis_table.hpp: linearize) carries the mounting already.
+  run.align = !options.initial_model.has_value();
   KalmanRun r = run_kalman(session, options, nullptr, run);
   if (!r.stopped.empty())
     throw std::runtime_error("Kalman filter " + what + " stopped: " + r.stopped);

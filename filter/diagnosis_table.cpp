@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "models/coefficient_families.hpp"
@@ -317,6 +318,26 @@ class TableRounds {
 };
 
 }  // namespace
+
+std::optional<ImuErrorModel> linearize(TurnModel& model, int passes) {
+  if (!model.session || passes == 1) return std::nullopt;
+  KalmanRunOptions run;
+  run.nis_alarm_z = std::numeric_limits<double>::infinity();
+  if (passes == 0) {
+    const KalmanRun one = run_kalman(*model.session, model.base, nullptr, run);
+    if (!one.stopped.empty() || !one.diverged.empty() || one.nis_per_dof <= kRelinearizeNis)
+      return std::nullopt;  // a run that stops is reported by the diagnosis' own first run
+    passes = 3;
+  }
+  run.passes = passes;
+  const KalmanRun r = run_kalman(*model.session, model.base, nullptr, run);
+  if (!r.stopped.empty() || !r.diverged.empty())
+    throw std::runtime_error("the filter's passes to linearize about stopped: " + r.stopped +
+                             r.diverged);
+  model.base.initial_model = r.model;
+  if (r.installation.base_estimated) model.base.initial_base_n = r.installation.base_n;
+  return r.model;
+}
 
 TableDiagnosis diagnose_table(const std::vector<EquivalentInputs>& inputs, const Site& site,
                               const Stage2Options& base, const TableDiagnosisOptions& o,

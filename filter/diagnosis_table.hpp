@@ -60,6 +60,19 @@ struct TurnModel {
 /// session's sensor profile, the table's attitude sigma (rad), the session's time offset.
 TurnModel turn_model_of(const Session& session, const SensorProfile& profile, double table_sigma);
 
+/// One pass's NIS per dof above this: the session's errors are too large for one linearization
+/// about zero (MEMS), and both tests linearize about a first calibration.
+constexpr double kRelinearizeNis = 1.5;
+
+/// The model both tests linearize about, or none (about zero, as one pass of calibrate): the
+/// filter's estimate after `passes` passes over the log with the session's model; `passes` 0:
+/// automatic, 3 passes when one pass's NIS per dof is above kRelinearizeNis, else none. Sets the
+/// model (and its base) as the filter's starting point (`model.base.initial_model`); the closed
+/// form takes it as `run_closed_form(..., false, about)` (no alignment: the model carries the
+/// mounting), so the dwells' fits are corrections to it. Throws
+/// std::runtime_error when a pass stops early.
+std::optional<ImuErrorModel> linearize(TurnModel& model, int passes);
+
 /// A coefficient of a finding in the extended calibration.
 struct FindingCoefficient {
   int catalog = 0;

@@ -110,13 +110,16 @@ inline DiagnosisOutcome diagnose_hidden(const HiddenCase& c, const std::vector<s
                                         bool turns = true) {
   const Stage1Options s1 = default_stage1(&c.filter_profile);
   const TableAttitudeError table{kDefaultTableAttitudeSigma};
-  const ClosedFormReport calibration = run_closed_form(c.session, s1, table);
+  TurnModel model = turn_model_of(c.session, c.filter_profile, table.sigma);
+  model.run_filter = turns;
+  const auto about = linearize(model, 0);
+  const ClosedFormReport calibration =
+      run_closed_form(c.session, s1, table, !about, about ? &*about : nullptr);
   TableDiagnosisOptions o;
   o.dwells.prefer = prefer;
-  const TurnModel model = turn_model_of(c.session, c.filter_profile, table.sigma);
   DiagnosisOutcome out;
-  out.result = diagnose_table(calibration.stage1, c.session.site, calibration.stage2_options, o,
-                              turns ? &model : nullptr);
+  out.result =
+      diagnose_table(calibration.stage1, c.session.site, calibration.stage2_options, o, &model);
   const auto is_hidden = [&](const std::string& f) {
     return std::find(hidden.begin(), hidden.end(), f) != hidden.end();
   };

@@ -60,7 +60,10 @@ double detection_sigma(const std::string& plan, const std::string& profile,
                                    999, kMatrixRate);
   const Stage1Options s1 = default_stage1(&c.filter_profile);
   const TableAttitudeError table{kDefaultTableAttitudeSigma};
-  const ClosedFormReport cal = run_closed_form(c.session, s1, table);
+  TurnModel model = turn_model_of(c.session, c.filter_profile, table.sigma);
+  const auto about = linearize(model, 0);
+  const ClosedFormReport cal =
+      run_closed_form(c.session, s1, table, !about, about ? &*about : nullptr);
   Stage2Options o = cal.stage2_options;
   const auto& cat = coefficient_catalog();
   std::vector<int> components;
@@ -77,7 +80,7 @@ double detection_sigma(const std::string& plan, const std::string& profile,
     if (r.observable[static_cast<std::size_t>(i)] && s < prior / 3.0) sigmas.push_back(s);
   }
   if (sigmas.empty()) {
-    CalibratorOptions ko = turn_model_of(c.session, c.filter_profile, table.sigma).base;
+    CalibratorOptions ko = model.base;
     ko.layout.set(family, true);
     const KalmanRun run = run_kalman(c.session, ko);
     for (int k : components) {

@@ -145,3 +145,4 @@ TEST_CASE("Diagnosis statistics: log10 of tiny p-values is continuous where p un
     }
   }
 }
+
