@@ -200,7 +200,11 @@ int cmd_diagnose(const std::vector<std::string>& args) {
   if (profile) {
     turns = turn_model_of(session, *profile, table.sigma);
     turns->run_filter = vm->count("no-kalman") == 0;
-    about = linearize(*turns, passes);
+    std::string failed;
+    about = linearize(*turns, passes, &failed);
+    if (!failed.empty())
+      std::printf("The filter's passes to linearize about failed (%s): diagnosed about zero\n",
+                  failed.c_str());
     if (about)
       std::printf(
           "Linearized about the filter's calibration (%d passes): the session's errors "

@@ -95,7 +95,12 @@ KalmanCandidateTest test_candidate(const Session& session, const CalibratorOptio
   c.separated_by = coefficient_family_info(family).separated_by;
   CalibratorOptions with = current;
   with.layout.set(family, true);
-  r = run_checked(session, with, "with " + family);
+  try {
+    r = run_checked(session, with, "with " + family);
+  } catch (const std::runtime_error& e) {
+    c.failed = e.what();
+    return c;
+  }
   const auto& cat = coefficient_catalog();
   for (std::size_t k = 0; k < cat.size(); ++k)
     if (cat[k].family == family && r.estimates[k].status == CoefficientEstimate::Status::Estimated)
@@ -132,20 +137,27 @@ HeldoutTurns heldout_turns(const Session& session, const CalibratorOptions& opti
   HeldoutTurns h;
   if (turns.size() < 2) return h;
   double nis = 0.0, vel = 0.0;
+  int scored = 0;
   for (std::size_t fold = 0; fold < 2; ++fold) {
     CalibratorOptions o = options;
     for (std::size_t k = fold; k < turns.size(); k += 2) o.holdout.push_back(turns[k]);
-    const KalmanRun r = run_checked(session, o, "with turns held out");
+    KalmanRun r;
+    try {
+      r = run_checked(session, o, "with turns held out");
+    } catch (const std::runtime_error& e) {
+      return {0, e.what(), 0.0, 0.0};
+    }
     for (const auto& p : r.holdout) {
       if (p.dof == 0) continue;
       nis += p.nis / p.dof;
       vel += p.velocity_innovation.squaredNorm();
-      ++h.turns;
+      ++scored;
     }
   }
-  if (h.turns > 0) {
-    h.sigmas = std::sqrt(nis / h.turns);
-    h.velocity = std::sqrt(vel / h.turns);
+  if (scored > 0) {
+    h.turns = scored;
+    h.sigmas = std::sqrt(nis / scored);
+    h.velocity = std::sqrt(vel / scored);
   }
   return h;
 }
@@ -173,7 +185,7 @@ void TurnTests::extend(const std::string& family) {
   if (model_.layout.on(family)) return;
   model_.layout.set(family, true);
   for (auto& [f, r] : last_round_)
-    if (f == family) {
+    if (f == family && !r.estimates.empty()) {
       now_ = std::move(r);
       last_round_.clear();
       return;

@@ -46,7 +46,9 @@ struct KalmanCandidateTest {
   double nis_scale = 1.0;    // the NIS per dof W was divided by (1: none)
   double p_value = 1.0;      // upper tail of chi-square(dof)
   double log10_p = 0.0;      // log10 of p_value, finite where p underflows
-  double threshold = 0.0;    // p below this is significant (alpha / candidates)
+  /// The run with the candidate stopped or diverged (the reason): not tested (dof 0).
+  std::string failed;
+  double threshold = 0.0;  // p below this is significant (alpha / candidates)
   bool significant = false;
   bool named = false;
   std::vector<int> catalog;  // the family's coefficient indices
@@ -73,13 +75,16 @@ struct KalmanDiagnosis {
 /// first update after each held-out turn scored: how well the coefficients learnt from the other
 /// turns and the dwells predict the navigation error a turn accumulates.
 struct HeldoutTurns {
-  int turns = 0;          // held-out turns scored
+  int turns = 0;          // held-out turns scored (0: none; see `failed`)
+  std::string failed;     // a run with turns held out diverged (errors too large to predict)
   double sigmas = 0.0;    // RMS of sqrt(NIS / dof) of those updates (1: as predicted)
   double velocity = 0.0;  // m/s: RMS of the zero-velocity innovation's norm
 };
 
 /// The held-out turns of `options`' model on the session (two runs of the filter). Turns with
-/// no time between their dwells' update margins are skipped; none: turns = 0.
+/// no time between their dwells' update margins are skipped; none: turns = 0. A run that
+/// diverges (the turns' errors too large to predict without updates) leaves turns = 0 and the
+/// reason in `failed`.
 HeldoutTurns heldout_turns(const Session& session, const CalibratorOptions& options);
 
 /// The turns' side of a table diagnosis: the filter run with the current model, then with each
@@ -92,7 +97,8 @@ class TurnTests {
   const KalmanRun& now() const { return now_; }
   const CalibratorOptions& model() const { return model_; }
   /// Tests each family against the current model (the runs are kept for extend()). Throws
-  /// std::invalid_argument for a family that is not extended or already in the model.
+  /// std::invalid_argument for a family that is not extended or already in the model; a run
+  /// that stops or diverges leaves its family untested (KalmanCandidateTest::failed).
   std::vector<KalmanCandidateTest> round(const std::vector<std::string>& families);
   /// Adds a family to the model: the last round's run with it, else a new run.
   void extend(const std::string& family);

@@ -319,7 +319,7 @@ class TableRounds {
 
 }  // namespace
 
-std::optional<ImuErrorModel> linearize(TurnModel& model, int passes) {
+std::optional<ImuErrorModel> linearize(TurnModel& model, int passes, std::string* failed) {
   if (!model.session || passes == 1) return std::nullopt;
   KalmanRunOptions run;
   run.nis_alarm_z = std::numeric_limits<double>::infinity();
@@ -331,9 +331,10 @@ std::optional<ImuErrorModel> linearize(TurnModel& model, int passes) {
   }
   run.passes = passes;
   const KalmanRun r = run_kalman(*model.session, model.base, nullptr, run);
-  if (!r.stopped.empty() || !r.diverged.empty())
-    throw std::runtime_error("the filter's passes to linearize about stopped: " + r.stopped +
-                             r.diverged);
+  if (!r.stopped.empty() || !r.diverged.empty()) {
+    if (failed) *failed = r.stopped + r.diverged;
+    return std::nullopt;
+  }
   model.base.initial_model = r.model;
   if (r.installation.base_estimated) model.base.initial_base_n = r.installation.base_n;
   return r.model;

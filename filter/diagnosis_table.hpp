@@ -69,9 +69,10 @@ constexpr double kRelinearizeNis = 1.5;
 /// automatic, 3 passes when one pass's NIS per dof is above kRelinearizeNis, else none. Sets the
 /// model (and its base) as the filter's starting point (`model.base.initial_model`); the closed
 /// form takes it as `run_closed_form(..., false, about)` (no alignment: the model carries the
-/// mounting), so the dwells' fits are corrections to it. Throws
-/// std::runtime_error when a pass stops early.
-std::optional<ImuErrorModel> linearize(TurnModel& model, int passes);
+/// mounting), so the dwells' fits are corrections to it. When a pass stops or diverges: none
+/// (about zero), the reason in `failed`.
+std::optional<ImuErrorModel> linearize(TurnModel& model, int passes,
+                                       std::string* failed = nullptr);
 
 /// A coefficient of a finding in the extended calibration.
 struct FindingCoefficient {

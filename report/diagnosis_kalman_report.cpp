@@ -44,6 +44,7 @@ namespace {
 
 json candidate_json(const KalmanCandidateTest& c, double alpha) {
   json j = {{"effect", c.family}, {"separable", c.dof > 0}};
+  if (!c.failed.empty()) j["failed"] = c.failed;
   if (c.dof > 0) {
     j["statistic"] = statistic_json(c, alpha);
     j["significant"] = c.significant;
@@ -117,6 +118,11 @@ std::string kalman_diagnosis_markdown(const KalmanDiagnosis& k) {
   for (const auto& round : k.rounds) {
     ++round_number;
     for (const auto& c : round) {
+      if (!c.failed.empty()) {
+        m << "| " << round_number << " | " << c.family << " | - | - | - | not tested: " << c.failed
+          << " |\n";
+        continue;
+      }
       if (c.dof == 0) {
         m << "| " << round_number << " | " << c.family << " | 0 | - | - | not separable ("
           << c.separated_by << ") |\n";

@@ -58,6 +58,7 @@ DiagnosisFiles diagnosis_files(const std::string& dir) {
 namespace {
 
 json heldout_turns_json(const std::optional<HeldoutTurns>& h) {
+  if (h && !h->failed.empty()) return {{"turns", 0}, {"failed", h->failed}};
   if (!h || h->turns == 0) return nullptr;
   return {{"turns", h->turns}, {"sigmas", h->sigmas}, {"velocity_mm_per_s", h->velocity / 1e-3}};
 }

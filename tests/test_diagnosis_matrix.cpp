@@ -96,6 +96,7 @@ double detection_sigma(const std::string& plan, const std::string& profile,
 struct CellScore {
   int seeds = 0, first_right = 0, false_named = 0, all_named = 0, magnitudes = 0, covered = 0;
   int ambiguous_first = 0;
+  int errors = 0;  // diagnoses that failed (a filter run that stopped or diverged)
   std::string worst_story;
 };
 
@@ -110,8 +111,17 @@ CellScore run_cell(const Cell& cell, int seeds, double lo, double hi, std::uint6
   for (int k = 0; k < seeds; ++k) {
     const HiddenCase c = hidden_case("matrix", cell.plan, cell.profile, lines,
                                      seed0 + static_cast<std::uint64_t>(k), kMatrixRate);
-    const DiagnosisOutcome o = diagnose_hidden(c, cell.families);
     ++score.seeds;
+    DiagnosisOutcome o;
+    try {
+      o = diagnose_hidden(c, cell.families);
+    } catch (const std::exception& e) {
+      ++score.errors;
+      if (score.worst_story.empty())
+        score.worst_story = "seed " + std::to_string(seed0 + static_cast<std::uint64_t>(k)) +
+                            ": diagnosis failed: " + e.what();
+      continue;
+    }
     const bool right = cell.families.empty() ? o.result.findings.empty() : o.first_right;
     score.first_right += right ? 1 : 0;
     score.ambiguous_first += o.ambiguous_first ? 1 : 0;
@@ -130,9 +140,10 @@ CellScore run_cell(const Cell& cell, int seeds, double lo, double hi, std::uint6
 
 std::string row(const Cell& cell, const char* band, const CellScore& s) {
   char b[512];
-  std::snprintf(b, sizeof b, "| %s | %s | %d/%d | %d | %d | %d/%d | %d |", cell.name().c_str(),
+  std::snprintf(b, sizeof b, "| %s | %s | %d/%d | %d | %d | %d/%d | %s | %d |", cell.name().c_str(),
                 band, s.first_right, s.seeds, s.ambiguous_first, s.false_named, s.covered,
-                s.magnitudes, cell.families.size() > 1 ? s.all_named : -1);
+                s.magnitudes, cell.families.size() > 1 ? std::to_string(s.all_named).c_str() : "-",
+                s.errors);
   return b;
 }
 
@@ -211,6 +222,7 @@ TEST_CASE("Diagnosis matrix slice: dwell effect under the turns' test, pair, cle
     CHECK(s.first_right == s.seeds);
     CHECK(s.false_named == 0);
     CHECK(s.covered == s.magnitudes);
+    CHECK(s.errors == 0);
     if (cell.families.size() > 1) CHECK(s.all_named == s.seeds);
   }
 }

@@ -145,4 +145,3 @@ TEST_CASE("Diagnosis statistics: log10 of tiny p-values is continuous where p un
     }
   }
 }
-
