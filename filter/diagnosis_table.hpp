@@ -71,8 +71,7 @@ constexpr double kRelinearizeNis = 1.5;
 /// form takes it as `run_closed_form(..., false, about)` (no alignment: the model carries the
 /// mounting), so the dwells' fits are corrections to it. When a pass stops or diverges: none
 /// (about zero), the reason in `failed`.
-std::optional<ImuErrorModel> linearize(TurnModel& model, int passes,
-                                       std::string* failed = nullptr);
+std::optional<ImuErrorModel> linearize(TurnModel& model, int passes, std::string* failed = nullptr);
 
 /// A coefficient of a finding in the extended calibration.
 struct FindingCoefficient {
