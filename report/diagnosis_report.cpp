@@ -279,6 +279,12 @@ std::string diagnosis_markdown(const TableDiagnosis& d, const std::string& sessi
   if (d.turns)
     m << " The Kalman filter with the same model: NIS per dof "
       << fixed(d.turns->initial_nis_per_dof, 3) << ".";
+  if (r.final_fit.fit.chi2_per_dof > 2.5)
+    m << "\n\n**Caution**: with the findings, the dwells' residual is still "
+      << fixed(r.final_fit.fit.chi2_per_dof, 1)
+      << " times its noise model (unmodelled noise such as bias instability, or errors beyond the "
+         "linearization): the tests rescale by it (F), but a finding without a held-out gain is "
+         "doubtful.";
   m << "\n\nEach round tests every candidate of the dwells" << (d.turns ? " and of the turns" : "")
     << " against one model at the family-wise level " << r.alpha
     << " (Bonferroni over the round's tests); the dwells' finding comes first, the "
