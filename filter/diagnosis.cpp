@@ -213,7 +213,7 @@ std::vector<DeterminedCombination> determined_combinations(const Stage2Result& f
     const auto i = it - fit.parameters.begin();
     if (!fit.observable[static_cast<std::size_t>(i)]) at.push_back(i);
   }
-  if (at.empty() || fit.theta_min_norm.size() == 0) return {};
+  if (at.empty() || fit.null_vectors.empty() || fit.theta_min_norm.size() == 0) return {};
   const auto a = static_cast<Eigen::Index>(at.size());
   // Z: the null vectors restricted to these components; a determined combination c has Z c = 0.
   Eigen::MatrixXd Z(static_cast<Eigen::Index>(fit.null_vectors.size()), a);

@@ -270,10 +270,37 @@ class TableRounds {
   int findings() const { return static_cast<int>(d_.findings.size()); }
 
  private:
+  // The family of an ambiguous set the turns pick: each run in the filter, the best innovation
+  // log-likelihood (the turns sweep each axis through every specific-force level between the
+  // dwells' and so tell K2 from the scale asymmetry). Empty: no set, no filter, or the user's pick.
+  std::string turns_pick(const CandidateTest& best) {
+    std::vector<std::string> set = {best.family};
+    for (const auto& c : best.ambiguous_with)
+      if (std::find(set.begin(), set.end(), c.family) == set.end()) set.push_back(c.family);
+    if (!turns_ || set.size() < 2) return "";
+    for (const auto& f : o_.dwells.prefer)
+      if (std::find(set.begin(), set.end(), f) != set.end()) return "";
+    set.erase(std::remove_if(set.begin(), set.end(),
+                             [&](const std::string& f) { return turns_->model().layout.on(f); }),
+              set.end());
+    if (set.size() < 2) return "";
+    std::string pick;
+    double best_ll = -std::numeric_limits<double>::infinity();
+    for (const auto& c : turns_->round(set))
+      if (c.failed.empty() && c.log_likelihood > best_ll) {
+        best_ll = c.log_likelihood;
+        pick = c.family;
+      }
+    return pick;
+  }
+
   TableFinding extend_dwells(CandidateTest& best, std::vector<CandidateTest>& round) {
     DiagnosisReport& rep = d_.dwells;
     if (!best.named) rep.ambiguous.push_back(best);
-    const CandidateTest member = pick_member(best, o_.dwells.prefer);
+    const std::string by_turns = turns_pick(best);
+    CandidateTest member =
+        pick_member(best, by_turns.empty() ? o_.dwells.prefer : std::vector<std::string>{by_turns});
+    if (!by_turns.empty()) member.picked_by = "turns";
     for (auto& c : round) c.named = c.family == member.family && c.separable == member.separable;
     TableFinding f = dwell_finding(member);
     f.dwells_before = now_;

@@ -90,8 +90,9 @@ struct TableFinding {
   Source source = Source::Dwells;
   std::string family;           // the family the model was extended with
   std::vector<int> components;  // catalog indices added (the dwells: the separable ones)
-  /// Other families that explain the same residual as well on this plan (an ambiguous set), and
-  /// who picked `family` out of it ("data": the best fit; "user": DiagnosisOptions::prefer).
+  /// Other families that explain the same residual as well on the dwells (an ambiguous set), and
+  /// who picked `family` out of it ("turns": the filter's best log-likelihood; "data": the
+  /// dwells' best fit; "user": DiagnosisOptions::prefer).
   std::vector<std::string> ambiguous_with;
   std::string picked_by;
   /// What separates each family of the set from the base coefficients (the family table):

@@ -125,8 +125,10 @@ std::string finding_title(const TableFinding& f) {
   if (f.ambiguous_with.empty()) return f.family;
   std::string t = f.family;
   for (const auto& a : f.ambiguous_with) t += " / " + a;
-  return t + " (ambiguous on this plan; the model extended with " + f.family +
-         (f.picked_by == "user" ? ", the user's pick)" : ", the data's pick)");
+  return t + " (ambiguous on this plan's dwells; the model extended with " + f.family +
+         (f.picked_by == "user"    ? ", the user's pick)"
+          : f.picked_by == "turns" ? ", the turns' pick)"
+                                   : ", the dwells' best fit)");
 }
 
 std::string finding_summary(const TableFinding& f) {
@@ -218,7 +220,10 @@ void markdown_finding(std::ostringstream& m, const TableFinding& f, int number) 
     m << "This plan cannot tell " << f.family;
     for (const auto& a : f.ambiguous_with) m << " from " << a;
     m << ": each explains the dwells as well. The model was extended with " << f.family << " ("
-      << (f.picked_by == "user" ? "`--prefer`" : "the best fit; `--prefer FAMILY` picks another")
+      << (f.picked_by == "user"    ? "`--prefer`"
+          : f.picked_by == "turns" ? "the turns' pick: the best innovation log-likelihood of the "
+                                     "filter run with each; `--prefer FAMILY` picks another"
+                                   : "the best fit; `--prefer FAMILY` picks another")
       << "); later rounds test the rest against it. What separates them: " << f.family << ": "
       << f.separated_by.front();
     for (std::size_t i = 0; i < f.ambiguous_with.size(); ++i)

@@ -218,6 +218,7 @@ check "diagnose: K2 hidden, the ambiguous set first" grep -qE "^1\. accel\.(k2|s
 check "diagnose: K2 hidden, no lever arm named" bash -c "! grep -qE '^[0-9]+\. accel.lever_arm' '$work/diag5.txt'"
 "$bin" diagnose --session "$work/k2/session.ini" --out "$work/k2/diag2" --no-plot --prefer accel.k2 > "$work/diag6.txt"
 check "diagnose --prefer: the user's pick extends the model" contains "$work/diag6.txt" "the model extended with accel.k2, the user's pick"
+check "diagnose: the turns pick K2 out of the set" contains "$work/diag5.txt" "the model extended with accel.k2, the turns' pick"
 check "diagnosis.json: the K2 magnitudes with sigma" python3 -c "import json,sys; d=json.load(open('$work/k2/diag2/diagnosis.json')); c=d['findings'][0]['coefficients']; sys.exit(not all(v['sigma'] and 20-3*v['sigma'] < abs(v['value']) < 30+3*v['sigma'] for v in c.values()))"
 "$bin" diagnose --session "$work/k2/session.ini" --out "$work/k2/diag3" --prefer accel.bias 2> "$work/diag7.err"
 check "diagnose --prefer a base family is a usage error" test $? -eq 1

@@ -210,7 +210,7 @@ TEST_CASE("Diagnosis matrix: every family hidden, both plans, both profiles", "[
 // CI's slice: the hardest cells a few seeds each, every seed right (a dwell effect under the
 // turns' test, an effect of the turns on the 8-orientation plan, a pair, a clean session).
 TEST_CASE("Diagnosis matrix slice: dwell effect under the turns' test, pair, clean",
-          "[diagnosis][matrix_slice]") {
+          "[diagnosis][matrix_slice][long]") {
   const std::vector<Cell> slice = {
       {"rot19.ini", "nav-fog.ini", {"accel.k2"}},
       {"seed8.ini", "nav-fog.ini", {"time_delay"}},

@@ -23,8 +23,13 @@ TEST_CASE(
     const DiagnosisOutcome o = diagnose_hidden(c, {"accel.k2"});
     INFO("seed " << seed << ": " << o.story);
     CHECK(o.first_right);
-    CHECK(o.ambiguous_first);  // rot19 has one specific-force level per axis
+    CHECK(o.ambiguous_first);  // rot19's dwells have one specific-force level per axis
     CHECK(o.false_names.empty());
+    // The turns sweep each axis through the levels between: they pick K2 out of the set.
+    CHECK(o.first.family == "accel.k2");
+    CHECK(o.first.picked_by == "turns");
+    CHECK(o.magnitudes_checked == 3);
+    CHECK(o.worst_sigma < 3.0);
     // With the user's pick, the model is extended with K2 and its magnitudes are the truth's.
     const DiagnosisOutcome u = diagnose_hidden(c, {"accel.k2"}, {"accel.k2"});
     INFO("prefer accel.k2: " << u.story);
@@ -37,7 +42,7 @@ TEST_CASE(
 }
 
 TEST_CASE("One story: gyro g-sensitivity hidden in rot19 reports all nine components with sigma",
-          "[diagnosis][table]") {
+          "[diagnosis][table][long]") {
   const HiddenCase c = hidden_case("table_gs", "rot19.ini", "nav-fog.ini",
                                    {{"gyro", "g_sensitivity = 0.03 0.05 deg/h/g"}}, 1, 50.0);
   const DiagnosisOutcome o = diagnose_hidden(c, {"gyro.g_sensitivity"});
@@ -55,7 +60,7 @@ TEST_CASE("One story: gyro g-sensitivity hidden in rot19 reports all nine compon
 }
 
 TEST_CASE("One story: a dwell effect and a turn effect together, each named, the dwells first",
-          "[diagnosis][table]") {
+          "[diagnosis][table][long]") {
   const HiddenCase c = hidden_case(
       "table_pair", "rot19.ini", "nav-fog.ini",
       {{"gyro", "bias_drift = 0.3 0.5 deg/h/h"}, {"timing", "time_delay = 0.2 0.4 ms"}}, 3, 50.0);
@@ -69,7 +74,7 @@ TEST_CASE("One story: a dwell effect and a turn effect together, each named, the
 }
 
 TEST_CASE("One story: a turn effect near its detection limit is named, nothing else",
-          "[diagnosis][table]") {
+          "[diagnosis][table][long]") {
   // rot19 at 50 Hz: the time delay's sigma in the filter is about 5 us; hidden at 20-25 us
   // (4-5 detection sigmas).
   const HiddenCase c = hidden_case("table_delay", "rot19.ini", "nav-fog.ini",
