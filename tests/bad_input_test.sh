@@ -542,7 +542,7 @@ dg() { S diagnose --session session.ini --out out/d --no-plot "$@"; }
 new handheld-diagnose-too-few-poses; handheld
 fixed 2 "needs at least 10 static poses|found 3" dg
 new handheld-diagnose-table-sigma; handheld
-fixed 1 "--table-sigma, --min-dwell, --prefer, --force and --no-kalman act on table sessions" dg --table-sigma 3
+fixed 1 "--table-sigma, --min-dwell, --prefer, --passes, --force and --no-kalman act on table" dg --table-sigma 3
 new handheld-diagnose-unknown-candidate; handheld
 fixed 1 "--candidates: 'accel.nonsense' is not an extended family" dg --candidates accel.nonsense
 new handheld-diagnose-base-candidate; handheld
