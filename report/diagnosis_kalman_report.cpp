@@ -102,7 +102,9 @@ std::string kalman_diagnosis_markdown(const KalmanDiagnosis& k) {
     << "Each candidate family is added to the filter and the session run again; its estimate is "
        "tested against zero (Wald statistic over the directions the data determine, chi-square; "
        "family-wise level "
-    << k.alpha << ", Bonferroni per round). NIS per dof of the session's model: ";
+    << k.alpha
+    << ", Bonferroni over each round's tests of the dwells and the turns together). NIS per dof of "
+       "the session's model: ";
   std::snprintf(line, sizeof line, "%.3f.\n\n", k.initial_nis_per_dof);
   m << line;
   if (k.findings.empty()) m << "No candidate is significant.\n\n";
