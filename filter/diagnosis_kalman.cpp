@@ -194,6 +194,16 @@ void TurnTests::extend(const std::string& family) {
   now_ = run_checked(session_, model_, "with " + family);
 }
 
+KalmanCandidateTest* most_significant(std::vector<KalmanCandidateTest>& round, double threshold) {
+  KalmanCandidateTest* best = nullptr;
+  for (auto& c : round) {
+    c.threshold = threshold;
+    c.significant = c.dof > 0 && c.p_value < threshold;
+    if (c.significant && (!best || c.log10_p < best->log10_p)) best = &c;
+  }
+  return best;
+}
+
 KalmanDiagnosis diagnose_kalman(const Session& session, const CalibratorOptions& base,
                                 const KalmanDiagnosisOptions& o) {
   check_candidates(base, o.candidates);
@@ -207,12 +217,7 @@ KalmanDiagnosis diagnose_kalman(const Session& session, const CalibratorOptions&
   while (!remaining.empty() && static_cast<int>(d.findings.size()) < o.max_findings) {
     std::vector<KalmanCandidateTest> round = tests.round(remaining);
     const double threshold = o.alpha / static_cast<double>(round.size());
-    KalmanCandidateTest* best = nullptr;
-    for (auto& c : round) {
-      c.threshold = threshold;
-      c.significant = c.dof > 0 && c.p_value < threshold;
-      if (c.significant && (!best || c.log10_p < best->log10_p)) best = &c;
-    }
+    KalmanCandidateTest* best = most_significant(round, threshold);
     if (!best) {
       for (const auto& c : round)
         if (c.dof == 0) d.not_separable.push_back(c);

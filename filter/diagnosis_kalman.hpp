@@ -112,6 +112,10 @@ class TurnTests {
   std::vector<std::pair<std::string, KalmanRun>> last_round_;
 };
 
+/// Marks the round's candidates significant below `threshold` (p-value, with a tested direction)
+/// and returns the most significant one (smallest log10 p), or nullptr.
+KalmanCandidateTest* most_significant(std::vector<KalmanCandidateTest>& round, double threshold);
+
 /// Runs the filter on the session with `base`, then each candidate family added. Throws
 /// std::invalid_argument for a candidate that is not an extended family or already in `base`,
 /// and std::runtime_error when a run of the filter stops early (bad sample, divergence).

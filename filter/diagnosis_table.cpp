@@ -226,12 +226,7 @@ class TableRounds {
         o_.dwells.alpha / static_cast<double>(std::max<std::ptrdiff_t>(1, tested_d + tested_k));
     CandidateTest* best_d = diagnosis_detail::choose(
         dround, threshold * static_cast<double>(std::max<std::ptrdiff_t>(1, tested_d)));
-    KalmanCandidateTest* best_k = nullptr;
-    for (auto& c : kround) {
-      c.threshold = threshold;
-      c.significant = c.dof > 0 && c.p_value < threshold;
-      if (c.significant && (!best_k || c.log10_p < best_k->log10_p)) best_k = &c;
-    }
+    KalmanCandidateTest* best_k = most_significant(kround, threshold);
     std::optional<TableFinding> f;
     if (best_d)  // the dwells first (see the header)
       f = extend_dwells(*best_d, dround);
