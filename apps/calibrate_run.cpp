@@ -8,7 +8,7 @@
 
 #include "apps/calibrate.hpp"
 #include "apps/print.hpp"
-#include "filter/plausibility.hpp"
+#include "filter/plausibility/plausibility.hpp"
 #include "models/units.hpp"
 #include "report/monitor.hpp"
 #include "report/output.hpp"
@@ -46,9 +46,10 @@ CalibratorOptions kalman_options(const CalibrateOptions& o, const Session& sessi
   return ko;
 }
 
-// The plausibility gate (filter/plausibility.hpp) before any estimate: a failure stops with the
-// checks' messages (exit 2) unless --force, which runs anyway and records them in the result.
-// Standard input cannot be read twice: a streamed log is checked by the filter's own alarms.
+// The plausibility gate (filter/plausibility/plausibility.hpp) before any estimate: a failure stops
+// with the checks' messages (exit 2) unless --force, which runs anyway and records them in the
+// result. Standard input cannot be read twice: a streamed log is checked by the filter's own
+// alarms.
 PlausibilityReport plausibility_gate(const CalibrateOptions& o, const Session& session,
                                      const PlausibilityLimits& limits) {
   if (o.stream) return {};

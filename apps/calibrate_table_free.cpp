@@ -1,5 +1,5 @@
 // sinscal calibrate --method table-free: a hand-held session's calibration without a table
-// (filter/handheld_run.hpp), its options, result file and summary.
+// (filter/table_free/handheld_run.hpp), its options, result file and summary.
 #include <chrono>
 #include <cstdio>
 

@@ -10,8 +10,8 @@
 #include <utility>
 #include <vector>
 
-#include "filter/closed_form.hpp"
-#include "filter/kalman_calibrator.hpp"
+#include "filter/closed_form/closed_form.hpp"
+#include "filter/kalman/kalman_calibrator.hpp"
 #include "rig/session.hpp"
 
 namespace sinscal::cli {

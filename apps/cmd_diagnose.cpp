@@ -1,6 +1,6 @@
 // sinscal diagnose: what the calibrated model fails to explain on a table session, the missing
-// effect that explains it, and the gain of adding it (filter/diagnosis.hpp); sessions without a
-// plan are hand-held (apps/diagnose_handheld.cpp).
+// effect that explains it, and the gain of adding it (filter/diagnosis/diagnosis.hpp); sessions
+// without a plan are hand-held (apps/diagnose_handheld.cpp).
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -8,8 +8,8 @@
 #include "apps/cli.hpp"
 #include "apps/commands.hpp"
 #include "apps/diagnose.hpp"
-#include "filter/diagnosis_table.hpp"
-#include "filter/plausibility.hpp"
+#include "filter/diagnosis/diagnosis_table.hpp"
+#include "filter/plausibility/plausibility.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"

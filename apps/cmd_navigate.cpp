@@ -5,11 +5,11 @@
 
 #include "apps/cli.hpp"
 #include "apps/commands.hpp"
-#include "filter/dwell_navigation.hpp"
+#include "filter/strapdown/dwell_navigation.hpp"
 #include "models/attitude.hpp"
 #include "models/units.hpp"
 #include "report/output.hpp"
-#include "rig/log_io.hpp"
+#include "rig/io/log_io.hpp"
 #include "rig/session.hpp"
 
 namespace sinscal::cli {

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "apps/cli.hpp"
-#include "filter/handheld_run.hpp"
+#include "filter/table_free/handheld_run.hpp"
 
 namespace sinscal::cli {
 

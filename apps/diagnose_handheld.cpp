@@ -1,13 +1,13 @@
 // sinscal diagnose on a hand-held session (no plan): the table-free calibration, then model
-// discovery on its poses and turns (filter/handheld_diagnosis.hpp), held-out validation records
-// before and after, the files of report/handheld_diagnosis_report.hpp.
+// discovery on its poses and turns (filter/diagnosis/handheld_diagnosis.hpp), held-out validation
+// records before and after, the files of report/handheld_diagnosis_report.hpp.
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
 
 #include "apps/diagnose.hpp"
-#include "filter/handheld_diagnosis.hpp"
+#include "filter/diagnosis/handheld_diagnosis.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/units.hpp"
 #include "report/diagnosis_common.hpp"

@@ -4,9 +4,9 @@
 #include <map>
 #include <string>
 
-#include "filter/closed_form.hpp"
-#include "filter/handheld_run.hpp"
-#include "filter/kalman_run.hpp"
+#include "filter/closed_form/closed_form.hpp"
+#include "filter/kalman/kalman_run.hpp"
+#include "filter/table_free/handheld_run.hpp"
 #include "models/sensor_profile.hpp"
 #include "report/result.hpp"
 

@@ -9,16 +9,16 @@
 #include <string>
 #include <vector>
 
-#include "filter/closed_form.hpp"
-#include "filter/diagnosis_kalman.hpp"
-#include "filter/diagnosis_table.hpp"
-#include "filter/handheld_diagnosis.hpp"
-#include "filter/handheld_run.hpp"
-#include "filter/kalman_calibrator.hpp"
-#include "filter/strapdown.hpp"
+#include "filter/closed_form/closed_form.hpp"
+#include "filter/diagnosis/diagnosis_kalman.hpp"
+#include "filter/diagnosis/diagnosis_table.hpp"
+#include "filter/diagnosis/handheld_diagnosis.hpp"
+#include "filter/kalman/kalman_calibrator.hpp"
+#include "filter/strapdown/strapdown.hpp"
+#include "filter/table_free/handheld_run.hpp"
 #include "models/sensor_profile.hpp"
 #include "rig/imu_sim.hpp"
-#include "rig/log_io.hpp"
+#include "rig/io/log_io.hpp"
 #include "rig/plan.hpp"
 #include "rig/session.hpp"
 
@@ -51,7 +51,7 @@ void bench_handheld(const std::string& src) {
           "table-free calibration of the Xsens MTi session (%zu samples, %zu poses, files read "
           "included): %.3f s (aim 1 s)\n",
           tf.samples, tf.poses.size(), t_tf);
-      // Its diagnosis (filter/handheld_diagnosis.hpp): every candidate refitted, held-out
+      // Its diagnosis (filter/diagnosis/handheld_diagnosis.hpp): every candidate refitted, held-out
       // figures, the Allan deviation of the longest pose (aim: calibration + diagnosis 2 s).
       double t_dg = 1e300;
       HandheldDiagnosis dg;

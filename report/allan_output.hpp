@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "filter/allan.hpp"
+#include "filter/noise/allan.hpp"
 
 namespace sinscal {
 

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "filter/kalman_run.hpp"
+#include "filter/kalman/kalman_run.hpp"
 #include "report/result.hpp"
 
 namespace sinscal {

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "filter/diagnosis.hpp"
+#include "filter/diagnosis/diagnosis.hpp"
 
 namespace sinscal::diagnosis_output {
 

@@ -1,12 +1,12 @@
-// The Kalman-filter part of the diagnosis files (filter/diagnosis_kalman.hpp): its findings join
-// diagnosis.json's "findings" (statistic "wald_kalman"), its every test goes under "kalman", and
-// report.md gets a section (docs/formats.md).
+// The Kalman-filter part of the diagnosis files (filter/diagnosis/diagnosis_kalman.hpp): its
+// findings join diagnosis.json's "findings" (statistic "wald_kalman"), its every test goes under
+// "kalman", and report.md gets a section (docs/formats.md).
 #pragma once
 
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "filter/diagnosis_kalman.hpp"
+#include "filter/diagnosis/diagnosis_kalman.hpp"
 
 namespace sinscal {
 

@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "filter/ins_error_model.hpp"
+#include "filter/strapdown/ins_error_model.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/imu_error_model.hpp"
 #include "models/units.hpp"

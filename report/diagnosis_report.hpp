@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "filter/diagnosis_table.hpp"
+#include "filter/diagnosis/diagnosis_table.hpp"
 
 namespace sinscal {
 

@@ -9,8 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "filter/handheld_diagnosis.hpp"
-#include "filter/handheld_run.hpp"
+#include "filter/diagnosis/handheld_diagnosis.hpp"
+#include "filter/table_free/handheld_run.hpp"
 #include "report/diagnosis_common.hpp"
 #include "report/diagnosis_report.hpp"
 

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "filter/closed_form.hpp"
-#include "filter/kalman_run.hpp"
+#include "filter/closed_form/closed_form.hpp"
+#include "filter/kalman/kalman_run.hpp"
 #include "rig/session.hpp"
 
 namespace sinscal {

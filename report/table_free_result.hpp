@@ -5,7 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "filter/handheld_run.hpp"
+#include "filter/table_free/handheld_run.hpp"
 #include "report/result.hpp"
 
 namespace sinscal {

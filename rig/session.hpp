@@ -11,7 +11,7 @@
 #include "models/earth.hpp"
 #include "models/imu_error_model.hpp"
 #include "models/sensor_profile.hpp"
-#include "rig/log_io.hpp"
+#include "rig/io/log_io.hpp"
 #include "rig/plan.hpp"
 
 namespace sinscal {

@@ -631,7 +631,7 @@ new closed-form-mismatch-names-the-log; mini; head -n 400 "$base/mini/imu.csv" >
 fixed 2 "imu.csv|plan does not match the data" cf
 
 
-# The plausibility gate (filter/plausibility.hpp): before any estimate each static dwell is
+# The plausibility gate (filter/plausibility/plausibility.hpp): before any estimate each static dwell is
 # compared with gravity, the Earth rate and the plan's attitude; a failure names the log, the dwell
 # and the likely cause, exit 2.
 new closed-form-constant-data; s8

@@ -11,8 +11,8 @@
 #include <utility>
 #include <vector>
 
-#include "filter/closed_form.hpp"
-#include "filter/diagnosis_table.hpp"
+#include "filter/closed_form/closed_form.hpp"
+#include "filter/diagnosis/diagnosis_table.hpp"
 #include "helpers.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/units.hpp"

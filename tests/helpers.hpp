@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "filter/kalman_calibrator.hpp"
+#include "filter/kalman/kalman_calibrator.hpp"
 #include "models/sensor_profile.hpp"
 #include "rig/handheld.hpp"
 #include "rig/imu_sim.hpp"

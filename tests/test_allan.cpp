@@ -4,7 +4,7 @@
 #include <cmath>
 #include <string>
 
-#include "filter/allan.hpp"
+#include "filter/noise/allan.hpp"
 #include "helpers.hpp"
 #include "models/noise_model.hpp"
 #include "models/sensor_profile.hpp"

@@ -1,7 +1,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "filter/closed_form.hpp"
+#include "filter/closed_form/closed_form.hpp"
 #include "helpers.hpp"
 #include "models/units.hpp"
 

@@ -1,6 +1,6 @@
-// Model discovery on the static dwells (filter/diagnosis.hpp): an effect hidden in a simulated
-// session, which the calibrating model lacks, must be named first with its magnitude; a clean
-// session must name nothing; effects the plan cannot separate must be said to be so.
+// Model discovery on the static dwells (filter/diagnosis/diagnosis.hpp): an effect hidden in a
+// simulated session, which the calibrating model lacks, must be named first with its magnitude; a
+// clean session must name nothing; effects the plan cannot separate must be said to be so.
 #include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <catch2/catch.hpp>
@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <random>
 
-#include "filter/diagnosis_table.hpp"
+#include "filter/diagnosis/diagnosis_table.hpp"
 #include "helpers.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/units.hpp"

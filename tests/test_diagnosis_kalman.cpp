@@ -1,13 +1,14 @@
-// Model discovery from the Kalman filter's innovations (filter/diagnosis_kalman.hpp): an effect of
-// the turns hidden in a simulated rot19 session, which the calibrating profile lacks, must be
-// named first with every component within 3 sigma of the truth; a clean session names nothing.
+// Model discovery from the Kalman filter's innovations (filter/diagnosis/diagnosis_kalman.hpp): an
+// effect of the turns hidden in a simulated rot19 session, which the calibrating profile lacks,
+// must be named first with every component within 3 sigma of the truth; a clean session names
+// nothing.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
 
-#include "filter/diagnosis_kalman.hpp"
+#include "filter/diagnosis/diagnosis_kalman.hpp"
 #include "helpers.hpp"
 #include "models/coefficient_families.hpp"
 

@@ -1,6 +1,6 @@
-// The table diagnosis as one story across dwells and turns (filter/diagnosis_table.hpp), as
-// `sinscal diagnose` runs it: the session's profile lacks the effect, the simulation has it.
-// A wrong first name is a failure: the hidden family (or the ambiguous set holding it) must come
+// The table diagnosis as one story across dwells and turns (filter/diagnosis/diagnosis_table.hpp),
+// as `sinscal diagnose` runs it: the session's profile lacks the effect, the simulation has it. A
+// wrong first name is a failure: the hidden family (or the ambiguous set holding it) must come
 // first, and no family the data lack may be named at all.
 #include <catch2/catch.hpp>
 #include <cmath>

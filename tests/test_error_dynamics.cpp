@@ -4,13 +4,13 @@
 //    perturbed coefficient, over an interval that includes a table turn;
 //  - every measurement's H against numerical differences of its measurement function;
 //  - the feedback: a known error injected and fed back returns the truth.
-// The error-state convention (filter/measurements.hpp) is the link between them: errors are
+// The error-state convention (filter/kalman/measurements.hpp) is the link between them: errors are
 // injected with inject_error and read back as navigation errors (computed minus true).
 #include <catch2/catch.hpp>
 #include <random>
 
-#include "filter/kalman_calibrator.hpp"
-#include "filter/measurements.hpp"
+#include "filter/kalman/kalman_calibrator.hpp"
+#include "filter/kalman/measurements.hpp"
 #include "helpers.hpp"
 #include "models/attitude.hpp"
 #include "models/coefficient_families.hpp"

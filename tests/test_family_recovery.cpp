@@ -8,7 +8,7 @@
 #include <map>
 #include <sstream>
 
-#include "filter/kalman_calibrator.hpp"
+#include "filter/kalman/kalman_calibrator.hpp"
 #include "helpers.hpp"
 #include "models/coefficient_families.hpp"
 

@@ -1,5 +1,5 @@
-// Model discovery on hand-held sessions (filter/handheld_diagnosis.hpp): an effect hidden in a
-// simulated hand-held session, which the table-free model lacks, must be named first with its
+// Model discovery on hand-held sessions (filter/diagnosis/handheld_diagnosis.hpp): an effect hidden
+// in a simulated hand-held session, which the table-free model lacks, must be named first with its
 // magnitude; clean sessions must name nothing; the refit's columns must be the physics (a turn's
 // sensitivity against re-integration); bad requests must say what is missing.
 #include <catch2/catch.hpp>
@@ -9,7 +9,7 @@
 #include <map>
 #include <random>
 
-#include "filter/handheld_diagnosis.hpp"
+#include "filter/diagnosis/handheld_diagnosis.hpp"
 #include "helpers.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/units.hpp"

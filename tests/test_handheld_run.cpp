@@ -1,5 +1,5 @@
-// Hand-held sessions end to end (filter/handheld_run.hpp, report/table_free_result.hpp): a
-// simulated session written as a plan-less session.ini with a two-file log in raw counts, read,
+// Hand-held sessions end to end (filter/table_free/handheld_run.hpp, report/table_free_result.hpp):
+// a simulated session written as a plan-less session.ini with a two-file log in raw counts, read,
 // calibrated from its nominal conversion, validated and written as a result file; Allan of a pose.
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "filter/handheld_run.hpp"
+#include "filter/table_free/handheld_run.hpp"
 #include "helpers.hpp"
 #include "models/config.hpp"
 #include "models/units.hpp"

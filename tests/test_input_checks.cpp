@@ -11,7 +11,7 @@
 #include "models/earth.hpp"
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"
-#include "rig/log_io.hpp"
+#include "rig/io/log_io.hpp"
 #include "rig/plan.hpp"
 #include "rig/session.hpp"
 

@@ -6,9 +6,9 @@
 #include <catch2/catch.hpp>
 #include <random>
 
-#include "filter/closed_form.hpp"
-#include "filter/installation.hpp"
-#include "filter/kalman_run.hpp"
+#include "filter/closed_form/closed_form.hpp"
+#include "filter/installation/installation.hpp"
+#include "filter/kalman/kalman_run.hpp"
 #include "helpers.hpp"
 #include "models/attitude.hpp"
 #include "models/units.hpp"

@@ -1,9 +1,9 @@
 #include <catch2/catch.hpp>
 
-#include "filter/kalman_calibrator.hpp"
+#include "filter/kalman/kalman_calibrator.hpp"
 #include "helpers.hpp"
 #include "models/units.hpp"
-#include "rig/log_io.hpp"
+#include "rig/io/log_io.hpp"
 
 using namespace sinscal;
 

@@ -4,12 +4,12 @@
 #include <catch2/catch.hpp>
 #include <fstream>
 
-#include "filter/closed_form.hpp"
-#include "filter/kalman_calibrator.hpp"
+#include "filter/closed_form/closed_form.hpp"
+#include "filter/kalman/kalman_calibrator.hpp"
 #include "helpers.hpp"
 #include "models/units.hpp"
 #include "report/result.hpp"
-#include "rig/log_io.hpp"
+#include "rig/io/log_io.hpp"
 
 using namespace sinscal;
 

@@ -5,13 +5,13 @@
 #include <fstream>
 #include <sstream>
 
-#include "filter/closed_form.hpp"
-#include "filter/kalman_calibrator.hpp"
+#include "filter/closed_form/closed_form.hpp"
+#include "filter/kalman/kalman_calibrator.hpp"
 #include "helpers.hpp"
 #include "models/config.hpp"
 #include "models/units.hpp"
 #include "report/result.hpp"
-#include "rig/log_io.hpp"
+#include "rig/io/log_io.hpp"
 #include "rig/session.hpp"
 
 using namespace sinscal;

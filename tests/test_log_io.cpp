@@ -5,7 +5,7 @@
 #include "helpers.hpp"
 #include "models/config.hpp"
 #include "models/units.hpp"
-#include "rig/log_io.hpp"
+#include "rig/io/log_io.hpp"
 
 using namespace sinscal;
 using Eigen::Vector3d;

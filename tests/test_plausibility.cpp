@@ -3,7 +3,7 @@
 #include <catch2/catch.hpp>
 #include <functional>
 
-#include "filter/plausibility.hpp"
+#include "filter/plausibility/plausibility.hpp"
 #include "helpers.hpp"
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"

@@ -8,7 +8,7 @@
 #include <sstream>
 #include <string>
 
-#include "filter/pose_detector.hpp"
+#include "filter/table_free/pose_detector.hpp"
 #include "helpers.hpp"
 #include "models/attitude.hpp"
 #include "models/units.hpp"

@@ -1,6 +1,6 @@
 #include <catch2/catch.hpp>
 
-#include "filter/strapdown.hpp"
+#include "filter/strapdown/strapdown.hpp"
 #include "helpers.hpp"
 #include "models/units.hpp"
 

@@ -1,6 +1,6 @@
 #include <catch2/catch.hpp>
 
-#include "filter/state_layout.hpp"
+#include "filter/kalman/state_layout.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/imu_error_model.hpp"
 

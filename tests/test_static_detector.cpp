@@ -3,8 +3,8 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "filter/kalman_calibrator.hpp"
-#include "filter/static_detector.hpp"
+#include "filter/kalman/kalman_calibrator.hpp"
+#include "filter/noise/static_detector.hpp"
 #include "helpers.hpp"
 #include "models/units.hpp"
 #include "rig/imu_sim.hpp"

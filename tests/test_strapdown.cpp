@@ -1,8 +1,8 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "filter/dwell_navigation.hpp"
-#include "filter/strapdown.hpp"
+#include "filter/strapdown/dwell_navigation.hpp"
+#include "filter/strapdown/strapdown.hpp"
 #include "helpers.hpp"
 #include "models/units.hpp"
 

@@ -9,7 +9,7 @@
 #include <sstream>
 #include <string>
 
-#include "filter/table_free.hpp"
+#include "filter/table_free/table_free.hpp"
 #include "helpers.hpp"
 #include "models/units.hpp"
 #include "rig/handheld.hpp"

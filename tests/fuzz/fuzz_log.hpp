@@ -6,7 +6,7 @@
 #include <string>
 
 #include "fuzz_support.hpp"
-#include "rig/log_io.hpp"
+#include "rig/io/log_io.hpp"
 
 namespace sinscal::fuzz {
 

@@ -1,4 +1,4 @@
-// libFuzzer target: LogReader over an std::istream in a custom format (rig/log_io.hpp). Input: two
+// libFuzzer target: LogReader over an std::istream in a custom format (rig/io/log_io.hpp). Input: two
 // option bytes choosing the format (delimiter, header lines, rates or increments, units, axis
 // mapping, time and table columns, saturation, skipping bad samples), then the log text. Every
 // error is a LogError naming the file; every sample read is finite and moves time forward.
@@ -7,7 +7,7 @@
 
 #include "fuzz_log.hpp"
 #include "models/units.hpp"
-#include "rig/log_io.hpp"
+#include "rig/io/log_io.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using sinscal::fuzz::finding;

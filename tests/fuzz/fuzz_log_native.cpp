@@ -1,11 +1,11 @@
-// libFuzzer target: LogReader over an std::istream in the native format (rig/log_io.hpp). Input:
+// libFuzzer target: LogReader over an std::istream in the native format (rig/io/log_io.hpp). Input:
 // one option byte (bit 0: skip bad samples), then the log text. Every error is a LogError naming
 // the file; every sample read is finite and moves time forward.
 #include <cmath>
 #include <sstream>
 
 #include "fuzz_log.hpp"
-#include "rig/log_io.hpp"
+#include "rig/io/log_io.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using sinscal::fuzz::finding;

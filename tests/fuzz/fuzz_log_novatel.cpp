@@ -1,5 +1,5 @@
 // libFuzzer target: LogReader over an std::istream in NovAtel RAWIMUSA / RAWIMUSXA ASCII format
-// (rig/log_io.hpp). Input: one option byte (bit 0: skip bad samples; bit 1: check the IMU status
+// (rig/io/log_io.hpp). Input: one option byte (bit 0: skip bad samples; bit 1: check the IMU status
 // against a mask; bit 2: a 200 Hz nominal rate), then the log text. Every error is a LogError
 // naming the file; every sample read is finite and moves time forward.
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include "fuzz_log.hpp"
 #include "models/units.hpp"
-#include "rig/log_io.hpp"
+#include "rig/io/log_io.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using sinscal::fuzz::finding;

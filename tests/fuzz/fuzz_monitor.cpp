@@ -1,4 +1,4 @@
-// libFuzzer target: read_monitor (filter/monitor.hpp; it may move to report/), which takes a path:
+// libFuzzer target: read_monitor (report/monitor.hpp), which takes a path:
 // the input is written to a file first. Every error is a std::runtime_error naming the file; a
 // series read has one entry per record in every column.
 #include "fuzz_support.hpp"

@@ -1,0 +1,186 @@
+// The source paper's closed-form calibration (../shared/seed-method.md), faithful and generalized.
+//
+// Stage 1, per static dwell: the navigation errors over the dwell (started from the known
+// attitude, zero velocity, known position) give the equivalent inputs u = (df_n, dw_n): the
+// accelerometer and gyro errors in NED, natural sign (the paper's dwn, dwe are -dw_n, -dw_e).
+//   point: the paper's single-time formulas (eq. 5) on the uncoupled Schuler solutions;
+//   fit:   weighted least squares of the error dynamics over the whole window. The errors are
+//          observed exactly at every sample, so the one-step residuals
+//          x(k+1) - Phi x(k) - Gamma u are the sensor noise of that step, independent from step to
+//          step (VRW^2 h on velocity rows, ARW^2 h on attitude rows): the fit is the optimal
+//          estimator of u under the noise model and reaches VRW / sqrt(T). Constant memory.
+// Channels: north (dv_n, phi_e -> df_n, dw_e), east (dv_e, phi_n -> df_e, dw_n), optionally
+// vertical (dv_d -> df_d) and heading (phi_d -> dw_d). Model: the paper's uncoupled channels or the
+// coupled one (Earth rate, Coriolis, transport, gravity feedback).
+//
+// Stage 2: the equivalent inputs of all dwells are linear in the 24 base coefficients; a general
+// weighted least-squares solve (any static plan) with an identifiability report, and the paper's
+// literal closed forms for the X and Z sensors of the 8-orientation plan.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "filter/installation/installation.hpp"
+#include "filter/strapdown/ins_error_model.hpp"
+#include "filter/strapdown/strapdown.hpp"
+#include "rig/imu_sample.hpp"
+#include "rig/session.hpp"
+#include "rig/table.hpp"
+#include "rig/timeline.hpp"
+
+namespace sinscal {
+
+struct SensorProfile;
+
+enum class Stage1Method { Point, Fit };
+
+struct ChannelSet {
+  bool north = true;
+  bool east = true;
+  bool vertical = false;
+  bool heading = false;
+  /// Which of the 6 inputs (df_n, df_e, df_d, dw_n, dw_e, dw_d) the channels give.
+  std::array<bool, 6> inputs() const;
+};
+
+struct Stage1Options {
+  Stage1Method method = Stage1Method::Fit;
+  ErrorModelKind model = ErrorModelKind::Uncoupled;
+  ChannelSet channels;
+  double point_time = 0.0;  // s from the dwell start; 0: the end of the dwell
+  double arw = 0.0;         // rad/sqrt(s), gyro white noise density (weights, sigma)
+  double vrw = 0.0;         // m/s/sqrt(s), accelerometer white noise density
+  double min_dwell = 20.0;  // s: a shorter dwell is an error
+  StrapdownOptions strapdown;
+};
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+/// Stage-1 result of one dwell.
+struct EquivalentInputs {
+  PlanDwell dwell;
+  double duration = 0.0;  // s navigated
+  std::size_t samples = 0;
+  Vector6d u = Vector6d::Zero();    // df_n (m/s^2, NED), dw_n (rad/s, NED)
+  Matrix6d cov = Matrix6d::Zero();  // of the estimated inputs; rows of the others are zero
+  std::array<bool, 6> estimated{};  // which inputs this stage gave
+  double rms_velocity = 0.0;        // m/s: RMS one-step residual of the velocity rows (fit)
+  double rms_attitude = 0.0;        // rad: of the attitude rows (fit)
+  double chi2_per_dof = 0.0;  // residual chi-square per degree of freedom under the noise model
+};
+
+/// The command line's stage 1: the coupled model, all four channels, and the white-noise
+/// densities of the sensor profile (nullptr: zero, to be given).
+Stage1Options default_stage1(const SensorProfile* profile);
+
+/// Runs the navigator through every dwell and stage 1 on it. Throws PlanMismatch (dwell missing
+/// from the log) or std::invalid_argument (dwell shorter than min_dwell, no noise densities).
+std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector<PlanDwell>& dwells,
+                                         const Site& site, const Stage1Options& options,
+                                         double time_offset = 0.0,
+                                         const std::string& input = "the log");
+
+/// The coefficients stage 2 solves for: the base families of the family table
+/// (models/coefficient_families.hpp), as catalog indices in catalog order.
+std::vector<int> stage2_parameters();
+
+/// u = H theta at a static attitude (theta in SI, `parameters` catalog indices): the error
+/// model's Jacobian (models/imu_error_model.hpp) at the static inputs f_b = -C^T g_n and
+/// omega_ib_b = C^T omega_ie_n, rotated to NED: df_n = C J_accel theta, dw_n = C J_gyro theta.
+/// `t` (s since the start of the plan; a dwell's middle) for the time-dependent terms.
+Eigen::Matrix<double, 6, Eigen::Dynamic> equivalent_input_map(const Eigen::Matrix3d& C_b_n,
+                                                              const Site& site,
+                                                              const std::vector<int>& parameters,
+                                                              double t = 0.0);
+/// The covariance stage 2 gives a dwell's equivalent inputs: stage 1's plus the table's attitude
+/// error aliased into them (df_n += f_n x eps, dw_n += omega_ie_n x eps).
+Matrix6d stage2_input_covariance(const EquivalentInputs& in, const Site& site,
+                                 const TableAttitudeError& table);
+/// The stage-2 parameters of a model (SI), in the order of `parameters`.
+Eigen::VectorXd parameter_vector(const class ImuErrorModel& model,
+                                 const std::vector<int>& parameters);
+
+struct Stage2Options {
+  /// The table's attitude error at each orientation (rig/table.hpp: the one model both methods
+  /// use); it aliases into the inputs as df_n += f_n x eps, dw_n += omega_ie_n x eps.
+  TableAttitudeError table;
+  double null_tolerance = 1e-9;  // relative singular value below which a direction is unobservable
+  std::vector<int> parameters = stage2_parameters();
+  /// Three more parameters: the error of the table base attitude common to every dwell (rotation
+  /// vector, NED, true minus the dwells' known attitudes' base; docs/conventions.md "Table base
+  /// and mounting"), aliasing into every dwell as the table's attitude error does.
+  bool base_attitude = false;
+};
+
+struct Stage2Result {
+  std::vector<int> parameters;  // catalog index of each entry
+  Eigen::VectorXd theta;        // SI; unobservable entries are NaN
+  Eigen::MatrixXd cov;          // rows/columns of unobservable entries NaN
+  std::vector<bool> observable;
+  int rank = 0;
+  std::vector<std::string> unobservable_directions;  // e.g. "+0.577 accel.scale.x +0.577 ..."
+  std::vector<Eigen::VectorXd> null_vectors;         // in coefficient space (unit norm)
+  /// The minimum-norm solution (Jacobi-scaled) and its covariance, every entry finite: a
+  /// combination c of the coefficients orthogonal to every null vector is determined by the
+  /// data, c^T theta_min_norm with variance c^T cov_min_norm c (the coefficients first, as in
+  /// `parameters`, then the base's three when estimated).
+  Eigen::VectorXd theta_min_norm;
+  Eigen::MatrixXd cov_min_norm;
+  /// Stage-2 residual: chi-square of the equivalent inputs against the solution per degree of
+  /// freedom (inputs minus rank); 1 when the model explains the dwells to their sigmas.
+  double chi2_per_dof = 0.0;
+  int dof = 0;
+  /// With Stage2Options::base_attitude: the base's error (rad, NED) and its covariance.
+  bool base_estimated = false;
+  bool base_observable = false;
+  Eigen::Vector3d base_n = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d base_cov = Eigen::Matrix3d::Zero();
+};
+
+Stage2Result solve_stage2(const std::vector<EquivalentInputs>& inputs, const Site& site,
+                          const Stage2Options& options);
+
+/// The paper's closed forms for the X and Z sensors of the 8-orientation plan, literally
+/// (X as printed, with the OCR-lost signs of seed-method.md; Z derived the same way).
+/// `inputs` are the 8 dwells in the paper's order. SI units.
+struct PaperClosedForms {
+  double w0x, dkgx, nu_xy, nu_xz;  // X gyro: bias, scale, misalignments
+  double w0z, dkgz, nu_zx, nu_zy;  // Z gyro
+  double f0x, mu_xy, mu_xz;        // X accelerometer: bias, misalignments
+  double f0z, mu_zx, mu_zy;        // Z accelerometer
+};
+PaperClosedForms paper_closed_forms(const std::vector<EquivalentInputs>& inputs, const Site& site);
+
+/// The paper's closed forms beside the names of the coefficients they give, in the paper's order.
+std::vector<std::pair<std::string, double>> named(const PaperClosedForms& p);
+
+/// The whole method on a recorded session: navigation through every dwell, stage 1, stage 2.
+struct ClosedFormReport {
+  /// The alignment from the dwells (filter/installation/installation.hpp); when applied, the
+  /// samples were turned by its mounting and the dwells' attitudes by its base before stage 1, and
+  /// stage 2's coefficients turned back relative to the platform. The base attitude (the
+  /// alignment's, if applied, turned by stage 2's correction), the mounting of the stage-2
+  /// coefficients, and the alignment.
+  InstallationResult installation;
+  Stage1Options stage1_options;
+  Stage2Options stage2_options;
+  std::vector<EquivalentInputs> stage1;
+  Stage2Result stage2;
+  bool has_paper_forms = false;  // the plan is the paper's 8-orientation table
+  PaperClosedForms paper{};
+};
+
+/// `align`: align from the dwells first and estimate the base in stage 2 (the command line's
+/// default); false: the plan's attitudes as they are, no base. `about`: the samples compensated
+/// with this model first (its inverse, ImuErrorModel::compensate), so that stage 1 linearizes
+/// about it and stage 2 gives corrections to it (errors too large for one linearization about
+/// zero: MEMS).
+ClosedFormReport run_closed_form(const Session& session, const Stage1Options& stage1,
+                                 const TableAttitudeError& table, bool align = true,
+                                 const class ImuErrorModel* about = nullptr);
+
+}  // namespace sinscal

@@ -1,0 +1,513 @@
+#include "filter/diagnosis/diagnosis.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
+#include <boost/math/distributions/fisher_f.hpp>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+
+#include "filter/strapdown/ins_error_model.hpp"
+#include "models/attitude.hpp"
+#include "models/coefficient_families.hpp"
+#include "models/earth.hpp"
+#include "models/imu_error_model.hpp"
+#include "models/units.hpp"
+
+namespace sinscal {
+
+namespace {
+
+// The noise model is trusted while the fit's chi-square stays within this quantile.
+constexpr double kNoiseModelLevel = 0.99;
+// Two candidates whose fits' chi-square differ by less than this explain the residual equally
+// well (a likelihood ratio below e^4.5, about 90).
+constexpr double kAmbiguityMargin = 9.0;
+
+// One dwell's estimated inputs, whitened: L^-1 u = L^-1 H theta + unit noise (R = L L^T).
+struct WhiteDwell {
+  Eigen::MatrixXd A;  // L^-1 H (rows: the dwell's estimated inputs)
+  Eigen::VectorXd y;  // L^-1 u
+  Eigen::MatrixXd H;  // H (physical units)
+  Eigen::VectorXd u;
+  std::vector<int> rows;  // which of the 6 inputs
+};
+
+class StaticDesign {
+ public:
+  StaticDesign(const std::vector<EquivalentInputs>& inputs, const Site& site,
+               const TableAttitudeError& table, bool base_attitude)
+      : inputs_(inputs), site_(site), table_(table), base_attitude_(base_attitude) {}
+
+  std::vector<WhiteDwell> whiten(const std::vector<int>& parameters) const {
+    std::vector<WhiteDwell> out;
+    for (const auto& in : inputs_) {
+      const auto Hc = equivalent_input_map(in.dwell.C_b_n_known, site_, parameters,
+                                           0.5 * (in.dwell.t_start + in.dwell.t_end));
+      // The table base's error (closed form's stage 2 with a base): three more columns.
+      Eigen::Matrix<double, 6, Eigen::Dynamic> H6(6, Hc.cols() + (base_attitude_ ? 3 : 0));
+      H6.leftCols(Hc.cols()) = Hc;
+      if (base_attitude_) {
+        const Earth& earth = Earth::wgs84();
+        H6.rightCols(3).setZero();
+        H6.block<3, 3>(ins_input::kAccel.index, Hc.cols()) =
+            skew(-earth.gravity_n(site_.lat_rad, site_.h_m));
+        H6.block<3, 3>(ins_input::kGyro.index, Hc.cols()) = skew(earth.omega_ie_n(site_.lat_rad));
+      }
+      const Matrix6d R6 = stage2_input_covariance(in, site_, table_);
+      WhiteDwell w;
+      for (int i = 0; i < 6; ++i)
+        if (in.estimated[static_cast<std::size_t>(i)]) w.rows.push_back(i);
+      const auto m = static_cast<Eigen::Index>(w.rows.size());
+      Eigen::MatrixXd R(m, m);
+      w.H.resize(m, H6.cols());
+      w.u.resize(m);
+      for (Eigen::Index a = 0; a < m; ++a) {
+        w.H.row(a) = H6.row(w.rows[static_cast<std::size_t>(a)]);
+        w.u(a) = in.u(w.rows[static_cast<std::size_t>(a)]);
+        for (Eigen::Index b = 0; b < m; ++b)
+          R(a, b) = R6(w.rows[static_cast<std::size_t>(a)], w.rows[static_cast<std::size_t>(b)]);
+      }
+      const Eigen::LLT<Eigen::MatrixXd> llt(R);
+      if (llt.info() != Eigen::Success)
+        throw std::invalid_argument("diagnosis: the covariance of dwell " +
+                                    std::to_string(in.dwell.index) + " is not positive definite");
+      w.A = llt.matrixL().solve(w.H);
+      w.y = llt.matrixL().solve(w.u);
+      out.push_back(std::move(w));
+    }
+    return out;
+  }
+
+  const std::vector<EquivalentInputs>& inputs() const { return inputs_; }
+  const Site& site() const { return site_; }
+  const TableAttitudeError& table() const { return table_; }
+  bool base_attitude() const { return base_attitude_; }
+
+ private:
+  const std::vector<EquivalentInputs>& inputs_;
+  const Site& site_;
+  const TableAttitudeError& table_;
+  bool base_attitude_ = false;
+};
+
+// The families' default priors (SI) of the parameters: a weak prior that makes every fit
+// determinate (a direction no dwell sees is predicted as zero) without pulling observed ones.
+Eigen::VectorXd prior_sigmas(const std::vector<int>& parameters, bool base_attitude) {
+  const auto& cat = coefficient_catalog();
+  Eigen::VectorXd s(static_cast<Eigen::Index>(parameters.size()) + (base_attitude ? 3 : 0));
+  // The base's three angles: a weak prior of a table set up on its site (1 deg).
+  if (base_attitude) s.tail<3>().setConstant(units::deg);
+  for (std::size_t k = 0; k < parameters.size(); ++k)
+    s(static_cast<Eigen::Index>(k)) =
+        coefficient_family_info(cat[static_cast<std::size_t>(parameters[k])].family).default_prior;
+  return s;
+}
+
+// Regularized least squares over the dwells except `skip` (-1: none).
+Eigen::VectorXd solve_with_prior(const std::vector<WhiteDwell>& dwells, const Eigen::VectorXd& p0,
+                                 int skip) {
+  const Eigen::Index n = p0.size();
+  Eigen::MatrixXd N = p0.cwiseInverse().cwiseAbs2().asDiagonal();
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(n);
+  for (std::size_t i = 0; i < dwells.size(); ++i) {
+    if (static_cast<int>(i) == skip) continue;
+    N += dwells[i].A.transpose() * dwells[i].A;
+    b += dwells[i].A.transpose() * dwells[i].y;
+  }
+  return N.ldlt().solve(b);
+}
+
+// Fit, residuals and leave-one-dwell-out prediction of one parameter set.
+FitFigures figures(const StaticDesign& design, const std::vector<int>& parameters,
+                   bool heldout = true) {
+  FitFigures f;
+  Stage2Options o;
+  o.table = design.table();
+  o.base_attitude = design.base_attitude();
+  o.parameters = parameters;
+  f.fit = solve_stage2(design.inputs(), design.site(), o);
+  f.chi2 = f.fit.chi2_per_dof * f.fit.dof;
+  const auto dwells = design.whiten(parameters);
+  const Eigen::VectorXd p0 = prior_sigmas(parameters, design.base_attitude());
+  const Eigen::VectorXd theta = solve_with_prior(dwells, p0, -1);
+  double sa = 0.0, sg = 0.0, ha = 0.0, hg = 0.0, hz = 0.0;
+  int na = 0, ng = 0, nha = 0, nhg = 0, nz = 0, inputs = 0;
+  for (std::size_t i = 0; i < dwells.size(); ++i) {
+    const WhiteDwell& w = dwells[i];
+    const Eigen::VectorXd r = w.u - w.H * theta;
+    const Eigen::VectorXd th = heldout ? solve_with_prior(dwells, p0, static_cast<int>(i)) : theta;
+    const Eigen::VectorXd e = w.u - w.H * th, z = w.y - w.A * th;
+    for (std::size_t a = 0; a < w.rows.size(); ++a) {
+      const bool gyro = w.rows[a] >= ins_input::kGyro.index;
+      const auto k = static_cast<Eigen::Index>(a);
+      (gyro ? sg : sa) += r(k) * r(k);
+      (gyro ? ng : na) += 1;
+      (gyro ? hg : ha) += e(k) * e(k);
+      (gyro ? nhg : nha) += 1;
+    }
+    hz += z.squaredNorm();
+    nz += static_cast<int>(z.size());
+    inputs += static_cast<int>(w.rows.size());
+  }
+  f.accel_rms = na ? std::sqrt(sa / na) : 0.0;
+  f.gyro_rms = ng ? std::sqrt(sg / ng) : 0.0;
+  f.heldout_accel = nha ? std::sqrt(ha / nha) : 0.0;
+  f.heldout_gyro = nhg ? std::sqrt(hg / nhg) : 0.0;
+  f.heldout = nz ? std::sqrt(hz / nz) : 0.0;
+  f.heldout_dwells = static_cast<int>(dwells.size());
+  f.log_likelihood = -0.5 * f.chi2;
+  f.bic = f.chi2 + f.fit.rank * std::log(std::max(1, inputs));
+  return f;
+}
+
+// One component as a candidate: separable when, added alone to the current parameters, it is
+// observable with a sigma below its family's prior / ratio.
+CandidateTest separability(const StaticDesign& design, const std::vector<int>& current,
+                           int component, const DiagnosisOptions& o) {
+  const auto& cat = coefficient_catalog();
+  CandidateTest c;
+  c.family = cat[static_cast<std::size_t>(component)].family;
+  const CoefficientFamily& info = coefficient_family_info(c.family);
+  c.separated_by = info.separated_by;
+  Stage2Options so;
+  so.table = design.table();
+  so.base_attitude = design.base_attitude();
+  so.parameters = current;
+  so.parameters.push_back(component);
+  const Stage2Result r = solve_stage2(design.inputs(), design.site(), so);
+  const auto j = static_cast<Eigen::Index>(current.size());
+  const double sigma = std::sqrt(r.cov(j, j));
+  const bool ok =
+      r.observable.back() && std::isfinite(sigma) && sigma < info.default_prior / o.separable_ratio;
+  (ok ? c.separable : c.aliased).push_back(component);
+  const std::string& name = cat[static_cast<std::size_t>(component)].name;
+  for (const auto& d : r.unobservable_directions)
+    if (d.find(name) != std::string::npos) c.aliased_with = d;
+  return c;
+}
+
+}  // namespace
+
+std::string DeterminedCombination::text() const {
+  std::string out;
+  const auto& cat = coefficient_catalog();
+  for (const auto& [k, w] : weights) {
+    if (std::abs(w) < 5e-4) continue;
+    char b[32];
+    std::snprintf(b, sizeof b, "%s%+.3f ", out.empty() ? "" : " ", w);
+    out += b + cat[static_cast<std::size_t>(k)].name;
+  }
+  return out.empty() ? out : out.substr(out[0] == ' ' ? 1 : 0);
+}
+
+std::vector<DeterminedCombination> determined_combinations(const Stage2Result& fit,
+                                                           const std::vector<int>& components) {
+  std::vector<Eigen::Index> at;  // positions of the components not observable one by one
+  for (int k : components) {
+    const auto it = std::find(fit.parameters.begin(), fit.parameters.end(), k);
+    if (it == fit.parameters.end()) continue;
+    const auto i = it - fit.parameters.begin();
+    if (!fit.observable[static_cast<std::size_t>(i)]) at.push_back(i);
+  }
+  if (at.empty() || fit.null_vectors.empty() || fit.theta_min_norm.size() == 0) return {};
+  const auto a = static_cast<Eigen::Index>(at.size());
+  // Z: the null vectors restricted to these components; a determined combination c has Z c = 0.
+  Eigen::MatrixXd Z(static_cast<Eigen::Index>(fit.null_vectors.size()), a);
+  for (std::size_t r = 0; r < fit.null_vectors.size(); ++r)
+    for (Eigen::Index j = 0; j < a; ++j)
+      Z(static_cast<Eigen::Index>(r), j) = fit.null_vectors[r](at[static_cast<std::size_t>(j)]);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(Z, Eigen::ComputeFullV);
+  const double smax = svd.singularValues().size() ? svd.singularValues()(0) : 0.0;
+  Eigen::Index rank = 0;
+  for (Eigen::Index k = 0; k < svd.singularValues().size(); ++k)
+    if (svd.singularValues()(k) > 1e-8 * std::max(1.0, smax)) ++rank;
+  std::vector<DeterminedCombination> out;
+  for (Eigen::Index k = rank; k < a; ++k) {
+    Eigen::VectorXd c = svd.matrixV().col(k);
+    Eigen::Index lead = 0;
+    c.cwiseAbs().maxCoeff(&lead);
+    if (c(lead) < 0.0) c = -c;
+    DeterminedCombination d;
+    Eigen::VectorXd full = Eigen::VectorXd::Zero(fit.theta_min_norm.size());
+    for (Eigen::Index j = 0; j < a; ++j) {
+      const auto i = at[static_cast<std::size_t>(j)];
+      full(i) = c(j);
+      d.weights.emplace_back(fit.parameters[static_cast<std::size_t>(i)], c(j));
+    }
+    d.value = full.dot(fit.theta_min_norm);
+    d.sigma = std::sqrt(std::max(0.0, full.dot(fit.cov_min_norm * full)));
+    out.push_back(std::move(d));
+  }
+  return out;
+}
+
+double log10_chi2_tail(double x, int dof) {
+  if (dof <= 0) return 0.0;
+  if (!(x > 0.0)) return 0.0;
+  const double p = boost::math::cdf(boost::math::complement(boost::math::chi_squared(dof), x));
+  if (p > 1e-280) return std::log10(p);
+  // Q(s, y) = Gamma(s, y) / Gamma(s) ~ y^(s-1) e^-y / Gamma(s) (1 + (s-1)/y + ...), y = x/2.
+  const double s = 0.5 * dof, y = 0.5 * x;
+  const double ln = (s - 1.0) * std::log(y) - y - std::lgamma(s) + std::log1p((s - 1.0) / y);
+  return ln / std::log(10.0);
+}
+
+double log10_f_tail(double f, int dof1, int dof2) {
+  if (dof1 <= 0 || dof2 <= 0 || !(f > 0.0)) return 0.0;
+  const double p = boost::math::cdf(boost::math::complement(boost::math::fisher_f(dof1, dof2), f));
+  if (p > 1e-280) return std::log10(p);
+  return log10_chi2_tail(f * dof1, dof1);
+}
+
+namespace diagnosis_detail {
+
+std::vector<int> candidate_components(const std::vector<std::string>& candidates,
+                                      const std::vector<int>& current) {
+  std::vector<std::string> families = candidates;
+  if (families.empty())
+    for (const auto& f : coefficient_families())
+      if (!f.base) families.push_back(f.name);
+  const auto& cat = coefficient_catalog();
+  std::vector<int> out;
+  for (std::size_t k = 0; k < cat.size(); ++k) {
+    const int c = static_cast<int>(k);
+    if (std::find(families.begin(), families.end(), cat[k].family) != families.end() &&
+        std::find(current.begin(), current.end(), c) == current.end())
+      out.push_back(c);
+  }
+  return out;
+}
+
+double largest_shift(const FitFigures& before, const FitFigures& after,
+                     const std::vector<int>& base) {
+  double worst = 0.0;
+  for (std::size_t k = 0; k < base.size(); ++k) {
+    const auto i = static_cast<Eigen::Index>(k);
+    const double s = std::sqrt(before.fit.cov(i, i));
+    if (!before.fit.observable[k] || !after.fit.observable[k] || !(s > 0.0)) continue;
+    worst = std::max(worst, std::abs(after.fit.theta(i) - before.fit.theta(i)) / s);
+  }
+  return worst;
+}
+
+// Tests one separable candidate against the current fit.
+// The test of a nested extension: the chi-square test of the likelihood ratio while the noise
+// model holds (the extended fit's chi-square within its 99 % quantile), else the F test, which
+// scales the noise by the fit's own residual.
+void test_statistic(const FitFigures& now, CandidateTest& c) {
+  const double lr = std::max(0.0, now.chi2 - c.with.chi2);
+  const int dof1 = c.with.fit.dof;
+  c.likelihood_ratio = lr;
+  if (c.with.chi2 <= boost::math::quantile(boost::math::chi_squared(dof1), kNoiseModelLevel)) {
+    c.test = "chi2";
+    c.statistic = lr;
+    c.dof2 = 0;
+    c.p_value = boost::math::cdf(boost::math::complement(boost::math::chi_squared(c.dof), lr));
+    c.log10_p = log10_chi2_tail(lr, c.dof);
+  } else {
+    c.test = "F";
+    c.statistic = (lr / c.dof) / c.with.fit.chi2_per_dof;
+    c.dof2 = dof1;
+    c.p_value =
+        boost::math::cdf(boost::math::complement(boost::math::fisher_f(c.dof, dof1), c.statistic));
+    c.log10_p = log10_f_tail(c.statistic, c.dof, dof1);
+  }
+}
+
+// Marks the round's significant candidates and returns the most significant one, or nullptr.
+CandidateTest* best_of(std::vector<CandidateTest>& round, double alpha) {
+  const auto tested =
+      std::count_if(round.begin(), round.end(), [](const CandidateTest& c) { return c.dof > 0; });
+  CandidateTest* best = nullptr;
+  for (auto& c : round) {
+    c.threshold = alpha / static_cast<double>(std::max<std::ptrdiff_t>(1, tested));
+    c.significant = c.dof > 0 && c.p_value < c.threshold;
+    if (c.significant &&
+        (!best || c.log10_p < best->log10_p ||
+         (c.log10_p == best->log10_p && c.likelihood_ratio > best->likelihood_ratio)))
+      best = &c;
+  }
+  return best;
+}
+
+// The round's most significant candidate, with the candidates that explain the residual as well
+// (their fits' chi-square within kAmbiguityMargin): the plan cannot tell them apart. Another
+// family's: name neither; the same family's: the family is named, its axis is ambiguous.
+CandidateTest* choose(std::vector<CandidateTest>& round, double alpha) {
+  CandidateTest* best = best_of(round, alpha);
+  if (!best) return nullptr;
+  for (auto& c : round)
+    if (&c != best && c.significant && c.with.chi2 - best->with.chi2 < kAmbiguityMargin)
+      best->ambiguous_with.push_back(c);
+  best->named = std::none_of(best->ambiguous_with.begin(), best->ambiguous_with.end(),
+                             [&](const CandidateTest& c) { return c.family != best->family; });
+  return best;
+}
+
+// What the plan could not separate (against the final model), one entry per family.
+std::vector<CandidateTest> not_separable(const std::vector<CandidateTest>& last_round) {
+  std::vector<CandidateTest> out;
+  for (const auto& c : last_round) {
+    if (c.aliased.empty()) continue;
+    auto it = std::find_if(out.begin(), out.end(),
+                           [&](const CandidateTest& n) { return n.family == c.family; });
+    if (it == out.end()) {
+      out.push_back(c);
+    } else {
+      it->aliased.insert(it->aliased.end(), c.aliased.begin(), c.aliased.end());
+      if (it->aliased_with.empty()) it->aliased_with = c.aliased_with;
+    }
+  }
+  return out;
+}
+
+void run_rounds(DiagnosisReport& rep, int max_findings, const RoundRunner& run_round,
+                const BestCompleter& complete) {
+  std::vector<int> current = rep.initial_parameters;
+  FitFigures now = rep.initial;
+  while (static_cast<int>(rep.findings.size()) < max_findings) {
+    std::vector<CandidateTest> round = run_round(current, now);
+    CandidateTest* best = choose(round, rep.alpha);
+    if (best && complete) {
+      std::vector<int> with = current;
+      with.insert(with.end(), best->separable.begin(), best->separable.end());
+      complete(with, *best);
+    }
+    rep.rounds.push_back(round);
+    if (!best) break;
+    if (!best->named) {
+      rep.ambiguous.push_back(*best);
+      break;
+    }
+    rep.findings.push_back(*best);
+    current.insert(current.end(), best->separable.begin(), best->separable.end());
+    now = best->with;
+  }
+  if (!rep.rounds.empty()) rep.not_separable = not_separable(rep.rounds.back());
+  rep.final_parameters = current;
+  rep.final_fit = now;
+}
+
+}  // namespace diagnosis_detail
+
+using namespace diagnosis_detail;
+
+namespace {
+
+void test_candidate(const StaticDesign& design, const std::vector<int>& current,
+                    const FitFigures& now, CandidateTest& c) {
+  std::vector<int> with = current;
+  with.insert(with.end(), c.separable.begin(), c.separable.end());
+  c.with = figures(design, with);
+  c.dof = c.with.fit.rank - now.fit.rank;
+  if (c.dof <= 0 || c.with.fit.dof <= 0) return;
+  test_statistic(now, c);
+  c.base_shift_sigma = largest_shift(now, c.with, current);
+  const auto& p = c.with.fit.parameters;
+  for (int k : c.separable) {
+    const auto at = std::find(p.begin(), p.end(), k) - p.begin();
+    if (c.with.fit.observable[static_cast<std::size_t>(at)]) c.determined.push_back(k);
+  }
+  c.combinations = determined_combinations(c.with.fit, c.separable);
+}
+
+DwellResidual residual_of(const EquivalentInputs& in, const Site& site,
+                          const TableAttitudeError& table) {
+  DwellResidual d;
+  d.dwell = in.dwell.index;
+  d.label = in.dwell.label;
+  const Matrix6d R = stage2_input_covariance(in, site, table);
+  for (int i = 0; i < 6; ++i) d.sigma(i) = std::sqrt(R(i, i));
+  return d;
+}
+
+// Residuals of every dwell under the regularized fit of `parameters`; `after` or `before`.
+void fill_residuals(const StaticDesign& design, const std::vector<int>& parameters,
+                    std::vector<DwellResidual>& out, bool after) {
+  const auto dwells = design.whiten(parameters);
+  const Eigen::VectorXd theta =
+      solve_with_prior(dwells, prior_sigmas(parameters, design.base_attitude()), -1);
+  for (std::size_t i = 0; i < dwells.size(); ++i) {
+    const Eigen::VectorXd r = dwells[i].u - dwells[i].H * theta;
+    auto& target = after ? out[i].after : out[i].before;
+    target.setConstant(std::numeric_limits<double>::quiet_NaN());
+    for (std::size_t a = 0; a < dwells[i].rows.size(); ++a)
+      target(dwells[i].rows[a]) = r(static_cast<Eigen::Index>(a));
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// One round: every candidate component against the current model, then each family's separable
+// components together (an effect on every axis at once shows only partly in each one alone).
+std::vector<CandidateTest> run_round(const StaticDesign& design, const std::vector<int>& current,
+                                     const FitFigures& now, const DiagnosisOptions& o) {
+  std::vector<CandidateTest> round;
+  for (int component : diagnosis_detail::candidate_components(o.candidates, current)) {
+    CandidateTest c = separability(design, current, component, o);
+    if (!c.separable.empty()) test_candidate(design, current, now, c);
+    round.push_back(std::move(c));
+  }
+  const std::size_t singles = round.size();
+  for (std::size_t i = 0; i < singles; ++i) {
+    const bool first_of_family =
+        std::none_of(round.begin(), round.begin() + static_cast<std::ptrdiff_t>(i),
+                     [&](const CandidateTest& c) { return c.family == round[i].family; });
+    if (!first_of_family) continue;
+    CandidateTest all;
+    for (std::size_t j = i; j < singles; ++j)
+      if (round[j].family == round[i].family)
+        all.separable.insert(all.separable.end(), round[j].separable.begin(),
+                             round[j].separable.end());
+    if (all.separable.size() < 2) continue;
+    all.family = round[i].family;
+    all.separated_by = round[i].separated_by;
+    test_candidate(design, current, now, all);
+    round.push_back(std::move(all));
+  }
+  return round;
+}
+
+}  // namespace
+
+DwellTests::DwellTests(std::vector<EquivalentInputs> inputs, const Site& site,
+                       const Stage2Options& base, const DiagnosisOptions& o)
+    : inputs_(std::move(inputs)), site_(site), base_(base), options_(o) {
+  if (!(o.alpha > 0.0 && o.alpha < 1.0) || !(o.separable_ratio >= 1.0))
+    throw std::invalid_argument("diagnosis: alpha must be in (0, 1), separable_ratio >= 1");
+  for (const auto& in : inputs_)
+    for (bool e : in.estimated) inputs_count_ += e ? 1 : 0;
+  if (inputs_count_ <= static_cast<int>(base.parameters.size()))
+    throw std::invalid_argument(
+        "diagnosis: " + std::to_string(inputs_.size()) + " dwells give " +
+        std::to_string(inputs_count_) + " equivalent inputs, not more than the model's " +
+        std::to_string(base.parameters.size()) + " coefficients: too few dwells to test anything");
+}
+
+FitFigures DwellTests::fit(const std::vector<int>& parameters) const {
+  return figures(StaticDesign(inputs_, site_, base_.table, base_.base_attitude), parameters);
+}
+
+std::vector<CandidateTest> DwellTests::round(const std::vector<int>& current,
+                                             const FitFigures& now) const {
+  return run_round(StaticDesign(inputs_, site_, base_.table, base_.base_attitude), current, now,
+                   options_);
+}
+
+std::vector<DwellResidual> DwellTests::residuals(const std::vector<int>& initial,
+                                                 const std::vector<int>& final) const {
+  const StaticDesign design(inputs_, site_, base_.table, base_.base_attitude);
+  std::vector<DwellResidual> out;
+  for (const auto& in : inputs_) out.push_back(residual_of(in, site_, base_.table));
+  fill_residuals(design, initial, out, false);
+  fill_residuals(design, final, out, true);
+  return out;
+}
+
+}  // namespace sinscal

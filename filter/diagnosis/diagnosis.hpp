@@ -1,0 +1,206 @@
+// Model discovery on a table session's static dwells: what the calibrated model fails to explain,
+// which missing effect explains it, and what adding it gains (../shared/model-discovery.md).
+//
+// The residual is the closed form's stage-2 residual: each dwell's equivalent inputs (measured,
+// from stage 1) minus those the calibrated error model predicts at the dwell's attitude (the same
+// error-model Jacobian the simulator's error model linearizes to; exact for the static dwells,
+// whose inputs are constant). The candidates are the extended families of the one family table
+// (models/coefficient_families.hpp), component by component: a new family there is a new
+// candidate here. Each candidate is refitted; the most significant is named when its likelihood
+// ratio is significant at the stated family-wise level (Bonferroni over the round's candidates)
+// and no other family's candidate explains the same residual; then the next round tests the rest
+// against the extended model. The leave-one-dwell-out prediction error is reported beside it.
+// A candidate whose signature lies in the span of the model on this plan is "not separable",
+// with the plan feature that would separate it; two candidates the plan cannot tell apart are
+// reported as ambiguous, neither named. Effects that act only while the table turns (inner lever
+// arms, time delay, gyro scale asymmetry) have no static signature: on the static dwells they are
+// reported as not separable, never guessed.
+#pragma once
+
+#include <Eigen/Core>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "filter/closed_form/closed_form.hpp"
+
+namespace sinscal {
+
+struct DiagnosisOptions {
+  /// Family-wise false-alarm level of one round of tests (Bonferroni over the candidates).
+  double alpha = 0.01;
+  /// A candidate component is separable when the plan shrinks its sigma (given the base
+  /// coefficients) below its family's default prior divided by this.
+  double separable_ratio = 3.0;
+  int max_findings = 6;
+  /// Candidate families (each of their components is a candidate); empty: every extended family
+  /// of the family table.
+  std::vector<std::string> candidates;
+  /// Families the user picks out of an ambiguous set (the first of them in the set extends the
+  /// model; none: the data's pick, the member with the best fit).
+  std::vector<std::string> prefer;
+};
+
+/// Residuals of one dwell, measured minus model: df_n (m/s^2) and dw_n (rad/s), NED.
+struct DwellResidual {
+  int dwell = 0;
+  std::string label;
+  Eigen::Matrix<double, 6, 1> before = Eigen::Matrix<double, 6, 1>::Zero();  // initial model
+  Eigen::Matrix<double, 6, 1> after = Eigen::Matrix<double, 6, 1>::Zero();   // final model
+  Eigen::Matrix<double, 6, 1> sigma = Eigen::Matrix<double, 6, 1>::Zero();   // of the inputs
+};
+
+/// Fit figures of one parameter set.
+struct FitFigures {
+  Stage2Result fit;
+  double chi2 = 0.0;           // whitened residual sum of squares
+  double accel_rms = 0.0;      // m/s^2: RMS of the accelerometer residuals over dwells, axes
+  double gyro_rms = 0.0;       // rad/s
+  double heldout = 0.0;        // RMS of the leave-one-dwell-out prediction error, in sigmas
+  double heldout_accel = 0.0;  // m/s^2, same in the sensor's units
+  double heldout_gyro = 0.0;   // rad/s
+  int heldout_dwells = 0;      // dwells whose prediction the others determine
+  /// Hand-held sessions (filter/diagnosis/handheld_diagnosis.hpp): accel_rms, gyro_rms are the
+  /// poses' gravity-magnitude residual and rate at rest; these the turns' (rad), 0 for table
+  /// sessions.
+  double turn_rms = 0.0;
+  double heldout_turn = 0.0;
+  double log_likelihood = 0.0;  // -chi2/2 (constant terms dropped)
+  double bic = 0.0;             // chi2 + rank log(inputs)
+};
+
+/// A combination of a family's coefficients that the data determine although the coefficients
+/// alone are not (each is aliased with base coefficients or the family's others): sum of
+/// weight x coefficient (SI), with its value and sigma.
+struct DeterminedCombination {
+  std::vector<std::pair<int, double>> weights;  // catalog index, weight (unit norm)
+  double value = 0.0;                           // SI
+  double sigma = 0.0;                           // SI
+  std::string text() const;                     // "+0.707 gyro.g_sensitivity.xx -0.707 ..."
+};
+
+/// The combinations of `components` (catalog indices) that `fit` determines although they are not
+/// observable one by one: an orthonormal basis of the combinations orthogonal to every null
+/// vector of the fit. Empty when every component is observable.
+std::vector<DeterminedCombination> determined_combinations(const Stage2Result& fit,
+                                                           const std::vector<int>& components);
+
+/// log10 of the upper tail of chi-square(dof) at x, finite where the tail underflows (the
+/// leading term of the incomplete gamma function's asymptotic expansion): p-values of different
+/// tests and dof ranked on one scale.
+double log10_chi2_tail(double x, int dof);
+/// log10 of the upper tail of F(dof1, dof2) at f; where it underflows, that of chi-square(dof1)
+/// at dof1 f (the limit of a large dof2).
+double log10_f_tail(double f, int dof1, int dof2);
+
+/// One candidate (a component of an extended family) tested against the current model.
+struct CandidateTest {
+  std::string family;
+  std::vector<int> separable;  // catalog indices of the components the plan separates
+  std::vector<int> aliased;    // those it does not
+  std::string aliased_with;    // the base combination an aliased component hides in
+  std::string separated_by;    // the plan feature that would separate it (family table)
+  int dof = 0;                 // extra parameters fitted (rank increase)
+  /// chi2_0 - chi2_1: the whitened residual's decrease (twice the log-likelihood ratio).
+  double likelihood_ratio = 0.0;
+  /// "chi2" while the noise model holds: the statistic is likelihood_ratio, chi-square(dof);
+  /// "F" when the fit's residual rejects the noise model: the statistic is
+  /// (likelihood_ratio / dof) / (chi2_1 / dof2), F(dof, dof2).
+  std::string test;
+  double statistic = 0.0;
+  int dof2 = 0;            // F: the extended fit's degrees of freedom
+  double p_value = 1.0;    // upper tail of the statistic's distribution
+  double log10_p = 0.0;    // log10 of p_value, finite where p underflows (ranks across tests)
+  double threshold = 0.0;  // p below this is significant (alpha / candidates)
+  bool significant = false;
+  bool named = false;  // the most significant, and no other family explains it
+  /// Other families' candidates that explain the same residual (each insignificant once the
+  /// other is in the model): the plan cannot tell them apart.
+  std::vector<CandidateTest> ambiguous_with;
+  FitFigures with;                // the fit with the candidate
+  double base_shift_sigma = 0.0;  // largest move of a base coefficient, in its sigma
+  /// The candidate's components that `with` determines one by one, and the combinations of the
+  /// others it determines.
+  std::vector<int> determined;
+  std::vector<DeterminedCombination> combinations;
+  /// A finding out of an ambiguous set (ambiguous_with holds other families): who picked this
+  /// member to extend the model, "data" (the best fit) or "user" (DiagnosisOptions::prefer).
+  std::string picked_by;
+};
+
+struct DiagnosisReport {
+  std::vector<int> initial_parameters;  // catalog indices
+  FitFigures initial;
+  std::vector<std::vector<CandidateTest>> rounds;  // every candidate of every round
+  std::vector<CandidateTest> findings;             // named, in order
+  std::vector<CandidateTest> not_separable;        // components the plan hides, per family
+  std::vector<CandidateTest> ambiguous;  // the round's best, which another family explains too
+  std::vector<int> final_parameters;
+  FitFigures final_fit;
+  std::vector<DwellResidual> residuals;
+  int inputs = 0;  // equivalent inputs over all dwells
+  double alpha = 0.0;
+};
+
+/// The statistics shared by the table and hand-held diagnoses.
+namespace diagnosis_detail {
+/// The test of a nested extension `c.with` of `now` (c.dof extra parameters): the chi-square test
+/// of the likelihood ratio while the noise model holds, else the F test.
+void test_statistic(const FitFigures& now, CandidateTest& c);
+/// Largest move of the first base.size() coefficients between two fits, in their sigmas before.
+double largest_shift(const FitFigures& before, const FitFigures& after,
+                     const std::vector<int>& base);
+/// Marks the round's significant candidates (Bonferroni) and returns the most significant one,
+/// or nullptr.
+CandidateTest* best_of(std::vector<CandidateTest>& round, double alpha);
+/// The most significant candidate with those that explain the residual as well; named unless
+/// another family's does.
+CandidateTest* choose(std::vector<CandidateTest>& round, double alpha);
+/// What could not be separated (aliased components), one entry per family.
+std::vector<CandidateTest> not_separable(const std::vector<CandidateTest>& last_round);
+/// Catalog indices of the components of `families` (empty: every extended family of the family
+/// table) not yet in `current`.
+std::vector<int> candidate_components(const std::vector<std::string>& families,
+                                      const std::vector<int>& current);
+/// Tests every candidate against the model `current` whose fit is `now`.
+using RoundRunner = std::function<std::vector<CandidateTest>(const std::vector<int>& current,
+                                                             const FitFigures& now)>;
+/// Adds figures to the round's best candidate (`with`: the model with it) before it is recorded.
+using BestCompleter = std::function<void(const std::vector<int>& with, CandidateTest& best)>;
+/// The rounds of a diagnosis, from rep.initial_parameters and rep.initial: the round's named best
+/// joins the model, until no candidate is significant, the best is ambiguous or `max_findings`
+/// are named. Fills rounds, findings, ambiguous, not_separable, final_parameters and final_fit.
+void run_rounds(DiagnosisReport& rep, int max_findings, const RoundRunner& run_round,
+                const BestCompleter& complete = {});
+}  // namespace diagnosis_detail
+
+/// The static dwells' side of a table diagnosis: fits of parameter sets to stage 1's equivalent
+/// inputs and the tests of candidates against a current model (filter/diagnosis/diagnosis_table.hpp
+/// runs the rounds).
+class DwellTests {
+ public:
+  /// Throws std::invalid_argument when the dwells are too few for the base model (fewer inputs
+  /// than parameters plus one) or the options are out of range.
+  DwellTests(std::vector<EquivalentInputs> inputs, const Site& site, const Stage2Options& base,
+             const DiagnosisOptions& options);
+  /// Fit, residuals and leave-one-dwell-out prediction of a parameter set.
+  FitFigures fit(const std::vector<int>& parameters) const;
+  /// Every candidate component against the current model, then each family's separable
+  /// components together.
+  std::vector<CandidateTest> round(const std::vector<int>& current, const FitFigures& now) const;
+  /// Per-dwell residuals under the initial and the final parameter sets.
+  std::vector<DwellResidual> residuals(const std::vector<int>& initial,
+                                       const std::vector<int>& final) const;
+  int inputs() const { return inputs_count_; }
+  const Stage2Options& base() const { return base_; }
+  const DiagnosisOptions& options() const { return options_; }
+
+ private:
+  std::vector<EquivalentInputs> inputs_;
+  Site site_;
+  Stage2Options base_;
+  DiagnosisOptions options_;
+  int inputs_count_ = 0;
+};
+
+}  // namespace sinscal

@@ -1,0 +1,125 @@
+// Model discovery from the Kalman filter's innovations, for the effects that act only while the
+// table turns (inner lever arms, time delay, gyro scale asymmetry): they leave nothing in the
+// static dwells (filter/diagnosis/diagnosis.hpp reports them not separable there) but do leave it
+// in the zero-velocity, position and attitude updates during and after the turns.
+//
+// Each candidate family is switched on in the filter's model (the family table's entry and its
+// physics: no diagnosis code per family) and the session run again. In the linear-Gaussian model
+// the filter's estimate x of coefficients whose true value is zero has covariance
+// P - P P0^-1 P (P0 prior, P posterior): on prior-normalized coefficients, mu (1 - mu) along
+// an eigenvector of the normalized posterior with eigenvalue mu (the fraction of the prior
+// variance the data left). The test statistic W sums (projection of x)^2 / (mu (1 - mu)) over
+// the directions the data determine (mu at most `separable_remaining`): chi-square with as many
+// degrees of freedom as such directions when there is no such effect; for well-determined
+// directions it is the familiar (x / sigma)^2. No such direction: the plan does not separate the
+// family ("not separable"). When the run with the candidate still has a NIS per degree of
+// freedom above 1 (the filter's noise model does not hold), W is divided by it. A
+// candidate is named when it is the most significant of its round at the family-wise level
+// (Bonferroni over the round's candidates); the next round tests the others with it in the model.
+// The gain is the NIS per degree of freedom and the innovation log-likelihood before and after.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "filter/kalman/kalman_run.hpp"
+
+namespace sinscal {
+
+struct KalmanDiagnosisOptions {
+  /// Family-wise false-alarm level of one round of tests (Bonferroni over the candidates).
+  double alpha = 0.01;
+  /// A prior-normalized direction counts when the data leave at most this fraction of its prior
+  /// variance (the rule of CoefficientEstimate::observed()).
+  double separable_remaining = 0.5;
+  int max_findings = 3;
+  /// Candidate families (extended families of the family table not in the base model).
+  std::vector<std::string> candidates;
+};
+
+/// One candidate family run in the filter beside the current model.
+struct KalmanCandidateTest {
+  std::string family;
+  std::string separated_by;  // the plan feature that separates it (family table)
+  int dof = 0;               // directions the data determine
+  double wald = 0.0;         // W (after the NIS scaling)
+  double nis_scale = 1.0;    // the NIS per dof W was divided by (1: none)
+  double p_value = 1.0;      // upper tail of chi-square(dof)
+  double log10_p = 0.0;      // log10 of p_value, finite where p underflows
+  /// The run with the candidate stopped or diverged (the reason): not tested (dof 0).
+  std::string failed;
+  double threshold = 0.0;  // p below this is significant (alpha / candidates)
+  bool significant = false;
+  bool named = false;
+  std::vector<int> catalog;  // the family's coefficient indices
+  /// Every coefficient of the run with the candidate (catalog order, SI).
+  std::vector<CoefficientEstimate> estimates;
+  double nis_per_dof = 0.0;       // of the run with the candidate
+  double log_likelihood = 0.0;    // of the run with the candidate
+  double base_shift_sigma = 0.0;  // largest move of a coefficient of the current model, in sigma
+};
+
+struct KalmanDiagnosis {
+  std::vector<std::string> initial_families;  // extended families of the session's model
+  double initial_nis_per_dof = 0.0;
+  double initial_log_likelihood = 0.0;
+  std::vector<std::vector<KalmanCandidateTest>> rounds;
+  std::vector<KalmanCandidateTest> findings;       // named, in order
+  std::vector<KalmanCandidateTest> not_separable;  // no direction the data determine
+  KalmanRun final_run;                             // the model with the findings
+  double alpha = 0.0;
+};
+
+/// The turns' held-out prediction of one model: the filter run twice, each time without any
+/// update during every other turn between dwells (the odd turns, then the even ones), and the
+/// first update after each held-out turn scored: how well the coefficients learnt from the other
+/// turns and the dwells predict the navigation error a turn accumulates.
+struct HeldoutTurns {
+  int turns = 0;          // held-out turns scored (0: none; see `failed`)
+  std::string failed;     // a run with turns held out diverged (errors too large to predict)
+  double sigmas = 0.0;    // RMS of sqrt(NIS / dof) of those updates (1: as predicted)
+  double velocity = 0.0;  // m/s: RMS of the zero-velocity innovation's norm
+};
+
+/// The held-out turns of `options`' model on the session (two runs of the filter). Turns with
+/// no time between their dwells' update margins are skipped; none: turns = 0. A run that
+/// diverges (the turns' errors too large to predict without updates) leaves turns = 0 and the
+/// reason in `failed`.
+HeldoutTurns heldout_turns(const Session& session, const CalibratorOptions& options);
+
+/// The turns' side of a table diagnosis: the filter run with the current model, then with each
+/// candidate family added (filter/diagnosis/diagnosis_table.hpp runs the rounds).
+class TurnTests {
+ public:
+  /// Runs the filter with `base`. Throws std::runtime_error when the run stops early.
+  TurnTests(const Session& session, const CalibratorOptions& base,
+            const KalmanDiagnosisOptions& options);
+  const KalmanRun& now() const { return now_; }
+  const CalibratorOptions& model() const { return model_; }
+  /// Tests each family against the current model (the runs are kept for extend()). Throws
+  /// std::invalid_argument for a family that is not extended or already in the model; a run
+  /// that stops or diverges leaves its family untested (KalmanCandidateTest::failed).
+  std::vector<KalmanCandidateTest> round(const std::vector<std::string>& families);
+  /// Adds a family to the model: the last round's run with it, else a new run.
+  void extend(const std::string& family);
+  HeldoutTurns heldout() const { return heldout_turns(session_, model_); }
+
+ private:
+  const Session& session_;
+  KalmanDiagnosisOptions options_;
+  CalibratorOptions model_;
+  KalmanRun now_;
+  std::vector<std::pair<std::string, KalmanRun>> last_round_;
+};
+
+/// Marks the round's candidates significant below `threshold` (p-value, with a tested direction)
+/// and returns the most significant one (smallest log10 p), or nullptr.
+KalmanCandidateTest* most_significant(std::vector<KalmanCandidateTest>& round, double threshold);
+
+/// Runs the filter on the session with `base`, then each candidate family added. Throws
+/// std::invalid_argument for a candidate that is not an extended family or already in `base`,
+/// and std::runtime_error when a run of the filter stops early (bad sample, divergence).
+KalmanDiagnosis diagnose_kalman(const Session& session, const CalibratorOptions& base,
+                                const KalmanDiagnosisOptions& options);
+
+}  // namespace sinscal

@@ -1,0 +1,147 @@
+// Model discovery on a table session as one story across its dwells and turns.
+//
+// Two tests look for what the calibrated model lacks: the static dwells' (closed-form stage 2
+// residuals, filter/diagnosis/diagnosis.hpp), which sees every effect with a static signature, and
+// the Kalman filter's innovations (filter/diagnosis/diagnosis_kalman.hpp), which sees the effects
+// that act only while the table turns (the families with no component the dwells can separate).
+// Each round tests every candidate of both against one current model, on one Bonferroni level
+// (alpha over all the round's tests) and one comparable statistic (log10 of the p-value, finite
+// where p underflows). The round's finding joins the model both tests use, and every other
+// candidate is tested again against the extended model in the next round.
+//
+// The dwells first: while a dwell candidate is significant, the round's finding is the most
+// significant dwell candidate, whatever the turns' test says. A missing effect of the dwells
+// leaks into the filter's innovations during the turns (measured: a hidden accelerometer K2 on
+// rot19 made the inner lever arms significant at p = 3e-6 in 2 of 6 sessions), while the
+// effects of the turns have no static signature and cannot leak into the dwells' test; so a turn
+// candidate is only named against a model that explains the dwells.
+//
+// An ambiguous set (candidates of several families that explain the dwells equally well on this
+// plan, e.g. K2 and scale-factor asymmetry on a plan with one specific-force level per axis) is a
+// finding in its own rank: the model is extended with the member the user prefers
+// (DiagnosisOptions::prefer) or, without a preference, the data's pick, the member with the best
+// fit; later rounds are tested against that explained model. The finding names the whole set and
+// what separates its members.
+//
+// Each finding reports the extended calibration's coefficients of its family (the filter's
+// estimate with the family, which sees the turns too, where it observes a coefficient; else the
+// dwells' fit; for components neither determines alone, the dwells' determined combinations) and
+// its gain as held-out prediction: the leave-one-dwell-out error of the dwells' fit, and the turns
+// held out of the filter (HeldoutTurns), before and after.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "filter/diagnosis/diagnosis.hpp"
+#include "filter/diagnosis/diagnosis_kalman.hpp"
+
+namespace sinscal {
+
+struct TableDiagnosisOptions {
+  /// alpha, candidates, preferred members of ambiguous sets, max_findings.
+  DiagnosisOptions dwells;
+  /// The filter's test (separable_remaining); its alpha and candidates are the dwells'.
+  KalmanDiagnosisOptions turns;
+  /// Held-out turns for each finding's gain (two runs of the filter per model).
+  bool heldout_turns = true;
+};
+
+/// The session's model from its sensor profile: the extended families it declares join the
+/// dwells' initial model too (the model both tests use), and the filter runs the turns' test.
+struct TurnModel {
+  const Session* session = nullptr;
+  CalibratorOptions base;
+  bool run_filter = true;  // false: the profile's families only (no turns' test)
+};
+
+/// The turns' model of a session as `sinscal diagnose` runs it: the filter's options from the
+/// session's sensor profile, the table's attitude sigma (rad), the session's time offset.
+TurnModel turn_model_of(const Session& session, const SensorProfile& profile, double table_sigma);
+
+/// One pass's NIS per dof above this: the session's errors are too large for one linearization
+/// about zero (MEMS), and both tests linearize about a first calibration.
+constexpr double kRelinearizeNis = 1.5;
+
+/// The model both tests linearize about, or none (about zero, as one pass of calibrate): the
+/// filter's estimate after `passes` passes over the log with the session's model; `passes` 0:
+/// automatic, 3 passes when one pass's NIS per dof is above kRelinearizeNis, else none. Sets the
+/// model (and its base) as the filter's starting point (`model.base.initial_model`); the closed
+/// form takes it as `run_closed_form(..., false, about)` (no alignment: the model carries the
+/// mounting), so the dwells' fits are corrections to it. When a pass stops or diverges: none
+/// (about zero), the reason in `failed`.
+std::optional<ImuErrorModel> linearize(TurnModel& model, int passes, std::string* failed = nullptr);
+
+/// A coefficient of a finding in the extended calibration.
+struct FindingCoefficient {
+  int catalog = 0;
+  double value = 0.0;  // SI
+  double sigma = 0.0;  // SI
+  /// "kalman" (the filter with the extended model), "dwells" (the dwells' fit), or "" when
+  /// neither determines it alone (see the finding's combinations).
+  std::string source;
+};
+
+/// One finding of the story: the round's most significant effect, which then joined the model.
+struct TableFinding {
+  int round = 0;  // 1-based
+  enum class Source { Dwells, Turns };
+  Source source = Source::Dwells;
+  std::string family;           // the family the model was extended with
+  std::vector<int> components;  // catalog indices added (the dwells: the separable ones)
+  /// Other families that explain the same residual as well on the dwells (an ambiguous set), and
+  /// who picked `family` out of it ("turns": the filter's best log-likelihood; "data": the
+  /// dwells' best fit; "user": DiagnosisOptions::prefer).
+  std::vector<std::string> ambiguous_with;
+  std::string picked_by;
+  /// What separates each family of the set from the base coefficients (the family table):
+  /// `family` first, then each of ambiguous_with.
+  std::vector<std::string> separated_by;
+  /// The test: "chi2" (likelihood ratio), "F" (likelihood ratio over the residual's scale) or
+  /// "wald" (the filter's estimate against zero, chi-square).
+  std::string test;
+  double statistic = 0.0;
+  int dof = 0, dof2 = 0;
+  double p_value = 1.0, log10_p = 0.0, threshold = 0.0;
+  double base_shift_sigma = 0.0;  // largest move of a coefficient already in the model
+  /// The family's coefficients in the final extended calibration (every finding in the model).
+  std::vector<FindingCoefficient> coefficients;     // catalog order
+  std::vector<DeterminedCombination> combinations;  // determined only together (dwells)
+  /// Dwells: the fits before and after (residual RMS, leave-one-dwell-out prediction); only
+  /// for dwell findings (the effects of the turns leave the dwells' fit as it was).
+  std::optional<FitFigures> dwells_before, dwells_after;
+  /// The filter: NIS per dof and innovation log-likelihood before and after, and the turns'
+  /// held-out prediction.
+  bool filter = false;
+  double nis_before = 0.0, nis_after = 0.0, log_likelihood_before = 0.0, log_likelihood_after = 0.0;
+  std::optional<HeldoutTurns> turns_before, turns_after;
+};
+
+struct TableDiagnosis {
+  DiagnosisReport dwells;  // the dwells' rounds, their findings, what they cannot separate
+  /// The filter's rounds (aligned with the dwells' by round; a round with no turn candidate is
+  /// empty), its findings, the families it cannot separate either, the final run.
+  std::optional<KalmanDiagnosis> turns;
+  std::vector<TableFinding> findings;  // the story, in order
+  int rounds = 0;
+};
+
+/// Diagnoses a table session from its stage-1 inputs, starting from `base` (the session's model);
+/// with `turns`, the effects of the turns in the same rounds. Throws std::invalid_argument when the
+/// dwells are too few for the base model or a candidate is not an extended family, and
+/// std::runtime_error when a run of the filter stops early.
+TableDiagnosis diagnose_table(const std::vector<EquivalentInputs>& inputs, const Site& site,
+                              const Stage2Options& base, const TableDiagnosisOptions& options,
+                              const TurnModel* turns = nullptr);
+
+/// The dwells alone (no turns' test).
+inline DiagnosisReport diagnose_static(const std::vector<EquivalentInputs>& inputs,
+                                       const Site& site, const Stage2Options& base,
+                                       const DiagnosisOptions& options = {}) {
+  TableDiagnosisOptions o;
+  o.dwells = options;
+  return diagnose_table(inputs, site, base, o).dwells;
+}
+
+}  // namespace sinscal

@@ -1,0 +1,76 @@
+// The error dynamics of the Kalman filter's state (filter/kalman/state_layout.hpp), accumulated per
+// IMU sample into the transition over an update interval:
+//
+//   phi'  = -omega_ie x phi + d_omega_in(dv, dp) - C_b_n J_g dtheta
+//   dv'   = f_n x phi - 2 omega_ie x dv + (2g/R) dp_d e_d + C_b_n J_a dtheta
+//   dp'   = dv
+//   dtheta' = 0 (coefficients constant; bias families wander with the profile's bias noise)
+//
+// with the INS error matrix of filter/strapdown/ins_error_model.hpp written in the layout's
+// navigation indices, J the error model's Jacobian (models/imu_error_model.hpp) for the coefficient
+// states, and dtheta = true - estimated coefficients. The transition has the structure
+// [[Phi_nn, Phi_nc], [0, I]], accumulated as Phi <- (I + A dt) Phi, Phi_nc <- (I + A dt) Phi_nc +
+// B dt; the process noise of the navigation errors as Q <- step Q step^T + q dt. Fixed-size
+// storage: nothing is allocated per sample.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "filter/kalman/state_layout.hpp"
+#include "filter/strapdown/ins_error_model.hpp"
+#include "models/imu_error_model.hpp"
+#include "models/noise_model.hpp"
+
+namespace sinscal {
+
+// Fixed-size storage for the navigation rows: kMaxNavStates rows, of which the layout's nav_size
+// are used (the layout's indices); with the vertical velocity off the last row and column are
+// inert (zero dynamics, no coupling).
+using NavMatrix = Eigen::Matrix<double, kMaxNavStates, kMaxNavStates, Eigen::RowMajor>;
+using NavCoefficientMatrix = Eigen::Matrix<double, kMaxNavStates, Eigen::Dynamic, Eigen::RowMajor,
+                                           kMaxNavStates, kMaxCoefficients>;
+
+class ErrorPropagator {
+ public:
+  ErrorPropagator(const StateLayout& layout, const InsSiteTerms& site, const NoiseModel& noise);
+  /// One IMU interval of length dt: the navigator's attitude after it, the compensated
+  /// kinematics (omega_ib_b, omega_dot_ib_b, f_ib_b, t), the rate of change of the specific
+  /// force and the model the samples were compensated with (its Jacobian).
+  void step(const Eigen::Matrix3d& C_b_n, const KinematicSample& k, const Eigen::Vector3d& f_dot,
+            const ImuErrorModel& model, double dt);
+  /// P <- Phi P Phi^T + Q over the accumulated interval, then starts a new interval.
+  void propagate(Eigen::MatrixXd& P);
+  /// Time accumulated since the last propagate() (s).
+  double accumulated() const { return accumulated_; }
+  /// The accumulated transition (layout indices): navigation errors from navigation errors
+  /// (nav_size x nav_size) and from the coefficient states (nav_size x coefficient states).
+  Eigen::MatrixXd Phi_nn() const { return Phi_nn_.topLeftCorner(n_, n_); }
+  Eigen::MatrixXd Phi_nc() const { return Phi_nc_.topRows(n_); }
+  Eigen::MatrixXd Q_nn() const { return Q_nn_.topLeftCorner(n_, n_); }
+
+ private:
+  void reset();
+  StateLayout layout_;
+  InsSiteTerms site_;
+  NoiseModel noise_;
+  int n_ = 0, m_ = 0;     // navigation states, states after them (coefficients, base attitude)
+  int coefficients_ = 0;  // coefficient states (the first of the m_)
+  std::vector<int> coefficient_catalog_;  // catalog index of each coefficient state, in order
+  Eigen::VectorXd wander_;                // per coefficient state: random-walk density (SI^2/s)
+  NavMatrix Phi_nn_, Q_nn_, work_nn_;
+  Eigen::Matrix<double, kMaxNavStates, kMaxNavStates> A_;  // column-major: ins_error_matrix()
+  NavCoefficientMatrix Phi_nc_, B_, work_nc_;
+  // The non-zero entries of A dt of the current step (the INS error matrix is sparse: products
+  // with I + A dt cost its entries, not 81 multiplications per column).
+  int nonzero_ = 0;
+  int nz_row_[kMaxNavStates * kMaxNavStates] = {};
+  int nz_col_[kMaxNavStates * kMaxNavStates] = {};
+  double nz_value_[kMaxNavStates * kMaxNavStates] = {};
+  /// out = (I + A dt) in, rows of `in` combined by the non-zero entries.
+  template <class Matrix>
+  void step_product(const Matrix& in, Matrix& out) const;
+  ImuErrorModel::JacobianColumns J_;
+  double accumulated_ = 0.0;
+};
+
+}  // namespace sinscal

@@ -1,0 +1,414 @@
+#include "filter/kalman/kalman_run.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <boost/math/distributions/chi_squared.hpp>
+#include <boost/math/distributions/normal.hpp>
+#include <cmath>
+#include <cstdio>
+#include <deque>
+#include <limits>
+#include <memory>
+#include <sstream>
+
+#include "models/attitude.hpp"
+#include "models/coefficient_families.hpp"
+
+namespace sinscal {
+
+std::string UnobservableDirection::text() const {
+  std::string out;
+  for (const auto& [name, w] : components) {
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "%s%+.3f %s", out.empty() ? "" : " ", w, name.c_str());
+    out += buf;
+  }
+  return out;
+}
+
+std::vector<std::string> above_target(const std::vector<CoefficientEstimate>& est,
+                                      const std::map<std::string, double>& targets) {
+  std::vector<std::string> out;
+  const auto& cat = coefficient_catalog();
+  for (std::size_t i = 0; i < cat.size(); ++i) {
+    if (est[i].status != CoefficientEstimate::Status::Estimated) continue;
+    const auto t = targets.find(cat[i].family);
+    if (t != targets.end() && est[i].sigma > t->second) out.push_back(cat[i].name);
+  }
+  return out;
+}
+
+namespace {
+
+bool converged(const std::vector<CoefficientEstimate>& est,
+               const std::map<std::string, double>& targets) {
+  return !targets.empty() && above_target(est, targets).empty();
+}
+
+/// The divergence alarm: the NIS summed over a sliding window of updates against the upper
+/// chi-square quantile at the normal tail probability of `z` standard deviations (constant
+/// memory).
+class NisWatch {
+ public:
+  NisWatch(int window, double z)
+      : window_(window),
+        tail_(std::isfinite(z) ? boost::math::cdf(boost::math::complement(
+                                     boost::math::normal_distribution<double>(), z))
+                               : 0.0) {}
+  /// Adds one update; true when the window is full and its NIS beyond the quantile.
+  bool add(double nis, int dof) {
+    updates_.emplace_back(nis, dof);
+    sum_ += nis;
+    dof_ += dof;
+    if (static_cast<int>(updates_.size()) > window_) {
+      sum_ -= updates_.front().first;
+      dof_ -= updates_.front().second;
+      updates_.pop_front();
+    }
+    return static_cast<int>(updates_.size()) == window_ && tail_ > 0.0 && sum_ > limit();
+  }
+  double limit() const {
+    return boost::math::quantile(
+        boost::math::complement(boost::math::chi_squared_distribution<double>(dof_), tail_));
+  }
+  std::string message(double t) const {
+    char msg[256];
+    std::snprintf(msg, sizeof msg,
+                  "filter diverging at t = %.3f s: NIS per dof %.3g over the last %d updates "
+                  "(%d dof; a consistent filter stays below %.3g)",
+                  t, sum_ / dof_, window_, dof_, limit() / dof_);
+    return msg;
+  }
+
+ private:
+  int window_;
+  double tail_;
+  std::deque<std::pair<double, int>> updates_;
+  double sum_ = 0.0;
+  int dof_ = 0;
+};
+
+MonitorRecord monitor_record(const Calibrator& kf, double t, bool converged_now) {
+  return {t, kf.nis_dof() > 0 ? kf.nis_sum() / kf.nis_dof() : 0.0, converged_now,
+          kf.layout().accel_triad_frame, kf.estimate()};
+}
+
+// The samples through the filter, with the supervision of each update: divergence alarm,
+// convergence, monitor records, interruption. Fills what the loop learns into `r`.
+void read_samples(Calibrator& kf, SampleSource& source, const KalmanRunOptions& run, KalmanRun& r) {
+  NisWatch watch(run.nis_window, run.nis_alarm_z);
+  ImuSample s;
+  double t_first = 0.0, next_monitor = run.monitor_interval;
+  int seen_updates = 0;
+  auto stop_requested = [&] { return run.stop && run.stop->load(std::memory_order_relaxed); };
+  try {
+    while (!stop_requested() && source.next(s)) {
+      if (r.samples == 0) {
+        t_first = s.t - s.dt;
+        next_monitor = t_first + run.monitor_interval;
+      }
+      r.t_last = s.t;
+      kf.push(s);
+      ++r.samples;
+      if (kf.updates() != seen_updates) {
+        seen_updates = kf.updates();
+        if (watch.add(kf.last_nis(), kf.last_nis_dof())) {
+          r.diverged = watch.message(s.t);
+          break;
+        }
+        if (!r.converged_at && converged(kf.estimate(), run.sigma_targets)) r.converged_at = s.t;
+      }
+      if (run.monitor && run.monitor_interval > 0.0 && s.t >= next_monitor - 1e-9) {
+        run.monitor(monitor_record(kf, s.t, r.converged_at.has_value()));
+        next_monitor += run.monitor_interval;
+      }
+    }
+  } catch (const LogError& e) {
+    r.stopped = e.what();
+  } catch (const PlanDataMismatch& e) {
+    r.stopped = e.what();
+  } catch (const std::runtime_error& e) {
+    // The filter itself failed (estimates run away until the error model cannot be inverted,
+    // an innovation covariance not positive definite): a diverged filter.
+    r.diverged = "filter diverged at t = " + std::to_string(r.t_last) + " s: " + e.what();
+  }
+  if (stop_requested()) {
+    // Stopped by the user (a signal; a read it interrupted may have failed): what was read is
+    // the run.
+    std::ostringstream m;
+    m << "interrupted at t = " << r.t_last << " s";
+    r.stopped = m.str();
+    r.interrupted = true;
+  }
+  r.duration = r.t_last - t_first;
+}
+
+// The data against the plan once the input ended: as many static intervals as dwells, a log as
+// long as the plan.
+void check_against_plan(const Calibrator& kf, const PlanTimeline& timeline,
+                        const std::string& input, double time_offset, double last_dt,
+                        KalmanRun& r) {
+  if (!r.stopped.empty() || !r.diverged.empty()) return;
+  std::ostringstream m;
+  if (const StaticDetector* detector = kf.detector()) {
+    if (detector->dwells().size() < timeline.dwells.size()) {
+      m << input << ": the data have " << detector->dwells().size()
+        << " static intervals, the plan " << timeline.dwells.size()
+        << " dwells: the plan does not match the data";
+      r.stopped = m.str();
+    }
+    return;
+  }
+  // A log that ends before the plan does: the estimates from the data up to there are kept.
+  if (r.samples == 0 || r.t_last - time_offset < timeline.duration - 1.5 * last_dt) {
+    m << input << ": the log ends at t = " << (r.samples ? r.t_last : 0.0)
+      << " s but the plan runs until " << timeline.duration + time_offset
+      << " s: the plan does not match the data";
+    r.stopped = m.str();
+  }
+}
+
+// Combinations of coefficient states whose variance the data did not bring below half the
+// prior's: eigen-decomposition of the coefficient covariance normalized by the prior sigmas.
+std::vector<UnobservableDirection> unobservable_directions(const Calibrator& kf,
+                                                           std::vector<CoefficientEstimate>& est) {
+  const StateLayout& l = kf.layout();
+  const int m = l.coefficient_states();
+  std::vector<int> catalog;
+  for (const auto& cb : l.coefficients)
+    catalog.insert(catalog.end(), cb.catalog.begin(), cb.catalog.end());
+  Eigen::VectorXd d(m);
+  for (int k = 0; k < m; ++k)
+    d(k) = 1.0 / est[static_cast<std::size_t>(catalog[static_cast<std::size_t>(k)])].prior_sigma;
+  const Eigen::MatrixXd M =
+      d.asDiagonal() * kf.covariance().block(l.nav_size, l.nav_size, m, m) * d.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(M);
+  std::vector<UnobservableDirection> out;
+  const auto& cat = coefficient_catalog();
+  for (int k = m - 1; k >= 0 && es.eigenvalues()(k) > kUnobservedVarianceRatio; --k) {
+    Eigen::VectorXd v = es.eigenvectors().col(k);
+    Eigen::Index lead = 0;
+    v.cwiseAbs().maxCoeff(&lead);
+    if (v(lead) < 0.0) v = -v;
+    UnobservableDirection u;
+    u.remaining = es.eigenvalues()(k);
+    for (int i = 0; i < m; ++i) {
+      if (v(i) * v(i) < kUnobservedWeight) continue;
+      const auto c = static_cast<std::size_t>(catalog[static_cast<std::size_t>(i)]);
+      u.components.emplace_back(cat[c].name, v(i));
+      est[c].in_unobservable_direction = true;
+    }
+    out.push_back(u);
+  }
+  return out;
+}
+
+// The covariance of the coefficient states, by the layout's blocks.
+void coefficient_covariance(const Calibrator& kf, KalmanRun& r) {
+  std::vector<int> states;
+  r.covariance_catalog.clear();
+  for (const auto& cb : kf.layout().coefficients)
+    for (int k = 0; k < cb.block.size; ++k) {
+      states.push_back(cb.block.index + k);
+      r.covariance_catalog.push_back(cb.catalog[static_cast<std::size_t>(k)]);
+    }
+  const auto n = static_cast<Eigen::Index>(states.size());
+  r.coefficient_covariance.resize(n, n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j < n; ++j)
+      r.coefficient_covariance(i, j) =
+          kf.covariance()(states[static_cast<std::size_t>(i)], states[static_cast<std::size_t>(j)]);
+}
+
+// The run's result from the filter at its end.
+void summarize(const Calibrator& kf, const PlanTimeline& timeline, const KalmanRunOptions& run,
+               KalmanRun& r) {
+  r.states = kf.layout().size;
+  r.accel_triad_frame = kf.layout().accel_triad_frame;
+  r.nis_per_dof = kf.nis_dof() > 0 ? kf.nis_sum() / kf.nis_dof() : 0.0;
+  r.log_likelihood = kf.log_likelihood();
+  coefficient_covariance(kf, r);
+  r.estimates = kf.estimate();
+  r.unobservable_directions = unobservable_directions(kf, r.estimates);
+  const auto& cat = coefficient_catalog();
+  for (std::size_t i = 0; i < r.estimates.size(); ++i)
+    if (r.estimates[i].status == CoefficientEstimate::Status::Estimated &&
+        !r.estimates[i].observed())
+      r.unobservable.push_back(cat[i].name);
+  r.has_targets = !run.sigma_targets.empty();
+  r.above_target = above_target(r.estimates, run.sigma_targets);
+  r.table_attitude_updates = kf.table_attitude_updates();
+  r.holdout = kf.holdout_predictions();
+  InstallationResult& in = r.installation;
+  in.base_estimated = StateLayout::on(kf.layout().base);
+  in.base_n = rotvec_from_dcm(kf.base());
+  if (in.base_estimated)
+    in.base_sigma_n = kf.covariance().diagonal().segment<3>(kf.layout().base.index).cwiseSqrt();
+  in.mounting_estimated = !kf.layout().accel_triad_frame;
+  if (in.mounting_estimated) {
+    in.mounting_b = mounting_of(kf.model());
+    in.mounting_sigma_b = mounting_sigma(kf.layout(), kf.covariance());
+  }
+  r.dwells = static_cast<int>(timeline.dwells.size());
+  r.model = kf.model();
+  if (const StaticDetector* detector = kf.detector()) {
+    KalmanRun::Detected d{
+        detector->gyro_bound(), detector->accel_bound(), detector->rate_threshold(), {}};
+    for (const auto& f : detector->dwells()) {
+      const PlanDwell& p = timeline.dwells[static_cast<std::size_t>(f.index - 1)];
+      d.intervals.push_back({f.index, p.label, f.t_start, f.t_end, p.t_start, p.t_end});
+    }
+    r.detected = d;
+  }
+}
+
+KalmanRun run_pass(const Session& session, const CalibratorOptions& options, SampleSource* source,
+                   const KalmanRunOptions& run) {
+  const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
+  Calibrator kf(timeline, session.site, options);
+  std::unique_ptr<LogReader> reader;
+  if (!source) {
+    reader = std::make_unique<LogReader>(session.log);
+    source = reader.get();
+  }
+  KalmanRun r;
+  r.options = options;
+  if (run.skip_bad_samples) {
+    auto* log = dynamic_cast<LogReader*>(source);
+    if (!log) throw std::invalid_argument("skipping bad samples needs a log reader");
+    log->skip_bad_samples([&r](const BadSampleError& e) {
+      ++r.skipped;
+      if (r.skipped_examples.size() < KalmanRun::kSkippedExamples)
+        r.skipped_examples.push_back(e.what());
+    });
+  }
+  read_samples(kf, *source, run, r);
+  const double last_dt =
+      r.samples > 0 && r.duration > 0.0 ? r.duration / static_cast<double>(r.samples) : 0.0;
+  check_against_plan(kf, timeline, reader ? session.log.file : std::string("the input"),
+                     options.time_offset, last_dt, r);
+  if (r.diverged.empty()) try {
+      kf.finish();
+    } catch (const PlanDataMismatch& e) {
+      if (r.stopped.empty()) r.stopped = e.what();
+    } catch (const std::runtime_error& e) {
+      r.diverged = "filter diverged at the last sample: " + std::string(e.what());
+    }
+  summarize(kf, timeline, run, r);
+  return r;
+}
+
+// The prior 1-sigma of a coefficient under the options (SI).
+double prior_of(const CalibratorOptions& o, const std::string& name) {
+  const auto& cat = coefficient_catalog();
+  for (std::size_t c = 0; c < cat.size(); ++c)
+    if (cat[c].name == name)
+      return o.initial_sigma.size() > c && o.initial_sigma[c] > 0.0
+                 ? o.initial_sigma[c]
+                 : coefficient_family_info(cat[c].family).default_prior;
+  return 0.0;
+}
+
+double largest_prior(const CalibratorOptions& o, const std::string& family) {
+  double out = 0.0;
+  for (const auto& c : coefficient_catalog())
+    if (c.family == family) out = std::max(out, prior_of(o, c.name));
+  return out;
+}
+
+// The alignment from the session's dwells; the options start from it when it is significant.
+CalibratorOptions aligned(const Session& session, const CalibratorOptions& options,
+                          InstallationResult& in) {
+  const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
+  std::vector<AlignmentDwell> means;
+  try {
+    // Bad samples left out of the means; the filter's pass reports them (stop or skip).
+    LogReader reader(session.log);
+    reader.skip_bad_samples([](const BadSampleError&) {});
+    means = dwell_means(reader, timeline, options.time_offset, options.static_margin);
+  } catch (const std::runtime_error&) {
+    return options;  // a log the filter's pass will refuse, with the reason
+  }
+  const double linear_a =
+      std::max(largest_prior(options, "accel.scale"), largest_prior(options, "accel.misalignment"));
+  const double linear_g =
+      std::max(largest_prior(options, "gyro.scale"), largest_prior(options, "gyro.misalignment"));
+  const Earth& earth = Earth::wgs84();
+  const Alignment a =
+      align(means, session.site, linear_a * earth.gravity_n(session.site.lat_rad, 0.0).norm(),
+            linear_g * earth.omega_ie_n(session.site.lat_rad).norm());
+  in.alignment = a;
+  const double threshold = std::max(
+      kAlignmentThreshold, kAlignmentPriorMultiple * largest_prior(options, "accel.misalignment"));
+  CalibratorOptions o = options;
+  if (!a.significant(threshold)) return o;
+  in.alignment_applied = true;
+  o.initial_base_n = a.base_n;
+  if (o.attitude == CalibratorOptions::AttitudeUpdates::None) {
+    // The body frame is the accelerometer triad's: the mounting turns the start attitude.
+    o.start_mounting_b = a.mounting_b;
+  } else {
+    // Relative to the platform the triads carry the mounting: the coefficients start there.
+    o.initial_model =
+        in_platform_frame(o.initial_model.value_or(ImuErrorModel{}), dcm_from_rotvec(a.mounting_b));
+  }
+  return o;
+}
+
+// How far the estimates moved from one pass to the next, in the later pass's sigmas, over the
+// coefficients both passes observe.
+double largest_change(const KalmanRun& now, const KalmanRun& before) {
+  double moved = 0.0;
+  for (std::size_t c = 0; c < now.estimates.size(); ++c) {
+    const CoefficientEstimate &a = now.estimates[c], &b = before.estimates[c];
+    if (!a.observed() || !b.observed() || !(a.sigma > 0.0)) continue;
+    moved = std::max(moved, std::abs(a.value - b.value) / a.sigma);
+  }
+  return moved;
+}
+
+}  // namespace
+
+KalmanRun run_kalman(const Session& session, const CalibratorOptions& given, SampleSource* source,
+                     const KalmanRunOptions& run) {
+  InstallationResult installation;
+  // The alignment averages the plan's dwells: not for a stream (read once) nor for dwells
+  // found in the data (the plan's timing may not hold).
+  const bool align_first =
+      run.align && !source && given.static_from == CalibratorOptions::StaticFrom::Plan;
+  const CalibratorOptions options = align_first ? aligned(session, given, installation) : given;
+  auto with_installation = [&](KalmanRun r) {
+    r.installation.alignment = installation.alignment;
+    r.installation.alignment_applied = installation.alignment_applied;
+    r.options = given;
+    return r;
+  };
+  if (run.passes <= 1) return with_installation(run_pass(session, options, source, run));
+  if (source) throw std::invalid_argument("several passes need the session's log, not a stream");
+  // Earlier passes: quiet, no alarm (their linearization is what the later passes improve).
+  KalmanRunOptions quiet = run;
+  quiet.monitor = nullptr;
+  quiet.monitor_interval = 0.0;
+  quiet.nis_alarm_z = std::numeric_limits<double>::infinity();
+  CalibratorOptions o = options;
+  std::vector<KalmanRun::Pass> passes;
+  KalmanRun previous;
+  for (int pass = 1; pass <= run.passes; ++pass) {
+    const bool last = pass == run.passes;
+    KalmanRun r = run_pass(session, o, nullptr, last ? run : quiet);
+    KalmanRun::Pass p{pass, r.nis_per_dof, std::nullopt};
+    if (pass > 1) p.largest_change_over_sigma = largest_change(r, previous);
+    passes.push_back(p);
+    if (last || !r.stopped.empty() || !r.diverged.empty()) {  // bad input, an interruption
+      r.passes = passes;
+      r.passes_requested = run.passes;
+      return with_installation(std::move(r));
+    }
+    // The coefficients carry over; the base starts again where the first pass did (a pass
+    // far off, MEMS, leaves it anywhere, and its prior is wide enough).
+    o.initial_model = r.model;
+    previous = std::move(r);
+  }
+  return previous;  // not reached
+}
+
+}  // namespace sinscal

@@ -1,0 +1,284 @@
+#include "filter/plausibility/plausibility.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "filter/closed_form/closed_form.hpp"
+#include "filter/installation/installation.hpp"
+#include "filter/kalman/kalman_calibrator.hpp"
+#include "models/sensor_profile.hpp"
+#include "models/units.hpp"
+#include "rig/session.hpp"
+
+namespace sinscal {
+
+namespace {
+
+// Fraction of each end of a dwell left out of its mean (the table settling, timing slack).
+constexpr double kDwellEdgeFraction = 0.1;
+// Floors of the bounds: a table may sit a few degrees off level or off the plan's heading, and
+// the IMU on its platform up to 2 deg off (docs/conventions.md).
+constexpr double kMinDirection = 5.0 * units::deg;
+// What the calibration admits (a base 3 sigma off level, the largest mounting) must pass it.
+static_assert(kAdmittedMounting + 3.0 * kBaseLevelPriorSigma <= kMinDirection * (1.0 + 1e-12),
+              "the gate's gravity-direction floor refuses installations the calibration admits");
+constexpr double kMinSpecificForce = 1e-3 * units::g0;
+constexpr double kMinRateFraction = 0.05;  // of the Earth rate
+// A ratio of measured to expected magnitude this close to a unit factor names the unit.
+constexpr double kFactorTolerance = 0.05;
+
+double largest(const SensorProfile& p, const std::string& family) {
+  const auto it = p.ranges.find(family);
+  if (it == p.ranges.end()) return 0.0;
+  return std::max(std::abs(it->second.lo), std::abs(it->second.hi));
+}
+
+// The likely cause of a magnitude `ratio` times what it should be: a unit mistaken for another.
+std::string unit_cause(double ratio, double dt, bool gyro) {
+  struct Factor {
+    double value;
+    const char* cause;
+  };
+  const Factor accel_factors[] = {
+      {1000.0, "values in mm/s (or mm/s^2) declared as m/s"},
+      {1e-3, "values in m/s declared as mm/s"},
+      {1.0 / units::g0, "values in g declared as m/s^2 (or m/s)"},
+      {units::g0, "values in m/s^2 declared as g"},
+  };
+  const Factor gyro_factors[] = {
+      {units::deg, "values in rad declared as deg"},
+      {1.0 / units::deg, "values in deg declared as rad"},
+      {3600.0, "values per hour declared per second"},
+      {1.0 / 3600.0, "values per second declared per hour"},
+  };
+  std::vector<Factor> factors(gyro ? std::begin(gyro_factors) : std::begin(accel_factors),
+                              gyro ? std::end(gyro_factors) : std::end(accel_factors));
+  if (dt > 0.0) {
+    factors.push_back({1.0 / dt, "rates declared as increments (or the wrong rate)"});
+    factors.push_back({dt, "increments declared as rates (or the wrong rate)"});
+  }
+  for (const auto& f : factors)
+    if (std::abs(std::log(ratio / f.value)) < kFactorTolerance) return f.cause;
+  if (ratio < 1e-3) return "no signal (a constant or zero channel?)";
+  if (gyro && ratio > 20.0)
+    return "the unit turns during the plan's dwell: the plan's timing (or the session's "
+           "time_offset) does not match the log";
+  return "a wrong unit or scale, or a sensor profile that does not match the unit";
+}
+
+std::string number(double v, int precision = 4) {
+  std::ostringstream s;
+  s.precision(precision);
+  s << v;
+  return s.str();
+}
+
+// Saturation: the first sample at the profile's range names its line.
+class SaturationWatch {
+ public:
+  SaturationWatch(const PlausibilityLimits& l, const std::string& input) : l_(l), input_(input) {}
+  void see(const ImuSample& s, std::size_t line) {
+    if (!(s.dt > 0.0)) return;
+    const double f = (s.dv_b / s.dt).cwiseAbs().maxCoeff();
+    const double w = (s.dtheta_b / s.dt).cwiseAbs().maxCoeff();
+    const bool accel = l_.accel_range > 0.0 && f >= (1.0 - 1e-6) * l_.accel_range;
+    const bool gyro = l_.gyro_range > 0.0 && w >= (1.0 - 1e-6) * l_.gyro_range;
+    if (!accel && !gyro) return;
+    if (count_++ > 0) return;
+    std::ostringstream m;
+    m << input_ << ":" << line << ": the " << (accel ? "accelerometers" : "gyros")
+      << " are saturated (|" << (accel ? "f" : "omega")
+      << "| = " << number(accel ? f : w / units::deg_per_s) << (accel ? " m/s^2" : " deg/s")
+      << " at the sensor profile's range "
+      << number(accel ? l_.accel_range : l_.gyro_range / units::deg_per_s)
+      << (accel ? " m/s^2" : " deg/s") << ")";
+    first_ = m.str();
+  }
+  PlausibilityCheck check() const {
+    PlausibilityCheck c{"saturation", count_ == 0, ""};
+    if (count_ > 0)
+      c.detail = first_ + "; " + std::to_string(count_) +
+                 " samples at the range: clipped data cannot be calibrated";
+    return c;
+  }
+
+ private:
+  const PlausibilityLimits& l_;
+  std::string input_;
+  std::size_t count_ = 0;
+  std::string first_;
+};
+
+// One pass over the log: dwell means and saturation.
+std::vector<DwellMean> read_means(LogReader& reader, const PlanTimeline& timeline,
+                                  double time_offset, bool dwell_checks, SaturationWatch& sat,
+                                  double& dt) {
+  std::vector<DwellMean> means;
+  for (const auto& d : timeline.dwells) {
+    DwellMean m;  // sums start at zero (the members' initializers)
+    m.dwell = d;
+    means.push_back(m);
+  }
+  ImuSample s;
+  std::size_t next = 0;
+  // A log the reader refuses part of the way is the estimators' to report (with their results up
+  // to there): the gate judges what it could read.
+  auto next_sample = [&]() {
+    try {
+      return reader.next(s);
+    } catch (const LogError&) {
+      return false;
+    }
+  };
+  while (next_sample()) {
+    sat.see(s, reader.line());
+    if (dt == 0.0) dt = s.dt;
+    if (!dwell_checks) continue;
+    const double t = s.t - time_offset;
+    while (next < means.size()) {
+      const PlanDwell& d = means[next].dwell;
+      const double edge = kDwellEdgeFraction * (d.t_end - d.t_start);
+      if (t - s.dt >= d.t_start + edge && t <= d.t_end - edge) {
+        means[next].omega_ib_b += s.dtheta_b;
+        means[next].f_b += s.dv_b;
+        means[next].seconds += s.dt;
+        ++means[next].samples;
+        break;
+      }
+      if (t <= d.t_end - edge) break;  // before this dwell's middle
+      ++next;
+    }
+  }
+  for (auto& m : means)
+    if (m.seconds > 0.0) {
+      m.f_b /= m.seconds;
+      m.omega_ib_b /= m.seconds;
+    }
+  return means;
+}
+
+// Each failing dwell's description; the check shows the first few and the count.
+struct Findings {
+  std::vector<std::string> lines;
+  void add(const std::string& s) { lines.push_back(s); }
+  PlausibilityCheck check(const std::string& name) const {
+    PlausibilityCheck c{name, lines.empty(), ""};
+    for (std::size_t i = 0; i < lines.size() && i < 3; ++i)
+      c.detail += (i > 0 ? "; " : "") + lines[i];
+    if (lines.size() > 3) c.detail += "; and " + std::to_string(lines.size() - 3) + " more dwells";
+    return c;
+  }
+};
+
+std::string dwell_name(const PlanDwell& d) {
+  return "dwell " + std::to_string(d.index) + (d.label.empty() ? "" : " (" + d.label + ")");
+}
+
+}  // namespace
+
+PlausibilityLimits PlausibilityLimits::from_profile(const SensorProfile* p) {
+  PlausibilityLimits l;
+  if (!p) return l;
+  const double g = units::g0, Omega = Earth::wgs84().rate();
+  const double ab = largest(*p, "accel.bias"), ak = largest(*p, "accel.scale"),
+               am = largest(*p, "accel.misalignment"), k2 = largest(*p, "accel.k2");
+  const double gb = largest(*p, "gyro.bias"), gk = largest(*p, "gyro.scale"),
+               gm = largest(*p, "gyro.misalignment"), gs = largest(*p, "gyro.g_sensitivity");
+  l.specific_force = std::max(
+      kMinSpecificForce,
+      3.0 * (std::sqrt(3.0) * (ab + p->noise.accel.bias_instability) + (ak + am) * g + k2 * g * g));
+  l.check_rate = p->ranges.count("gyro.bias") > 0;
+  l.rate = std::max(
+      kMinRateFraction * Omega,
+      3.0 * (std::sqrt(3.0) * (gb + p->noise.gyro.bias_instability + gs * g) + (gk + gm) * Omega));
+  l.direction = std::max(kMinDirection, 3.0 * (am + ak + ab / g));
+  l.accel_range = p->accel_range;
+  l.gyro_range = p->gyro_range;
+  l.accel_white = p->noise.accel.white;
+  l.gyro_white = p->noise.gyro.white;
+  return l;
+}
+
+bool PlausibilityReport::passed() const {
+  return std::all_of(checks.begin(), checks.end(),
+                     [](const PlausibilityCheck& c) { return c.passed; });
+}
+
+std::string PlausibilityReport::failures() const {
+  std::string out;
+  for (const auto& c : checks)
+    if (!c.passed) out += (out.empty() ? "" : "\n") + c.name + ": " + c.detail;
+  return out;
+}
+
+PlausibilityReport check_plausibility(LogReader& reader, const std::string& input,
+                                      const PlanTimeline& timeline, const Site& site,
+                                      double time_offset, const PlausibilityLimits& l,
+                                      bool dwell_checks) {
+  SaturationWatch sat(l, input);
+  double dt = 0.0;
+  const std::vector<DwellMean> means =
+      read_means(reader, timeline, time_offset, dwell_checks, sat, dt);
+  PlausibilityReport report;
+  report.checks.push_back(sat.check());
+  if (!dwell_checks) return report;
+  const Eigen::Vector3d f_n = -Earth::wgs84().gravity_n(site.lat_rad, site.h_m);
+  const double g = f_n.norm(), Omega = Earth::wgs84().rate();
+  Findings magnitude, rate, direction;
+  for (const auto& m : means) {
+    const std::string where = input + ": " + dwell_name(m.dwell);
+    if (m.samples == 0) continue;  // the log ends early: the estimators name the mismatch
+    const double f = m.f_b.norm();
+    const double f_tol = l.specific_force + 5.0 * l.accel_white / std::sqrt(m.seconds);
+    if (std::abs(f - g) > f_tol)
+      magnitude.add(where + ": |f| = " + number(f) + " m/s^2 at rest where gravity is " +
+                    number(g) + " (" + number(f / g) + " times): " + unit_cause(f / g, dt, false));
+    const double w = m.omega_ib_b.norm();
+    const double w_tol = l.rate + 5.0 * l.gyro_white / std::sqrt(m.seconds);
+    if (l.check_rate && std::abs(w - Omega) > w_tol)
+      rate.add(where + ": |omega| = " + number(w / units::deg_per_h) +
+               " deg/h at rest where the Earth rate is " + number(Omega / units::deg_per_h) +
+               " deg/h (bound " + number(w_tol / units::deg_per_h, 3) +
+               " from the profile): " + unit_cause(w / Omega, dt, true));
+    const Eigen::Vector3d expected = m.dwell.C_b_n_known.transpose() * f_n;
+    const double angle = std::atan2(expected.cross(m.f_b).norm(), expected.dot(m.f_b));
+    if (f > 0.0 && angle > l.direction)
+      direction.add(where + ": gravity measured " + number(angle / units::deg, 3) +
+                    " deg from where the plan's attitude puts it (bound " +
+                    number(l.direction / units::deg, 2) +
+                    " deg): a wrong axis map or sign, or the wrong plan");
+  }
+  report.checks.push_back(magnitude.check("gravity magnitude"));
+  if (l.check_rate) report.checks.push_back(rate.check("Earth rate"));
+  report.checks.push_back(direction.check("gravity direction"));
+  return report;
+}
+
+PlausibilityReport check_plausibility(const Session& session, const PlausibilityLimits& limits,
+                                      bool dwell_checks) {
+  LogReader reader(session.log);
+  return check_plausibility(reader, session.log.file, PlanTimeline::of(session.plan, session.site),
+                            session.site, session.time_offset, limits, dwell_checks);
+}
+
+void enforce(const PlausibilityReport& report, bool force) {
+  if (!report.passed() && !force)
+    throw PlausibilityError("the data fail the plausibility gate (--force runs anyway):\n" +
+                            report.failures());
+}
+
+PlausibilityCheck check_stage1_fit(const std::vector<EquivalentInputs>& stage1,
+                                   const PlausibilityLimits& l, const std::string& input) {
+  Findings bad;
+  for (const auto& e : stage1)
+    if (!(e.chi2_per_dof <= l.max_stage1_chi2_per_dof))
+      bad.add(input + ": " + dwell_name(e.dwell) + ": stage-1 chi2 per dof " +
+              number(e.chi2_per_dof) + " (expected about 1, bound " +
+              number(l.max_stage1_chi2_per_dof) +
+              "): the navigation errors do not follow the model (the data or the plan are not "
+              "what the session says, or the noise densities are wrong)");
+  return bad.check("stage-1 fit");
+}
+
+}  // namespace sinscal

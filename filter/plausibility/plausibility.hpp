@@ -1,0 +1,91 @@
+// The physics plausibility gate: before any estimate, the log is read once and each static dwell
+// of the plan is compared with what the Earth and the plan say a table at rest must show. A wrong
+// unit, a flipped or swapped axis, the wrong plan or clipped data fail here, named, instead of
+// becoming coefficients with small sigmas.
+#pragma once
+
+#include <Eigen/Core>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "models/earth.hpp"
+#include "rig/io/log_io.hpp"
+#include "rig/timeline.hpp"
+
+namespace sinscal {
+
+struct SensorProfile;
+struct Session;
+struct EquivalentInputs;
+
+/// What a static dwell may show and still be plausible. SI units.
+struct PlausibilityLimits {
+  double specific_force = 0.05 * 9.80665;  // m/s^2: tolerated | |f_b| - g | of a dwell's mean
+  bool check_rate = false;                 // without a profile the gyro biases are unknown
+  double rate = 0.0;                       // rad/s: tolerated | |omega_ib_b| - Earth rate |
+  double direction = 0.0;                  // rad: tolerated angle, gravity measured vs planned
+  double accel_range = 0.0;                // m/s^2: saturation (0: none)
+  double gyro_range = 0.0;                 // rad/s
+  double accel_white = 0.0;                // m/s/sqrt(s): for the noise of a dwell's mean
+  double gyro_white = 0.0;                 // rad/sqrt(s)
+  double max_stage1_chi2_per_dof = 10.0;   // closed form: a dwell's fit far above 1
+
+  /// Bounds from the sensor profile's error ranges (3 times the largest error they allow, plus
+  /// 5 noise sigmas of a dwell's mean), or generic bounds without a profile (nullptr).
+  static PlausibilityLimits from_profile(const SensorProfile* profile);
+};
+
+/// One check of the gate.
+struct PlausibilityCheck {
+  std::string name;  // "saturation", "gravity magnitude", "Earth rate", "gravity direction", ...
+  bool passed = true;
+  std::string detail;  // what was measured against what was expected, and the likely cause
+};
+
+struct PlausibilityReport {
+  std::vector<PlausibilityCheck> checks;
+  bool passed() const;
+  /// The failed checks, one per line.
+  std::string failures() const;
+};
+
+/// A failed gate: the message names the log, the dwell and the likely cause (unit, axis, plan,
+/// profile). apps/ exit 2; --force runs anyway and records the report.
+class PlausibilityError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// The mean specific force and rate of one static dwell of the plan.
+struct DwellMean {
+  PlanDwell dwell;
+  Eigen::Vector3d f_b = Eigen::Vector3d::Zero();         // m/s^2
+  Eigen::Vector3d omega_ib_b = Eigen::Vector3d::Zero();  // rad/s
+  double seconds = 0.0;                                  // averaged time
+  std::size_t samples = 0;
+};
+
+/// Reads the log once: the means over the middle of each static dwell (the plan's timing shifted
+/// by `time_offset`; `dwell_checks` false skips them, e.g. when the dwells come from the data) and
+/// saturation at the limits' ranges. Then compares each dwell with the Earth at the site and the
+/// plan's attitude. A read error ends the pass (the estimators report it): the gate judges what it
+/// read.
+PlausibilityReport check_plausibility(LogReader& reader, const std::string& input,
+                                      const PlanTimeline& timeline, const Site& site,
+                                      double time_offset, const PlausibilityLimits& limits,
+                                      bool dwell_checks = true);
+
+/// The gate on a session's own log, plan, site and time offset.
+PlausibilityReport check_plausibility(const Session& session, const PlausibilityLimits& limits,
+                                      bool dwell_checks = true);
+
+/// Throws PlausibilityError listing the failed checks unless the report passed or `force`.
+void enforce(const PlausibilityReport& report, bool force);
+
+/// The closed form's stage-1 fits: a dwell whose residual chi2 per dof is far above 1 does not
+/// fit the model (the data or the plan are not what the session says).
+PlausibilityCheck check_stage1_fit(const std::vector<EquivalentInputs>& stage1,
+                                   const PlausibilityLimits& limits, const std::string& input);
+
+}  // namespace sinscal

@@ -1,0 +1,316 @@
+#include "filter/table_free/handheld_run.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+
+#include "models/attitude.hpp"
+#include "models/config.hpp"
+
+namespace sinscal {
+
+namespace {
+
+// A triad's nominal conversion as a raw-count scaling per body axis: the reader computes
+// value_i = sign_i (raw - offset) scale, so raw = (sign_i / scale) value_i + offset.
+void nominal_of(const TriadColumns& c, bool& counts, Eigen::Vector3d& sensitivity,
+                Eigen::Vector3d& offset, std::array<int, 3>& log_axis) {
+  log_axis = c.axis;
+  counts = c.counts && !c.increments;
+  sensitivity.setOnes();
+  offset.setZero();
+  if (!counts) return;
+  for (int i = 0; i < 3; ++i) {
+    sensitivity(i) = c.sign[static_cast<std::size_t>(i)] / c.scale;
+    offset(i) = c.offset;
+  }
+}
+
+double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+std::string normal(const std::string& path) {
+  return path.empty() ? path : std::filesystem::path(path).lexically_normal().string();
+}
+
+// The log's files, each path in its normal form (config/x/../../data/a.csv: data/a.csv).
+std::string describe(const LogFormat& log) {
+  if (log.split()) return normal(log.accel_file) + " + " + normal(log.gyro_file);
+  if (!log.segments.empty()) return log.file;
+  return normal(log.file);
+}
+
+double rms(const std::vector<double>& v) {
+  if (v.empty()) return 0.0;
+  double s = 0.0;
+  for (double x : v) s += x * x;
+  return std::sqrt(s / static_cast<double>(v.size()));
+}
+
+}  // namespace
+
+std::vector<ImuReading> HandheldRecord::detector_readings() const {
+  return raw() ? counts_from_readings(readings, nominal, false) : readings;
+}
+
+HandheldRecord read_handheld_record(const LogFormat& log) {
+  HandheldRecord r;
+  r.file = describe(log);
+  LogReader reader(log);
+  ImuSample s;
+  while (reader.next(s)) r.samples.push_back(s);
+  if (r.samples.empty()) throw LogError(log.file, 0, "the log has no samples");
+  r.readings = readings_from_samples(r.samples);
+  nominal_of(log.accel, r.accel_counts, r.nominal.accel_sensitivity, r.nominal.accel_offset,
+             r.accel_log_axis);
+  nominal_of(log.gyro, r.gyro_counts, r.nominal.gyro_sensitivity, r.nominal.gyro_offset,
+             r.gyro_log_axis);
+  return r;
+}
+
+std::vector<HandheldPose> handheld_poses(const HandheldRecord& record,
+                                         const PoseDetection& detection) {
+  std::vector<HandheldPose> out;
+  for (const Pose& p : detection.poses) {
+    HandheldPose h;
+    h.pose = p;
+    reading_statistics(record.readings, p.first, p.last, h.accel_mean, h.gyro_mean, h.accel_std,
+                       h.gyro_std);
+    out.push_back(h);
+  }
+  return out;
+}
+
+TableFreeRun run_table_free(const Session& s, const TableFreeRunOptions& o) {
+  TableFreeRun run;
+  run.session = normal(s.path);
+  run.name = s.name;
+  run.log = describe(s.log);
+  run.options = o.calibration;
+  run.detector = o.detector;
+  run.has_site = s.has_site;
+  run.site = s.site;
+  if (s.has_site)
+    run.options.site = s.site;
+  else
+    run.options.site.reset();
+  if (o.gravity > 0.0) {
+    run.options.gravity = o.gravity;
+    run.gravity_from = "given";
+  } else if (s.gravity > 0.0) {
+    run.options.gravity = s.gravity;
+    run.gravity_from = "session";
+  } else if (s.has_site) {
+    run.options.gravity = 0.0;
+    run.gravity_from = "normal gravity at the site";
+  } else {
+    throw ConfigError(s.path +
+                      ": no local gravity: the session has neither [site] gravity nor a site "
+                      "(latitude) for the normal gravity, and none was given");
+  }
+  const HandheldRecord rec = read_handheld_record(s.log);
+  run.samples = rec.samples.size();
+  run.duration = rec.samples.back().t - rec.samples.front().t;
+  run.accel_counts = rec.accel_counts;
+  run.gyro_counts = rec.gyro_counts;
+  run.nominal = rec.nominal;
+  run.accel_log_axis = rec.accel_log_axis;
+  run.gyro_log_axis = rec.gyro_log_axis;
+  const std::vector<ImuReading> detector_in = rec.detector_readings();
+  try {
+    run.detection = detect_poses(detector_in, o.detector);
+  } catch (const PoseDetectorError& e) {
+    throw TableFreeError(TableFreeError::Kind::BadInput, run.log + ": " + e.what());
+  }
+  run.poses = handheld_poses(rec, run.detection);
+  run.readings = rec.raw() ? si_from_counts(detector_in, rec.nominal) : rec.readings;
+  run.result = rec.raw()
+                   ? calibrate_table_free_counts(detector_in, rec.nominal, run.options, o.detector)
+                   : calibrate_table_free(rec.readings, run.detection.poses, run.options);
+  return run;
+}
+
+namespace {
+
+// A validation record's readings, nominal or corrected with the calibration's whole model (any
+// extended terms a diagnosis added; time-dependent terms from the record's start).
+struct Corrector {
+  const ImuErrorModel& m;
+  double t0;
+  std::pair<Eigen::Vector3d, Eigen::Vector3d> correct(const Eigen::Vector3d& yg,
+                                                      const Eigen::Vector3d& ya, double t,
+                                                      bool calibrated) const {
+    std::pair<Eigen::Vector3d, Eigen::Vector3d> wf{yg, ya};
+    if (calibrated) m.compensate(yg, ya, Eigen::Vector3d::Zero(), wf.first, wf.second, t - t0);
+    return wf;
+  }
+  Eigen::Vector3d accel(const Eigen::Vector3d& ya, const Eigen::Vector3d& yg, double t,
+                        bool calibrated) const {
+    return correct(yg, ya, t, calibrated).second;
+  }
+  Eigen::Vector3d gyro(const Eigen::Vector3d& yg, const Eigen::Vector3d& ya, double t,
+                       bool calibrated) const {
+    return correct(yg, ya, t, calibrated).first;
+  }
+};
+
+struct PoseMean {
+  Eigen::Vector3d f, w;
+  double t;
+};
+
+// Each turn: the gyro rates integrated from the end of one pose to the start of the next (each
+// reading's rate over its interval) turn the gravity direction of the first pose into the one
+// the accelerometers see in the next.
+void validation_turns(const std::vector<ImuReading>& si, const PoseDetection& detection,
+                      const std::vector<PoseMean>& means, const Corrector& c,
+                      HandheldValidation& out) {
+  std::vector<double> t_n, t_c;
+  for (std::size_t p = 0; p + 1 < detection.poses.size(); ++p) {
+    ValidationTurn vt;
+    vt.from = detection.poses[p].index;
+    for (const bool calibrated : {false, true}) {
+      Eigen::Matrix3d C = Eigen::Matrix3d::Identity();
+      for (std::size_t k = detection.poses[p].last + 1; k <= detection.poses[p + 1].first; ++k)
+        C = C * dcm_from_rotvec(c.gyro(si[k].gyro, si[k].accel, si[k].t, calibrated) *
+                                (si[k].t - si[k - 1].t));
+      const PoseMean &a = means[p], &b = means[p + 1];
+      const Eigen::Vector3d u0 = c.accel(a.f, a.w, a.t, calibrated).normalized();
+      const Eigen::Vector3d u1 = c.accel(b.f, b.w, b.t, calibrated).normalized();
+      const double e = angle_between(C.transpose() * u0, u1);
+      (calibrated ? vt.error_calibrated : vt.error_nominal) = e;
+      (calibrated ? t_c : t_n).push_back(e);
+      if (calibrated) vt.angle = rotvec_from_dcm(C).norm();
+    }
+    out.turns.push_back(vt);
+  }
+  out.turn_rms_nominal = rms(t_n);
+  out.turn_rms_calibrated = rms(t_c);
+}
+
+}  // namespace
+
+HandheldValidation validate_table_free(const Session& v, const TableFreeRun& run,
+                                       const PoseDetectorOptions& detector) {
+  const HandheldRecord rec = read_handheld_record(v.log);
+  if (rec.accel_counts != run.accel_counts || rec.gyro_counts != run.gyro_counts ||
+      rec.accel_log_axis != run.accel_log_axis || rec.gyro_log_axis != run.gyro_log_axis)
+    throw std::invalid_argument(
+        v.path +
+        ": the validation log's triads are not logged as the calibration session's (raw counts "
+        "or not, the same axes): its readings cannot take that calibration");
+  // The readings through the calibration session's nominal conversion: the calibration is
+  // relative to it.
+  const std::vector<ImuReading> si =
+      rec.raw() ? si_from_counts(rec.detector_readings(), run.nominal) : rec.readings;
+  const PoseDetection detection = detect_poses(rec.detector_readings(), detector);
+  HandheldValidation out;
+  out.session = normal(v.path);
+  out.name = v.name;
+  out.samples = rec.samples.size();
+  out.duration = rec.samples.back().t - rec.samples.front().t;
+  const Corrector c{run.result.model, si.front().t};
+  const double g = run.result.gravity;
+  std::vector<double> ge_n, ge_c, r_n, r_c;
+  std::vector<PoseMean> means;
+  for (const Pose& p : detection.poses) {
+    Eigen::Vector3d f, w, fs, ws;
+    reading_statistics(si, p.first, p.last, f, w, fs, ws);
+    const double tm = 0.5 * (si[p.first].t + si[p.last].t);
+    means.push_back({f, w, tm});
+    ValidationPose vp;
+    vp.index = p.index;
+    vp.t_start = p.t_start;
+    vp.t_end = p.t_end;
+    vp.gravity_error_nominal = c.accel(f, w, tm, false).norm() - g;
+    vp.gravity_error_calibrated = c.accel(f, w, tm, true).norm() - g;
+    vp.rate_nominal = c.gyro(w, f, tm, false).norm();
+    vp.rate_calibrated = c.gyro(w, f, tm, true).norm();
+    ge_n.push_back(vp.gravity_error_nominal);
+    ge_c.push_back(vp.gravity_error_calibrated);
+    r_n.push_back(vp.rate_nominal);
+    r_c.push_back(vp.rate_calibrated);
+    out.poses.push_back(vp);
+  }
+  validation_turns(si, detection, means, c, out);
+  out.gravity_rms_nominal = rms(ge_n);
+  out.gravity_rms_calibrated = rms(ge_c);
+  out.rate_rms_nominal = rms(r_n);
+  out.rate_rms_calibrated = rms(r_c);
+  return out;
+}
+
+AllanRun run_allan(const Session& s, const AllanRunOptions& o) {
+  AllanRun out;
+  out.session = normal(s.path);
+  out.name = s.name;
+  out.log = describe(s.log);
+  out.selection = o.selection;
+  const HandheldRecord rec = read_handheld_record(s.log);
+  const double duration = rec.samples.back().t - rec.samples.front().t;
+  PoseDetection detection;
+  bool detected = false;
+  try {
+    detection = detect_poses(rec.detector_readings(), o.detector);
+    detected = true;
+  } catch (const PoseDetectorError&) {
+    if (o.selection != AllanSelection::All) throw;
+  }
+  out.poses_found = detected ? static_cast<int>(detection.poses.size()) : -1;
+  // Static: one pose covers (nearly) the whole record. Several poses covering most of it are a
+  // record with moves between them, which would dominate its Allan deviation.
+  double longest = 0.0;
+  for (const Pose& p : detection.poses) longest = std::max(longest, p.duration());
+  out.static_fraction = duration > 0.0 ? longest / duration : 0.0;
+  std::size_t first = 0, last = rec.samples.size() - 1;
+  if (o.selection == AllanSelection::All) {
+    if (out.static_fraction < 0.9) {
+      out.warning = "the record is not static: its longest static pose covers " +
+                    std::to_string(static_cast<int>(std::round(100.0 * out.static_fraction))) +
+                    " % of it (" + std::to_string(std::max(out.poses_found, 0)) +
+                    " poses found); --longest-pose or --pose N analyses one pose";
+      if (o.require_static) throw std::invalid_argument(out.log + ": " + out.warning);
+    }
+  } else {
+    if (detection.poses.empty()) throw PoseDetectorError(out.log + ": no static pose found");
+    const Pose* chosen = nullptr;
+    if (o.selection == AllanSelection::LongestPose) {
+      chosen = &*std::max_element(
+          detection.poses.begin(), detection.poses.end(),
+          [](const Pose& a, const Pose& b) { return a.duration() < b.duration(); });
+    } else {
+      if (o.pose < 1 || o.pose > static_cast<int>(detection.poses.size()))
+        throw std::invalid_argument(out.log + ": pose " + std::to_string(o.pose) +
+                                    " does not exist: the detector found " +
+                                    std::to_string(detection.poses.size()) + " poses (1 to " +
+                                    std::to_string(detection.poses.size()) + ")");
+      chosen = &detection.poses[static_cast<std::size_t>(o.pose - 1)];
+    }
+    out.pose = chosen->index;
+    first = chosen->first;
+    last = chosen->last;
+  }
+  out.t_start = rec.samples[first].t;
+  out.t_end = rec.samples[last].t;
+  std::vector<ImuSample> part(rec.samples.begin() + static_cast<std::ptrdiff_t>(first),
+                              rec.samples.begin() + static_cast<std::ptrdiff_t>(last) + 1);
+  // A log of rates samples them at the sensor's clock; the jitter of its time stamps (Xsens:
+  // 0.03 ms, printed to 0.01 ms) is the logger's. Each rate then holds over the median interval.
+  if (!s.log.gyro.increments && !s.log.accel.increments && part.size() > 1) {
+    std::vector<double> dt;
+    for (std::size_t k = 1; k < part.size(); ++k) dt.push_back(part[k].t - part[k - 1].t);
+    std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
+    const double tau0 = dt[dt.size() / 2];
+    for (auto& x : part) {
+      x.dtheta_b *= tau0 / x.dt;
+      x.dv_b *= tau0 / x.dt;
+      x.dt = tau0;
+    }
+  }
+  out.analysis = analyse_allan(part, o.allan);
+  return out;
+}
+
+}  // namespace sinscal

@@ -1,0 +1,730 @@
+#include "filter/table_free/table_free.hpp"
+
+#include <ceres/ceres.h>
+#include <ceres/sphere_manifold.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <sstream>
+
+#include "models/units.hpp"
+
+namespace sinscal {
+namespace {
+
+// Parameter blocks.
+//   accel (9): b_x b_y b_z, k_x k_y k_z, m_yx m_zx m_zy   (A lower triangular)
+//   gyro bias (3): b_x b_y b_z
+//   gyro linear (9): k_x k_y k_z, m_xy m_xz m_yx m_yz m_zx m_zy
+//   u_p (3): unit gravity-opposite direction (direction of the specific force) of pose p, body
+constexpr int kAccel = 9, kGyroBias = 3, kGyroLin = 9;
+
+// The error model's linear part, I + diag(k) + M (models/imu_error_model.hpp), in the
+// parametrisation of the blocks above, for any scalar type (Ceres Jets).
+template <class T>
+void accel_matrix(const T* a, T A[3][3]) {
+  A[0][0] = T(1.0) + a[3];
+  A[0][1] = T(0.0);
+  A[0][2] = T(0.0);
+  A[1][0] = a[6];
+  A[1][1] = T(1.0) + a[4];
+  A[1][2] = T(0.0);
+  A[2][0] = a[7];
+  A[2][1] = a[8];
+  A[2][2] = T(1.0) + a[5];
+}
+
+template <class T>
+void gyro_matrix(const T* g, T G[3][3]) {
+  G[0][0] = T(1.0) + g[0];
+  G[1][1] = T(1.0) + g[1];
+  G[2][2] = T(1.0) + g[2];
+  G[0][1] = g[3];
+  G[0][2] = g[4];
+  G[1][0] = g[5];
+  G[1][2] = g[6];
+  G[2][0] = g[7];
+  G[2][1] = g[8];
+}
+
+template <class T>
+void inverse3(const T M[3][3], T R[3][3]) {
+  const T c00 = M[1][1] * M[2][2] - M[1][2] * M[2][1];
+  const T c01 = M[1][2] * M[2][0] - M[1][0] * M[2][2];
+  const T c02 = M[1][0] * M[2][1] - M[1][1] * M[2][0];
+  const T inv_det = T(1.0) / (M[0][0] * c00 + M[0][1] * c01 + M[0][2] * c02);
+  R[0][0] = c00 * inv_det;
+  R[1][0] = c01 * inv_det;
+  R[2][0] = c02 * inv_det;
+  R[0][1] = (M[0][2] * M[2][1] - M[0][1] * M[2][2]) * inv_det;
+  R[1][1] = (M[0][0] * M[2][2] - M[0][2] * M[2][0]) * inv_det;
+  R[2][1] = (M[0][1] * M[2][0] - M[0][0] * M[2][1]) * inv_det;
+  R[0][2] = (M[0][1] * M[1][2] - M[0][2] * M[1][1]) * inv_det;
+  R[1][2] = (M[0][2] * M[1][0] - M[0][0] * M[1][2]) * inv_det;
+  R[2][2] = (M[0][0] * M[1][1] - M[0][1] * M[1][0]) * inv_det;
+}
+
+/// Quaternion (w, x, y, z) of a rotation vector: series in theta^2 below 0.1 rad (exact to
+/// rounding there and smooth through zero for autodiff), closed form above.
+template <class T>
+void quat_of_rotvec(const T v[3], T q[4]) {
+  using std::cos;
+  using std::sin;
+  using std::sqrt;
+  const T t2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+  T c, s;  // cos(theta / 2), sin(theta / 2) / theta
+  if (t2 < T(0.01)) {
+    c = T(1.0) - t2 / 8.0 + t2 * t2 / 384.0 - t2 * t2 * t2 / 46080.0;
+    s = T(0.5) - t2 / 48.0 + t2 * t2 / 3840.0 - t2 * t2 * t2 / 645120.0;
+  } else {
+    const T th = sqrt(t2);
+    c = cos(th / 2.0);
+    s = sin(th / 2.0) / th;
+  }
+  q[0] = c;
+  q[1] = s * v[0];
+  q[2] = s * v[1];
+  q[3] = s * v[2];
+}
+
+template <class T>
+void quat_mul(const T a[4], const T b[4], T out[4]) {
+  out[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
+  out[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
+  out[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
+  out[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
+}
+
+/// Rotation C_{b(end)}^{b(start)} over readings (k0, k1] of the gyro rates calibrated with the
+/// gyro blocks: rotation vectors of the compensated increments with the two-sample coning term
+/// (phi_k + phi_{k-1} x phi_k / 12), chained as quaternions. Returns the row-major matrix.
+template <class T>
+void integrate_turn(const std::vector<ImuReading>& r, std::size_t k0, std::size_t k1, const T* bias,
+                    const T* lin, T C[3][3]) {
+  T G[3][3], Gi[3][3];
+  gyro_matrix(lin, G);
+  inverse3(G, Gi);
+  T q[4] = {T(1.0), T(0.0), T(0.0), T(0.0)};
+  T prev[3] = {T(0.0), T(0.0), T(0.0)};
+  for (std::size_t k = k0 + 1; k <= k1; ++k) {
+    const double dt = r[k].t - r[k - 1].t;
+    T d[3], phi[3];
+    for (int i = 0; i < 3; ++i) d[i] = (T(r[k].gyro(i)) - bias[i]) * dt;
+    for (int i = 0; i < 3; ++i) phi[i] = Gi[i][0] * d[0] + Gi[i][1] * d[1] + Gi[i][2] * d[2];
+    T v[3] = {phi[0] + (prev[1] * phi[2] - prev[2] * phi[1]) / 12.0,
+              phi[1] + (prev[2] * phi[0] - prev[0] * phi[2]) / 12.0,
+              phi[2] + (prev[0] * phi[1] - prev[1] * phi[0]) / 12.0};
+    T dq[4], qn[4];
+    quat_of_rotvec(v, dq);
+    quat_mul(q, dq, qn);
+    for (int i = 0; i < 4; ++i) q[i] = qn[i];
+    for (int i = 0; i < 3; ++i) prev[i] = phi[i];
+  }
+  using std::sqrt;
+  const T norm = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  for (auto& x : q) x = x / norm;
+  const T &w = q[0], &x = q[1], &y = q[2], &z = q[3];
+  C[0][0] = T(1.0) - 2.0 * (y * y + z * z);
+  C[0][1] = 2.0 * (x * y - w * z);
+  C[0][2] = 2.0 * (x * z + w * y);
+  C[1][0] = 2.0 * (x * y + w * z);
+  C[1][1] = T(1.0) - 2.0 * (x * x + z * z);
+  C[1][2] = 2.0 * (y * z - w * x);
+  C[2][0] = 2.0 * (x * z - w * y);
+  C[2][1] = 2.0 * (y * z + w * x);
+  C[2][2] = T(1.0) - 2.0 * (x * x + y * y);
+}
+
+/// Stage 1: |A^-1 (y - b)| = g.
+struct GravityMagnitudeCost {
+  Eigen::Vector3d y;
+  double g, inv_sigma;
+  template <class T>
+  bool operator()(const T* a, T* res) const {
+    T A[3][3];
+    accel_matrix(a, A);
+    // Forward substitution (A lower triangular).
+    T f[3];
+    f[0] = (T(y(0)) - a[0]) / A[0][0];
+    f[1] = (T(y(1)) - a[1] - A[1][0] * f[0]) / A[1][1];
+    f[2] = (T(y(2)) - a[2] - A[2][0] * f[0] - A[2][1] * f[1]) / A[2][2];
+    using std::sqrt;
+    res[0] = (sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]) - g) * inv_sigma;
+    return true;
+  }
+};
+
+/// Joint: the pose's mean specific force, y_a - (A g u + b_a), whitened per axis.
+struct AccelPoseCost {
+  Eigen::Vector3d y, inv_sigma;
+  double g;
+  template <class T>
+  bool operator()(const T* a, const T* u, T* res) const {
+    T A[3][3];
+    accel_matrix(a, A);
+    for (int i = 0; i < 3; ++i)
+      res[i] =
+          (T(y(i)) - a[i] - g * (A[i][0] * u[0] + A[i][1] * u[1] + A[i][2] * u[2])) * inv_sigma(i);
+    return true;
+  }
+};
+
+/// Joint: the pose's mean rate, y_g - (b_g + G w_v), w_v = Omega sin(lat) u (the Earth rate's
+/// vertical part), whitened with the pose's covariance (noise plus horizontal Earth rate).
+struct GyroPoseCost {
+  Eigen::Vector3d y;
+  Eigen::Matrix3d W;  // inverse Cholesky factor of the covariance
+  double omega_v;     // Omega sin(lat), rad/s (0 without a site)
+  template <class T>
+  bool operator()(const T* b, const T* lin, const T* u, T* res) const {
+    T G[3][3];
+    gyro_matrix(lin, G);
+    T e[3];
+    for (int i = 0; i < 3; ++i)
+      e[i] = T(y(i)) - b[i] - omega_v * (G[i][0] * u[0] + G[i][1] * u[1] + G[i][2] * u[2]);
+    for (int i = 0; i < 3; ++i) res[i] = W(i, 0) * e[0] + W(i, 1) * e[1] + W(i, 2) * e[2];
+    return true;
+  }
+};
+
+/// A turn between two poses: the tangent components of R^T u_from - u_to, over sigma.
+class TurnCost : public ceres::SizedCostFunction<2, kGyroBias, kGyroLin, 3, 3> {
+ public:
+  TurnCost(const std::vector<ImuReading>& r, std::size_t k0, std::size_t k1,
+           const Eigen::Matrix<double, 3, 2>& E, double inv_sigma)
+      : r_(r), k0_(k0), k1_(k1), Et_(E.transpose() * inv_sigma) {}
+
+  using Map23 = Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>>;
+  using Map29 = Eigen::Map<Eigen::Matrix<double, 2, 9, Eigen::RowMajor>>;
+
+  bool Evaluate(double const* const* p, double* res, double** jac) const override {
+    const double* u_from = p[2];
+    const double* u_to = p[3];
+    double C[3][3];
+    const bool need_gyro = jac != nullptr && (jac[0] != nullptr || jac[1] != nullptr);
+    using Jet = ceres::Jet<double, kGyroBias + kGyroLin>;
+    Jet CJ[3][3];
+    if (need_gyro) {
+      Jet b[3], lin[9];
+      for (int i = 0; i < 3; ++i) b[i] = Jet(p[0][i], i);
+      for (int i = 0; i < 9; ++i) lin[i] = Jet(p[1][i], 3 + i);
+      integrate_turn(r_, k0_, k1_, b, lin, CJ);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) C[i][j] = CJ[i][j].a;
+    } else {
+      integrate_turn(r_, k0_, k1_, p[0], p[1], C);
+    }
+    // Predicted direction at the end: C^T u_from.
+    Eigen::Vector3d pred, d;
+    for (int j = 0; j < 3; ++j)
+      pred(j) = C[0][j] * u_from[0] + C[1][j] * u_from[1] + C[2][j] * u_from[2];
+    for (int j = 0; j < 3; ++j) d(j) = pred(j) - u_to[j];
+    const Eigen::Vector2d rr = Et_ * d;
+    res[0] = rr(0);
+    res[1] = rr(1);
+    if (jac == nullptr) return true;
+    if (need_gyro) {
+      // d pred_j / d theta = sum_i dC[i][j] u_from[i]
+      Eigen::Matrix<double, 3, 12> dpred = Eigen::Matrix<double, 3, 12>::Zero();
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i) dpred.row(j) += u_from[i] * CJ[i][j].v.transpose();
+      const Eigen::Matrix<double, 2, 12> J = Et_ * dpred;
+      if (jac[0] != nullptr) Map23{jac[0]} = J.leftCols<3>();
+      if (jac[1] != nullptr) Map29{jac[1]} = J.rightCols<9>();
+    }
+    if (jac[2] != nullptr) {
+      Eigen::Matrix3d Ct;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) Ct(j, i) = C[i][j];
+      Map23{jac[2]} = Et_ * Ct;
+    }
+    if (jac[3] != nullptr) Map23{jac[3]} = -Et_;
+    return true;
+  }
+
+ private:
+  const std::vector<ImuReading>& r_;
+  std::size_t k0_, k1_;
+  Eigen::Matrix<double, 2, 3> Et_;
+};
+
+Eigen::Matrix<double, 3, 2> tangent_basis(const Eigen::Vector3d& u) {
+  Eigen::Index smallest;
+  u.cwiseAbs().minCoeff(&smallest);
+  const Eigen::Vector3d e1 = u.cross(Eigen::Vector3d::Unit(smallest)).normalized();
+  Eigen::Matrix<double, 3, 2> E;
+  E.col(0) = e1;
+  E.col(1) = u.cross(e1).normalized();
+  return E;
+}
+
+ceres::Solver::Options solver_options(int max_iterations) {
+  ceres::Solver::Options o;
+  o.linear_solver_type = ceres::DENSE_QR;
+  o.max_num_iterations = max_iterations;
+  o.function_tolerance = 1e-12;
+  o.gradient_tolerance = 1e-14;
+  o.parameter_tolerance = 1e-12;
+  o.num_threads = 1;
+  o.logging_type = ceres::SILENT;
+  o.minimizer_progress_to_stdout = false;
+  return o;
+}
+
+TableFreeStage run(ceres::Problem& problem, int max_iterations, const char* stage) {
+  ceres::Solver::Summary s;
+  ceres::Solve(solver_options(max_iterations), &problem, &s);
+  if (!s.IsSolutionUsable())
+    throw TableFreeError(
+        TableFreeError::Kind::SolveFailed,
+        std::string("table-free calibration: the ") + stage + " stage failed: " + s.message);
+  TableFreeStage st;
+  st.iterations = s.num_successful_steps + s.num_unsuccessful_steps;
+  st.converged = s.termination_type == ceres::CONVERGENCE;
+  st.chi2 = 2.0 * s.final_cost;
+  st.residuals = s.num_residuals_reduced;
+  st.parameters = s.num_effective_parameters_reduced;
+  return st;
+}
+
+struct PoseData {
+  const Pose* pose;
+  std::size_t first, last;  // trimmed
+  Eigen::Vector3d accel, gyro, accel_std, gyro_std;
+  double n;
+};
+
+using Kind = TableFreeError::Kind;
+
+// Turns: from the last reading of pose p's trimmed stretch to the first of pose p+1's.
+struct Turn {
+  std::size_t k0, k1;
+  Eigen::Matrix<double, 3, 2> E;
+  double inv_sigma;
+};
+
+// The index of each catalog coefficient in the block vector [accel(9), gyro bias(3), gyro lin(9)],
+// in catalog order: gyro bias, scale, misalignment; accel bias, scale, misalignment.
+struct Slot {
+  const char* name;
+  int index;  // -1: fixed by convention
+};
+constexpr Slot kSlots[24] = {
+    {"gyro.bias.x", 9},
+    {"gyro.bias.y", 10},
+    {"gyro.bias.z", 11},
+    {"gyro.scale.x", 12},
+    {"gyro.scale.y", 13},
+    {"gyro.scale.z", 14},
+    {"gyro.misalignment.xy", 15},
+    {"gyro.misalignment.xz", 16},
+    {"gyro.misalignment.yx", 17},
+    {"gyro.misalignment.yz", 18},
+    {"gyro.misalignment.zx", 19},
+    {"gyro.misalignment.zy", 20},
+    {"accel.bias.x", 0},
+    {"accel.bias.y", 1},
+    {"accel.bias.z", 2},
+    {"accel.scale.x", 3},
+    {"accel.scale.y", 4},
+    {"accel.scale.z", 5},
+    {"accel.misalignment.xy", -1},
+    {"accel.misalignment.xz", -1},
+    {"accel.misalignment.yx", 6},
+    {"accel.misalignment.yz", -1},
+    {"accel.misalignment.zx", 7},
+    {"accel.misalignment.zy", 8},
+};
+
+// The three stages of the table-free calibration over one record and its poses: the
+// accelerometers from the gravity magnitude, the gyros from the turns, then the joint
+// maximum-likelihood refinement with per-pose gravity directions.
+class TableFreeSolver {
+ public:
+  TableFreeSolver(const std::vector<ImuReading>& r, const TableFreeOptions& o, TableFreeResult& out)
+      : r_(r), o_(o), out_(out) {}
+
+  void solve(const std::vector<Pose>& poses) {
+    set_earth();
+    check_readings();
+    pose_data(poses);
+    check_directions();
+    pooled_noise();
+    solve_accelerometers();
+    make_turns();
+    solve_gyros();
+    solve_joint();
+    pose_fits();
+  }
+
+ private:
+  void set_earth() {
+    if (o_.gravity > 0.0) {
+      out_.gravity = o_.gravity;
+    } else if (o_.site) {
+      out_.gravity = Earth::wgs84().gravity_n(o_.site->lat_rad, o_.site->h_m).norm();
+    } else {
+      throw TableFreeError(Kind::BadInput,
+                           "table-free calibration: give the local gravity or the site");
+    }
+    g_ = out_.gravity;
+    Omega_ = Earth::wgs84().rate();
+    omega_v_ = o_.site ? Omega_ * std::sin(o_.site->lat_rad) : 0.0;
+    omega_h_ = o_.site ? Omega_ * std::cos(o_.site->lat_rad) : 0.0;
+    if (!(o_.edge_trim >= 0.0) || !(o_.min_pose > 0.0) || o_.min_poses < 10 ||
+        o_.max_iterations < 1)
+      throw TableFreeError(Kind::BadInput,
+                           "table-free calibration: options out of range (min_poses must be at "
+                           "least 10: 9 accelerometer unknowns and one residual)");
+  }
+
+  void check_readings() const {
+    for (std::size_t k = 0; k < r_.size(); ++k) {
+      if (!r_[k].accel.allFinite() || !r_[k].gyro.allFinite() || !std::isfinite(r_[k].t))
+        throw TableFreeError(Kind::BadInput, "table-free calibration: reading " +
+                                                 std::to_string(k + 1) + " is not finite");
+      if (k > 0 && !(r_[k].t > r_[k - 1].t))
+        throw TableFreeError(
+            Kind::BadInput,
+            "table-free calibration: times do not increase at reading " + std::to_string(k + 1));
+    }
+  }
+
+  // Poses: in order, inside the record, trimmed, long enough.
+  void pose_data(const std::vector<Pose>& poses) {
+    if (static_cast<int>(poses.size()) < o_.min_poses) {
+      std::ostringstream m;
+      m << "table-free calibration needs at least " << o_.min_poses
+        << " static poses (the accelerometer triad has 9 unknowns, one equation per pose); found "
+        << poses.size();
+      throw TableFreeError(Kind::TooFewPoses, m.str());
+    }
+    std::ostringstream too_short;
+    for (std::size_t p = 0; p < poses.size(); ++p) {
+      const Pose& ps = poses[p];
+      if (ps.last >= r_.size() || ps.last <= ps.first || (p > 0 && ps.first <= poses[p - 1].last))
+        throw TableFreeError(Kind::BadInput,
+                             "table-free calibration: pose " + std::to_string(ps.index) +
+                                 " is outside the readings or overlaps the previous one");
+      std::size_t a = ps.first, b = ps.last;
+      while (a < b && r_[a].t < r_[ps.first].t + o_.edge_trim) ++a;
+      while (b > a && r_[b].t > r_[ps.last].t - o_.edge_trim) --b;
+      if (r_[b].t - r_[a].t < o_.min_pose) {
+        too_short << (too_short.tellp() > 0 ? ", " : "") << ps.index << " ("
+                  << r_[ps.last].t - r_[ps.first].t << " s)";
+        continue;
+      }
+      PoseData d;
+      d.pose = &ps;
+      d.first = a;
+      d.last = b;
+      d.n = static_cast<double>(b - a + 1);
+      reading_statistics(r_, a, b, d.accel, d.gyro, d.accel_std, d.gyro_std);
+      pd_.push_back(d);
+    }
+    if (too_short.tellp() > 0) {
+      std::ostringstream m;
+      m << "table-free calibration: poses too short for their means (need " << o_.min_pose
+        << " s after cutting " << o_.edge_trim << " s at each end): " << too_short.str();
+      throw TableFreeError(Kind::PoseTooShort, m.str());
+    }
+  }
+
+  // The accelerometer triad is observable only if gravity points along every axis in some pose:
+  // directions all near one plane leave the scale factor normal to it undetermined.
+  void check_directions() const {
+    Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
+    for (const auto& d : pd_) {
+      const Eigen::Vector3d u0 = d.accel.normalized();
+      S += u0 * u0.transpose() / static_cast<double>(pd_.size());
+    }
+    const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(S).eigenvalues()(0);
+    if (smallest < 1e-3) {
+      std::ostringstream m;
+      m << "table-free calibration: the poses' gravity directions lie within "
+        << std::asin(std::sqrt(smallest)) / units::deg
+        << " deg (RMS) of one plane: the accelerometer triad is not observable; turn the unit "
+           "so that every axis points up and down in some poses";
+      throw TableFreeError(Kind::SolveFailed, m.str());
+    }
+  }
+
+  // Noise per reading, pooled over the poses; rate noise density from the sample interval.
+  void pooled_noise() {
+    va_ = Eigen::Vector3d::Zero();
+    vg_ = Eigen::Vector3d::Zero();
+    double dof_sum = 0.0, t_sum = 0.0;
+    for (const auto& d : pd_) {
+      va_ += (d.n - 1.0) * d.accel_std.cwiseAbs2();
+      vg_ += (d.n - 1.0) * d.gyro_std.cwiseAbs2();
+      dof_sum += d.n - 1.0;
+      t_sum += r_[d.last].t - r_[d.first].t;
+    }
+    va_ /= dof_sum;
+    vg_ /= dof_sum;
+    // Quantized noise-free data may rest without any variance: floor at rounding level.
+    for (int i = 0; i < 3; ++i) {
+      va_(i) = std::max(va_(i), 1e-30 + 1e-24 * g_ * g_);
+      vg_(i) = std::max(vg_(i), 1e-30);
+    }
+    out_.accel_noise = va_.cwiseSqrt();
+    out_.gyro_noise = vg_.cwiseSqrt();
+    const double dt_mean = t_sum / dof_sum;
+    rate_psd_ = vg_.mean() * dt_mean;  // rad^2/s: per-axis angle variance per second
+  }
+
+  TriadErrors accel_errors() const {
+    TriadErrors e;
+    e.bias = Eigen::Vector3d(a_[0], a_[1], a_[2]);
+    e.scale = Eigen::Vector3d(a_[3], a_[4], a_[5]);
+    e.misalignment(1, 0) = a_[6];
+    e.misalignment(2, 0) = a_[7];
+    e.misalignment(2, 1) = a_[8];
+    return e;
+  }
+
+  // Stage 1: accelerometers from the gravity magnitude; the poses' directions from them.
+  void solve_accelerometers() {
+    ceres::Problem problem;
+    for (const auto& d : pd_) {
+      const Eigen::Vector3d dir = d.accel.normalized();
+      const double sigma = std::sqrt(dir.cwiseAbs2().dot(va_) / d.n);
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GravityMagnitudeCost, 1, kAccel>(
+                                   new GravityMagnitudeCost{d.accel, g_, 1.0 / sigma}),
+                               nullptr, a_);
+    }
+    out_.accel_stage = run(problem, o_.max_iterations, "accelerometer");
+    const TriadErrors accel_est = accel_errors();
+    u_.resize(pd_.size());
+    for (std::size_t p = 0; p < pd_.size(); ++p)
+      u_[p] = accel_est.invert_step(pd_[p].accel, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero())
+                  .normalized();
+  }
+
+  void make_turns() {
+    for (std::size_t p = 0; p + 1 < pd_.size(); ++p) {
+      Turn t;
+      t.k0 = pd_[p].last;
+      t.k1 = pd_[p + 1].first;
+      const double T = r_[t.k1].t - r_[t.k0].t;
+      const double earth =
+          o_.site ? omega_h_ * omega_h_ * T * T / 2.0 : Omega_ * Omega_ * T * T / 3.0;
+      t.E = tangent_basis(u_[p + 1]);
+      t.inv_sigma = 1.0 / std::sqrt(rate_psd_ * T + earth);
+      turns_.push_back(t);
+    }
+  }
+
+  void add_turns(ceres::Problem& problem) {
+    for (std::size_t p = 0; p + 1 < pd_.size(); ++p)
+      problem.AddResidualBlock(
+          new TurnCost(r_, turns_[p].k0, turns_[p].k1, turns_[p].E, turns_[p].inv_sigma), nullptr,
+          gb_, gl_, u_[p].data(), u_[p + 1].data());
+  }
+
+  // Stage 2: gyro bias from the poses' mean rates, then the gyro matrix from the turns.
+  void solve_gyros() {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    double n = 0.0;
+    for (std::size_t p = 0; p < pd_.size(); ++p) {
+      sum += pd_[p].n * (pd_[p].gyro - omega_v_ * u_[p]);
+      n += pd_[p].n;
+    }
+    for (int i = 0; i < 3; ++i) gb_[i] = sum(i) / n;
+    ceres::Problem problem;
+    add_turns(problem);
+    problem.SetParameterBlockConstant(gb_);
+    for (auto& v : u_) problem.SetParameterBlockConstant(v.data());
+    out_.gyro_stage = run(problem, o_.max_iterations, "gyro");
+  }
+
+  // Stage 3: joint refinement, then the covariance of the coefficient blocks (scaled by the
+  // chi-square per degree of freedom) and the result in catalog order.
+  void solve_joint() {
+    ceres::Problem problem;
+    for (std::size_t p = 0; p < pd_.size(); ++p) {
+      const auto& d = pd_[p];
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<AccelPoseCost, 3, kAccel, 3>(
+              new AccelPoseCost{d.accel, (va_ / d.n).cwiseSqrt().cwiseInverse(), g_}),
+          nullptr, a_, u_[p].data());
+      Eigen::Matrix3d cov = (vg_ / d.n).asDiagonal();
+      cov += o_.site ? Eigen::Matrix3d(omega_h_ * omega_h_ / 2.0 *
+                                       (Eigen::Matrix3d::Identity() - u_[p] * u_[p].transpose()))
+                     : Eigen::Matrix3d(Omega_ * Omega_ / 3.0 * Eigen::Matrix3d::Identity());
+      const Eigen::Matrix3d L = cov.llt().matrixL();
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<GyroPoseCost, 3, kGyroBias, kGyroLin, 3>(
+              new GyroPoseCost{d.gyro, L.inverse(), omega_v_}),
+          nullptr, gb_, gl_, u_[p].data());
+    }
+    add_turns(problem);
+    for (auto& v : u_) problem.SetManifold(v.data(), new ceres::SphereManifold<3>());
+    out_.joint_stage = run(problem, o_.max_iterations, "joint");
+    if (!out_.joint_stage.converged)
+      throw TableFreeError(Kind::SolveFailed,
+                           "table-free calibration: the joint solution did not converge in " +
+                               std::to_string(o_.max_iterations) +
+                               " iterations (inconsistent data: poses that are not at rest, or "
+                               "a wrong gravity?)");
+    out_.iterations =
+        out_.accel_stage.iterations + out_.gyro_stage.iterations + out_.joint_stage.iterations;
+    out_.converged = true;
+    out_.chi2 = out_.joint_stage.chi2;
+    out_.dof = out_.joint_stage.residuals - out_.joint_stage.parameters;
+    if (out_.dof <= 0)
+      throw TableFreeError(Kind::TooFewPoses,
+                           "table-free calibration: no degrees of freedom left with " +
+                               std::to_string(pd_.size()) + " poses");
+    out_.chi2_per_dof = out_.chi2 / out_.dof;
+    store_coefficients(covariance_of_blocks(problem));
+  }
+
+  Eigen::Matrix<double, 21, 21, Eigen::RowMajor> covariance_of_blocks(ceres::Problem& problem) {
+    ceres::Covariance::Options co;
+    co.algorithm_type = ceres::DENSE_SVD;
+    co.num_threads = 1;
+    ceres::Covariance covariance(co);
+    const std::vector<const double*> blocks = {a_, gb_, gl_};
+    std::vector<std::pair<const double*, const double*>> pairs;
+    for (std::size_t i = 0; i < blocks.size(); ++i)
+      for (std::size_t j = i; j < blocks.size(); ++j) pairs.emplace_back(blocks[i], blocks[j]);
+    if (!covariance.Compute(pairs, &problem))
+      throw TableFreeError(Kind::SolveFailed,
+                           "table-free calibration: the solution's covariance is singular (the "
+                           "poses do not turn the unit about enough different axes)");
+    Eigen::Matrix<double, 21, 21, Eigen::RowMajor> C_blocks;
+    covariance.GetCovarianceMatrix(blocks, C_blocks.data());
+    C_blocks *= out_.chi2_per_dof;
+    return C_blocks;
+  }
+
+  void store_coefficients(const Eigen::Matrix<double, 21, 21, Eigen::RowMajor>& C_blocks) {
+    double values[21];
+    std::copy(a_, a_ + 9, values);
+    std::copy(gb_, gb_ + 3, values + 9);
+    std::copy(gl_, gl_ + 9, values + 12);
+    std::vector<int> order;
+    for (const auto& s : kSlots) {
+      TableFreeCoefficient c;
+      c.name = s.name;
+      c.fixed_by_convention = s.index < 0;
+      if (s.index >= 0) {
+        c.value = values[s.index];
+        c.sigma = std::sqrt(C_blocks(s.index, s.index));
+        order.push_back(s.index);
+        out_.covariance_names.push_back(c.name);
+      }
+      out_.coefficients.push_back(c);
+    }
+    const auto m = static_cast<Eigen::Index>(order.size());
+    out_.covariance.resize(m, m);
+    for (Eigen::Index i = 0; i < m; ++i)
+      for (Eigen::Index j = 0; j < m; ++j)
+        out_.covariance(i, j) =
+            C_blocks(order[static_cast<std::size_t>(i)], order[static_cast<std::size_t>(j)]);
+    for (auto& [info, ptr] : out_.model.coefficient_refs())
+      for (const auto& c : out_.coefficients)
+        if (c.name == info.name) *ptr = c.value;
+  }
+
+  // Residuals per pose, with the model's own formula.
+  void pose_fits() {
+    const TriadErrors& A = out_.model.accel;
+    const TriadErrors& G = out_.model.gyro;
+    const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+    for (std::size_t p = 0; p < pd_.size(); ++p) {
+      TableFreePoseFit f;
+      f.index = pd_[p].pose->index;
+      f.t_start = r_[pd_[p].first].t;
+      f.t_end = r_[pd_[p].last].t;
+      f.count = pd_[p].last - pd_[p].first + 1;
+      f.first = pd_[p].first;
+      f.last = pd_[p].last;
+      f.direction = u_[p];
+      f.gravity_error = A.invert_step(pd_[p].accel, zero, zero).norm() - g_;
+      f.accel_rms = std::sqrt((pd_[p].accel - A.apply(g_ * u_[p], zero)).squaredNorm() / 3.0);
+      f.gyro_rms = std::sqrt((pd_[p].gyro - G.apply(omega_v_ * u_[p], zero)).squaredNorm() / 3.0);
+      if (p > 0) {
+        double C[3][3];
+        integrate_turn(r_, turns_[p - 1].k0, turns_[p - 1].k1, gb_, gl_, C);
+        Eigen::Matrix3d Cm;
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) Cm(i, j) = C[i][j];
+        const Eigen::Vector3d pred = Cm.transpose() * u_[p - 1];
+        f.turn_error = std::atan2(pred.cross(u_[p]).norm(), pred.dot(u_[p]));
+        f.turn_sigma = 1.0 / turns_[p - 1].inv_sigma;
+      }
+      out_.poses.push_back(f);
+    }
+  }
+
+  const std::vector<ImuReading>& r_;
+  const TableFreeOptions& o_;
+  TableFreeResult& out_;
+  std::vector<PoseData> pd_;
+  double g_ = 0.0, Omega_ = 0.0, omega_v_ = 0.0, omega_h_ = 0.0;
+  Eigen::Vector3d va_, vg_;
+  double rate_psd_ = 0.0;
+  double a_[kAccel] = {0.0};
+  double gb_[kGyroBias] = {0.0};
+  double gl_[kGyroLin] = {0.0};
+  std::vector<Eigen::Vector3d> u_;
+  std::vector<Turn> turns_;
+};
+
+}  // namespace
+
+const TableFreeCoefficient& TableFreeResult::at(const std::string& name) const {
+  for (const auto& c : coefficients)
+    if (c.name == name) return c;
+  throw std::invalid_argument("table-free result has no coefficient '" + name + "'");
+}
+
+TableFreeResult calibrate_table_free(const std::vector<ImuReading>& r,
+                                     const std::vector<Pose>& poses, const TableFreeOptions& o) {
+  TableFreeResult out;
+  TableFreeSolver(r, o, out).solve(poses);
+  return out;
+}
+
+TableFreeResult calibrate_table_free_counts(const std::vector<ImuReading>& counts,
+                                            const RawScaling& nominal,
+                                            const TableFreeOptions& options,
+                                            const PoseDetectorOptions& detector) {
+  std::vector<Pose> poses;
+  std::vector<ImuReading> si;
+  try {
+    poses = detect_poses(counts, detector).poses;
+    si = si_from_counts(counts, nominal);
+  } catch (const PoseDetectorError& e) {
+    throw TableFreeError(TableFreeError::Kind::BadInput, e.what());
+  } catch (const std::invalid_argument& e) {
+    throw TableFreeError(TableFreeError::Kind::BadInput, e.what());
+  }
+  TableFreeResult out = calibrate_table_free(si, poses, options);
+  out.has_raw = true;
+  auto view = [&](const TriadErrors& e, const std::string& triad, const Eigen::Vector3d& s0,
+                  const Eigen::Vector3d& o0) {
+    RawTriadView v;
+    const char* axis[3] = {"x", "y", "z"};
+    const Eigen::Matrix3d L = e.linear();
+    for (int i = 0; i < 3; ++i) {
+      const auto& k = out.at(triad + ".scale." + axis[i]);
+      const auto& b = out.at(triad + ".bias." + axis[i]);
+      v.sensitivity(i) = s0(i) * (1.0 + k.value);
+      v.sensitivity_sigma(i) = std::abs(s0(i)) * k.sigma;
+      v.offset(i) = o0(i) + s0(i) * b.value;
+      v.offset_sigma(i) = std::abs(s0(i)) * b.sigma;
+      v.row_norm(i) = std::abs(s0(i)) * L.row(i).norm();
+    }
+    return v;
+  };
+  out.accel_raw = view(out.model.accel, "accel", nominal.accel_sensitivity, nominal.accel_offset);
+  out.gyro_raw = view(out.model.gyro, "gyro", nominal.gyro_sensitivity, nominal.gyro_offset);
+  return out;
+}
+
+}  // namespace sinscal

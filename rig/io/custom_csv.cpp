@@ -1,0 +1,74 @@
+// A foreign delimited log (format = custom): column order, delimiter, header lines, units including
+// raw counts with a scale and offset, increments or rates, axis mapping with signs, optional table
+// angles. Its record is one line of numbers in the order of `columns`.
+#include <algorithm>
+
+#include "models/config.hpp"
+#include "rig/io/log_keys.hpp"
+
+namespace sinscal {
+
+namespace log_keys {
+
+void read_custom_format(const IniFile& ini, const std::string& base_dir, double rate_hz,
+                        bool segmented, std::vector<std::string>& keys, LogFormat& f) {
+  const bool split = ini.has("log.accel_file") || ini.has("log.gyro_file");
+  keys.insert(keys.end(),
+              {"delimiter", "header_lines", "time_unit", "gyro", "gyro_unit", "gyro_scale",
+               "gyro_offset", "gyro_axes", "gyro_saturation", "accel", "accel_unit", "accel_scale",
+               "accel_offset", "accel_axes", "accel_saturation"});
+  if (split) {
+    add_split_keys(ini, segmented, keys);
+  } else {
+    keys.insert(keys.end(), {"columns", "table_unit"});
+  }
+  ini.check_keys("log", keys);
+  f.native = false;
+  f.delimiter = read_delimiter(ini);
+  f.header_lines = read_header_lines(ini);
+  f.time_scale = unit_of(ini, "log.time_unit", "s", QuantityKind::Time);
+  if (split) {
+    read_split_format(ini, base_dir, f);
+  } else {
+    if (!segmented) f.file = path_in(base_dir, ini.get_string("log.file"));
+    for (const auto& c : tokens_of(ini.get_string("log.columns"))) {
+      static const std::vector<std::string> known = {"t",  "gx", "gy",    "gz",    "ax",
+                                                     "ay", "az", "outer", "inner", "-"};
+      if (std::find(known.begin(), known.end(), c) == known.end())
+        throw ConfigError(ini.where("log.columns") + "unknown column '" + c +
+                          "' (known: t gx gy gz ax ay az outer inner, - to skip)");
+      if (c != "-" && std::count(f.columns.begin(), f.columns.end(), c))
+        throw ConfigError(ini.where("log.columns") + "column '" + c + "' given twice");
+      f.columns.push_back(c);
+    }
+    const bool outer = std::count(f.columns.begin(), f.columns.end(), "outer") > 0;
+    if (outer != (std::count(f.columns.begin(), f.columns.end(), "inner") > 0))
+      throw ConfigError(ini.where("log.columns") +
+                        "give both table-angle columns, outer and inner");
+    if (outer) f.table_scale = unit_of(ini, "log.table_unit", "deg", QuantityKind::Angle);
+  }
+  f.gyro = read_triad(ini, "gyro", true, rate_hz);
+  f.accel = read_triad(ini, "accel", false, rate_hz);
+  for (const char* c : {"gx", "gy", "gz", "ax", "ay", "az"})
+    if (!split && !std::count(f.columns.begin(), f.columns.end(), c))
+      throw ConfigError(ini.where("log.columns") + "column '" + c +
+                        "' missing (the columns must name gx gy gz ax ay az)");
+}
+
+}  // namespace log_keys
+
+bool LogReader::read_record() {
+  if (f_.kind == LogFormat::Kind::NovAtel) return read_novatel_record();
+  if (f_.split()) return read_split_record();
+  loc_ = &main_;
+  bool nl = true;
+  if (!read_data_line(main_, text_, nl)) return false;
+  // sinscal writes a line end after every sample: a last line without one was cut (its last
+  // number may be cut short and still read as a number).
+  if (f_.native && !nl)
+    fail("truncated line: the last line has no line end (the file was cut while being written?)");
+  split_fields(text_, nl, f_.columns.size(), fields_);
+  return true;
+}
+
+}  // namespace sinscal

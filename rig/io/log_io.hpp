@@ -1,0 +1,221 @@
+// IMU logs. The native format (written by `sinscal simulate`) is CSV with a header naming each
+// column and its unit; a configurable reader also takes foreign logs: column order, delimiter,
+// header lines, units including raw counts with a scale and offset, increments or rates, axis
+// mapping with signs; a log split over one file per triad (accelerometers, gyros) sharing a time
+// column; NovAtel RAWIMUSA / RAWIMUSXA ASCII logs (CRC-32 checked); and a session recorded as
+// one file per dwell of the plan. Format and [log] keys: docs/formats.md.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "rig/imu_sample.hpp"
+
+namespace sinscal {
+
+class IniFile;
+
+/// A problem in a log file; what() reads "FILE:LINE: cause".
+class LogError : public std::runtime_error {
+ public:
+  LogError(const std::string& file, std::size_t line, const std::string& cause);
+  const std::string& file() const { return file_; }
+  std::size_t line() const { return line_; }
+  const std::string& cause() const { return cause_; }
+
+ private:
+  std::string file_;
+  std::size_t line_;
+  std::string cause_;
+};
+
+/// A bad sample that a reader may skip (a value NaN, infinite, not a number or saturated; time
+/// going backwards or repeating). Other problems (gaps, truncation, wrong field counts) are not.
+class BadSampleError : public LogError {
+ public:
+  using LogError::LogError;
+  double t_prev = 0.0;  // s, time of the last good sample before it
+};
+
+/// How one triad is stored in a log.
+struct TriadColumns {
+  bool increments = true;  // true: angle/velocity increments; false: rates
+  double scale = 1.0;      // SI per (count - offset): unit factor times counts-to-unit scale
+  double offset = 0.0;     // subtracted from the raw value before scaling
+  std::array<int, 3> axis{0, 1, 2};           // body axis i comes from log axis axis[i]
+  std::array<double, 3> sign{1.0, 1.0, 1.0};  // with this sign
+  double saturation = 0.0;  // |raw value| at or beyond which a sample is saturated (0: none)
+  /// The log holds raw counts (`_scale` or `_offset` given): scale and offset are then the
+  /// nominal conversion, the starting point of a calibration in counts (raw-count views).
+  bool counts = false;
+};
+
+/// One file of a log recorded as one file per dwell: its samples are placed in the dwell.
+struct LogSegment {
+  std::string file;      // path
+  int dwell = 0;         // the plan's dwell (1-based, as Dwell::index)
+  double t_start = 0.0;  // s, log time at which the dwell starts (time_offset included)
+  double t_end = 0.0;    // s, log time at which it ends
+};
+
+/// `file` as seen from the current directory when it is named relative to `dir` (a session's
+/// directory): unchanged when absolute or when `dir` is empty.
+std::string path_in(const std::string& dir, const std::string& file);
+
+struct LogFormat {
+  enum class Kind { Delimited, NovAtel };
+  /// Longest line a reader accepts (bytes); a longer one is an error, never buffered whole.
+  static constexpr std::size_t kMaxLine = 65536;
+  /// Most header lines a format may skip.
+  static constexpr int kMaxHeaderLines = 100000;
+  /// Largest `max_gap` (samples).
+  static constexpr double kMaxGap = 1000.0;
+  /// Plausibility bounds of a sample (docs/formats.md): beyond them a value is not a measurement
+  /// (a wrong unit or scale, a damaged field) and the sample is bad. Angular rate (an angle
+  /// increment over its interval): 1e6 rad/s; specific force (a velocity increment over its
+  /// interval): 1e6 m/s^2 (about 100,000 g); time: within 1e10 s of 0 (GPS and Unix seconds are
+  /// about 1e9 s); table angles: within 1e6 rad (about 160,000 turns).
+  static constexpr double kMaxRate = 1e6;           // rad/s
+  static constexpr double kMaxSpecificForce = 1e6;  // m/s^2
+  static constexpr double kMaxTime = 1e10;          // s
+  static constexpr double kMaxTableAngle = 1e6;     // rad
+
+  std::string file;  // path of the data file (split and segmented logs: a
+                     // description naming their files, for messages)
+  Kind kind = Kind::Delimited;
+  bool native = true;                // the sinscal CSV (the header is checked)
+  char delimiter = ',';              // ' ' means any run of spaces or tabs
+  int header_lines = 1;              // lines skipped before the data (after them, '#' lines too)
+  std::vector<std::string> columns;  // t gx gy gz ax ay az [outer inner], "-" to skip
+  double table_scale = 0.0;          // rad per table-angle unit (outer/inner columns)
+  double time_scale = 1.0;           // s per time unit
+  double rate_hz = 0.0;              // nominal rate; needed when there is no time column
+  double max_gap = 1.5;              // a step in time above max_gap / rate_hz is a gap (error)
+  TriadColumns gyro, accel;
+
+  /// A log split over two files sharing a time column (imu_tk style): both set. Each file's
+  /// columns are named t x y z or - (skip); without t in either, the time is sample number / rate.
+  std::string accel_file, gyro_file;
+  std::vector<std::string> accel_columns, gyro_columns;
+  double time_tolerance = 0.0;  // s: split files' times may differ this much (0: 1 % of 1/rate)
+
+  /// NovAtel: IMU status bits that make a sample bad (0: the status is not checked).
+  std::uint32_t status_mask = 0;
+
+  /// A log recorded as one file per dwell (non-empty): each file in the format above, its time
+  /// relative to its own start placed at its dwell's start, in dwell order.
+  std::vector<LogSegment> segments;
+
+  bool split() const { return !accel_file.empty(); }
+
+  /// The native format for a rate.
+  static LogFormat native_format(const std::string& file, double rate_hz);
+  /// From the [log] section of a session file; relative paths are taken from `base_dir`. A log
+  /// in one file per dwell (`files`) takes the dwells' times from the session's plan
+  /// ([session] plan, time_offset).
+  static LogFormat from_ini(const IniFile& ini, const std::string& base_dir, double rate_hz);
+};
+
+/// Writes the native CSV format.
+class LogWriter {
+ public:
+  /// With `table_angles`, two more columns: the table's outer and inner axis angles [deg].
+  LogWriter(const std::string& path, double rate_hz, bool table_angles = false);
+  void write(const ImuSample& s);
+  void close();
+
+ private:
+  std::string path_;
+  std::ofstream out_;
+  std::string buffer_;
+  bool table_ = false;
+};
+
+/// Reads a log sample by sample in constant memory; every problem throws LogError with the line.
+class LogReader : public SampleSource {
+ public:
+  explicit LogReader(const LogFormat& format);
+  /// Reads from a stream (standard input, a pipe); `format.file` names it in messages.
+  LogReader(std::istream& in, const LogFormat& format);
+  LogReader(const LogReader&) = delete;  // holds pointers into itself
+  LogReader& operator=(const LogReader&) = delete;
+  bool next(ImuSample& sample) override;
+  /// Line of the last record read (split logs: of the accelerometer file; one file per dwell:
+  /// of the current file).
+  std::size_t line() const { return segment_ ? segment_->line() : loc_->line; }
+  /// Samples read so far.
+  std::size_t count() const { return count_; }
+  /// Skip bad samples (BadSampleError) instead of throwing: each is passed to `on_skip` and the
+  /// reading goes on. The motion of a skipped interval is bridged by holding the next good
+  /// sample's rate over it (its increments are scaled to the whole interval since the last good
+  /// sample).
+  void skip_bad_samples(std::function<void(const BadSampleError&)> on_skip) {
+    on_skip_ = std::move(on_skip);
+    if (segment_) segment_->skip_bad_samples(on_skip_);
+  }
+
+ private:
+  /// One input file or stream, read line by line with a bounded line length.
+  struct Input {
+    std::unique_ptr<std::ifstream> owned;
+    std::istream* in = nullptr;
+    std::string name;
+    std::size_t line = 0;
+    std::vector<char> buffer;
+  };
+  [[noreturn]] void fail(const std::string& cause) const;
+  [[noreturn]] void bad_sample(const std::string& cause) const;
+  void open(Input& input, const std::string& path);
+  bool read_line(Input& input, std::string& line, bool& had_newline);
+  /// Next line that is neither empty nor a '#' comment.
+  bool read_data_line(Input& input, std::string& line, bool& had_newline);
+  void skip_header(Input& input);
+  /// Splits a delimited line into numbers (exactly `expected` of them).
+  void split_fields(const std::string& line, bool had_newline, std::size_t expected,
+                    std::vector<double>& out);
+  /// The next record's fields in the layout of f_.columns; false at the end.
+  bool read_record();
+  bool read_split_record();
+  bool read_novatel_record();
+  bool make_sample(ImuSample& s);
+  bool next_segment_sample(ImuSample& s);
+  void start();
+  /// The split log's columns (split_files.cpp), the native log's column header (native.cpp).
+  void map_split_columns();
+  void read_native_header();
+
+  LogFormat f_;
+  Input main_, second_;        // the log (split: accelerometer file), the split gyro file
+  const Input* loc_ = &main_;  // the file and line messages name
+  std::size_t count_ = 0;
+  int col_t_ = -1;
+  std::array<int, 3> col_g_{-1, -1, -1}, col_a_{-1, -1, -1};
+  int col_outer_ = -1, col_inner_ = -1;
+  double t_prev_ = 0.0;
+  std::vector<double> fields_, acc_, gyr_;  // a record; a split log's two lines
+  std::string text_, text2_;
+  // split: where t, x, y, z are in each file's columns (-1: absent)
+  std::array<int, 4> acc_cols_{-1, -1, -1, -1}, gyr_cols_{-1, -1, -1, -1};
+  // NovAtel
+  std::string novatel_message_;  // the raw IMU log read (the first one found)
+  long novatel_week0_ = -1;
+  std::size_t novatel_other_ = 0;  // lines of other logs skipped
+  // one file per dwell
+  std::unique_ptr<LogReader> segment_;
+  std::size_t segment_next_ = 0;
+  std::size_t segment_count_ = 0;  // samples of the current segment
+  double segment_shift_ = 0.0;
+  std::function<void(const BadSampleError&)> on_skip_;
+  bool skipped_ = false;  // a sample was skipped since the last good one
+  std::size_t skipped_count_ = 0;
+  std::size_t skipped_run_ = 0;  // consecutive skipped samples before the next good one
+  bool segment_child_ = false;   // one file of a log in one file per dwell (the parent checks)
+};
+
+}  // namespace sinscal
