@@ -21,7 +21,8 @@ const char* kUsage =
     "             estimates and sigmas over time from a Kalman monitor file, to PNG (gnuplot)\n"
     "  diagnose   what the calibrated model misses on a table session: the effect, its\n"
     "             magnitude and the gain of adding it (model discovery)\n"
-    "  allan      Allan deviation of a static record or pose, fitted noise terms, plot\n";
+    "  allan      Allan deviation of a static record or pose, fitted noise terms, plot\n"
+    "  design     the accuracy a plan will give, predicted without data (table, targets)\n";
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -40,6 +41,7 @@ int main(int argc, char** argv) {
     if (command == "plot-convergence") return cmd_plot_convergence(args);
     if (command == "diagnose") return cmd_diagnose(args);
     if (command == "allan") return cmd_allan(args);
+    if (command == "design") return cmd_design(args);
     std::cerr << "sinscal: unknown command '" << command << "'\n" << kUsage;
     return kUsageError;
   } catch (const po::error& e) {

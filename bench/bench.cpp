@@ -1,6 +1,7 @@
 // Throughput benchmarks (not tests): simulator, navigator, log writer and reader, calibrations,
 // on one core.
 // Prints samples/s and ratios. Usage: bench [SOURCE_DIR]
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "filter/closed_form/closed_form.hpp"
+#include "filter/design/prediction.hpp"
 #include "filter/diagnosis/diagnosis_kalman.hpp"
 #include "filter/diagnosis/diagnosis_table.hpp"
 #include "filter/diagnosis/handheld_diagnosis.hpp"
@@ -30,6 +32,28 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 }  // namespace
+
+// Plan design: the covariance pass over rot19 (592 s) with nav-fog-extended, CPU time (aim 0.2 s).
+double bench_design(const std::string& src) {
+  const Plan rot = Plan::load(src + "/config/plans/rot19.ini");
+  const SensorProfile profile = SensorProfile::load(src + "/config/sensors/nav-fog-extended.ini");
+  const CalibratorOptions o = calibrator_options_from_profile(profile);
+  double sink = 0.0;
+  for (const double rate : {20.0, 50.0, 100.0}) {
+    DesignOptions d;
+    d.rate_hz = rate;
+    double best = 1e300;
+    for (int pass = 0; pass < 3; ++pass) {
+      const std::clock_t c0 = std::clock();
+      const PlanPrediction p = predict_plan(rot, o, profile.sigma_targets, d);
+      best = std::min(best, static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC);
+      sink += p.run.estimates[0].sigma;
+    }
+    std::printf("design of rot19 (covariance pass, ideal IMU at %.0f Hz): %.3f s CPU%s\n", rate,
+                best, rate == 50.0 ? " (the default rate; aim 0.2 s)" : "");
+  }
+  return sink;
+}
 
 // Table-free calibration and diagnosis of the Xsens MTi hand-held session.
 void bench_handheld(const std::string& src) {
@@ -299,6 +323,7 @@ int main(int argc, char** argv) {
       static_cast<double>(rot_samples.size()) / t_read_nav,
       static_cast<double>(rot_samples.size()) / t_kf_log, t_kf_log / t_read_nav);
   sink += bench_kalman_diagnosis(src);
+  sink += bench_design(src);
   bench_handheld(src);
   std::printf("navigator / simulator throughput ratio: %.1f\n", t_sim / t_nav);
   std::printf("navigator aim: 5e6 samples/s -> %s\n", n / t_nav >= 5e6 ? "met" : "NOT met");

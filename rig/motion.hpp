@@ -26,6 +26,7 @@ class TrapezoidProfile {
   double duration() const { return 2.0 * t_acc_ + t_cruise_; }
   double angle() const { return angle_; }
   double peak_rate() const { return accel_ * t_acc_; }
+  double acceleration() const { return accel_; }  // rad/s^2, of the ramps
   /// Angle (rad), rate (rad/s), angular acceleration (rad/s^2) at time t from the start; the
   /// profile holds its end angle after it ends and zero before it starts.
   void eval(double t, double& angle, double& rate, double& accel) const;

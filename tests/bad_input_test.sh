@@ -669,6 +669,28 @@ awk -F, -v OFS=, 'NR <= 3 { print; next } { print $1, 0, 0, 0, 0, 0, -0.980665 }
 POST='grep -q "\"plausibility\"" out/result.json && grep -q "\"passed\": false" out/result.json'
 fixed 0 "" cf --force
 
+# --- design (issue 17): table descriptions and plans beyond the table
+tab="$src/config/tables/two-axis-20.ini"
+dz() { S design --plan "$src/config/plans/rot19.ini" --sensor "$fog" --table table.ini "$@"; }
+new design-control; cp "$tab" "$d/table.ini"
+control 0 "" dz
+new design-table-unknown-key; cp "$tab" "$d/table.ini"; add_line "$d/table.ini" "max_speed = 3 deg/s"
+fixed 2 "table.ini:$L: 'table.max_speed': unknown key" dz
+new design-table-rate-in-m-per-s; cp "$tab" "$d/table.ini"; set_key "$d/table.ini" max_rate "20 m/s"; L=$(lno "$d/table.ini" '^max_rate')
+fixed 2 "table.ini:$L: 'table.max_rate'" dz
+new design-table-negative-accuracy; cp "$tab" "$d/table.ini"; set_key "$d/table.ini" attitude_accuracy "-2.5 arcsec"; L=$(lno "$d/table.ini" '^attitude_accuracy')
+fixed 2 "table.ini:$L: 'table.attitude_accuracy'|positive" dz
+new design-table-no-rate; grep -v '^max_rate' "$tab" > "$d/table.ini"
+fixed 2 "table.ini|max_rate" dz
+new design-table-is-a-directory; mkdir "$d/table.ini"
+fixed 2 "table.ini: is a directory" dz
+new design-plan-beyond-table; cp "$tab" "$d/table.ini"; set_key "$d/table.ini" max_acceleration "5 deg/s^2"
+fixed 2 "the plan asks more than the table|angular acceleration 10.000 deg/s^2 above the table's 5.000 deg/s^2" dz
+new design-plan-dwell-shorter-than-settling; cp "$tab" "$d/table.ini"; set_key "$d/table.ini" settling_time "25 s"
+fixed 2 "shorter than the table's settling time 25.000 s" dz
+new design-rate-zero; cp "$tab" "$d/table.ini"
+fixed 1 "--rate must be within 1 and 10000 Hz" dz --rate 0
+
 # =============================================================================================
 # KNOWN: bad input still accepted or mishandled; the fix belongs to apps/, filter/ or the result
 # and compare code. Each line says the behaviour it needs.

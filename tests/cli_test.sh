@@ -231,5 +231,19 @@ check "... naming the dwell and the 20 s" contains "$work/diag8.err" "shorter th
 "$bin" diagnose --session "$work/short8/session.ini" --out "$work/short8/diag" --no-plot --min-dwell 4 > "$work/diag9.txt"
 check "diagnose --min-dwell 4 diagnoses 5 s dwells" test $? -eq 0
 
+# design: the accuracy a plan will give, without data (issue 17).
+"$bin" design --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog-extended.ini" \
+  --table "$src/config/tables/two-axis-20.ini" --out "$work/design" > "$work/design.txt"
+check "design exits 0" test $? -eq 0
+check "design prints each family against its target" contains "$work/design.txt" "accel.lever_arm"
+check "design names the table" contains "$work/design.txt" "on two-axis-20 (2.50 arcsec per dwell)"
+check "design.json has the predicted sigmas" python3 -c "import json,sys; d=json.load(open('$work/design/design.json')); sys.exit(not (len(d['coefficients']) >= 30 and all(c['predicted_sigma'] > 0 for c in d['coefficients'])))"
+check "sigma.jsonl is a monitor file plot-convergence reads" "$bin" plot-convergence --monitor "$work/design/sigma.jsonl" --out "$work/design/sigma.png"
+sed 's/^max_rate = 20 deg\/s/max_rate = 5 deg\/s/' "$src/config/tables/two-axis-20.ini" > "$work/slow-table.ini"
+"$bin" design --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog-extended.ini" \
+  --table "$work/slow-table.ini" > /dev/null 2> "$work/design2.err"
+check "design with a plan beyond the table exits 2" test $? -eq 2
+check "... naming the segment and the rates" contains "$work/design2.err" "motion segment 2 (t = 70.0 s): peak rate 11.459 deg/s above the table's 5.000 deg/s"
+
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0

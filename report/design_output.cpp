@@ -1,0 +1,114 @@
+#include "report/design_output.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include "models/coefficient_families.hpp"
+#include "models/imu_error_model.hpp"
+#include "models/units.hpp"
+
+namespace sinscal {
+
+namespace {
+
+double in_unit(const std::string& family, double si) {
+  return si / coefficient_family_info(family).si_per_unit();
+}
+
+std::string fmt(const char* format, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, v);
+  return buf;
+}
+
+}  // namespace
+
+nlohmann::ordered_json design_json(const PlanPrediction& p, const DesignInputs& in) {
+  nlohmann::ordered_json j;
+  j["format"] = "sinscal design 1";
+  j["plan"] = {{"file", in.plan}, {"name", in.plan_name}, {"duration_s", p.duration}};
+  j["sensor"] = {{"file", in.sensor}, {"name", in.sensor_name}};
+  j["table"] = {{"file", in.table},
+                {"name", in.table_name},
+                {"attitude_accuracy_arcsec", in.attitude_sigma / units::arcsec}};
+  j["ideal_imu_rate_hz"] = in.rate_hz;
+  j["states"] = p.run.states;
+  j["meets_targets"] = p.meets_targets();
+  const auto last = p.last_to_reach();
+  j["targets_reached_at_s"] = last ? nlohmann::ordered_json(last->second) : nullptr;
+  j["last_family_to_reach"] = last ? nlohmann::ordered_json(last->first) : nullptr;
+  nlohmann::ordered_json fams = nlohmann::ordered_json::array();
+  for (const auto& f : p.families) {
+    const std::string unit = coefficient_family_info(f.family).unit();
+    fams.push_back({{"family", f.family},
+                    {"unit", unit},
+                    {"target", f.target > 0.0 ? nlohmann::ordered_json(in_unit(f.family, f.target))
+                                              : nlohmann::ordered_json(nullptr)},
+                    {"predicted_sigma", in_unit(f.family, f.worst_sigma)},
+                    {"worst_coefficient", f.worst},
+                    {"meets_target", f.meets_target()},
+                    {"reached_at_s", f.reached_at ? nlohmann::ordered_json(*f.reached_at)
+                                                  : nlohmann::ordered_json(nullptr)},
+                    {"observed", f.observed}});
+  }
+  j["families"] = fams;
+  nlohmann::ordered_json coefs = nlohmann::ordered_json::array();
+  const auto& cat = coefficient_catalog();
+  for (std::size_t i = 0; i < cat.size(); ++i) {
+    const CoefficientEstimate& e = p.run.estimates[i];
+    if (e.status != CoefficientEstimate::Status::Estimated) continue;
+    coefs.push_back({{"name", cat[i].name},
+                     {"unit", cat[i].unit},
+                     {"prior_sigma", e.prior_sigma / cat[i].si_per_unit},
+                     {"predicted_sigma", e.sigma / cat[i].si_per_unit},
+                     {"observed", e.observed()}});
+  }
+  j["coefficients"] = coefs;
+  nlohmann::ordered_json dirs = nlohmann::ordered_json::array();
+  for (const auto& d : p.run.unobservable_directions)
+    dirs.push_back({{"combination", d.text()}, {"remaining_variance_ratio", d.remaining}});
+  j["unobservable_combinations"] = dirs;
+  j["cpu_s"] = in.cpu_seconds;
+  return j;
+}
+
+std::string design_tables(const PlanPrediction& p, const DesignInputs& in) {
+  std::string out;
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "Predicted accuracy of plan %s (%.1f s) for %s on %s (%.2f arcsec per dwell), "
+                "without data\n\n",
+                in.plan_name.c_str(), p.duration, in.sensor_name.c_str(), in.table_name.c_str(),
+                in.attitude_sigma / units::arcsec);
+  out += line;
+  std::snprintf(line, sizeof line, "%-22s %-9s %12s %12s  %-24s %10s\n", "family", "unit", "target",
+                "predicted", "(worst coefficient)", "reached at");
+  out += line;
+  for (const auto& f : p.families) {
+    const std::string unit = coefficient_family_info(f.family).unit();
+    const std::string target = f.target > 0.0 ? fmt("%.4g", in_unit(f.family, f.target)) : "-";
+    std::string reached = f.target <= 0.0 ? "-"
+                          : f.reached_at  ? fmt("%.0f s", *f.reached_at)
+                                          : "not reached";
+    if (!f.observed) reached += " (not observed)";
+    std::snprintf(line, sizeof line, "%-22s %-9s %12s %12.4g  %-24s %10s\n", f.family.c_str(),
+                  unit.c_str(), target.c_str(), in_unit(f.family, f.worst_sigma), f.worst.c_str(),
+                  reached.c_str());
+    out += line;
+  }
+  const auto last = p.last_to_reach();
+  if (last)
+    std::snprintf(line, sizeof line, "\nEvery target met at %.0f s of %.0f s (the last: %s).\n",
+                  last->second, p.duration, last->first.c_str());
+  else
+    std::snprintf(line, sizeof line, "\nNot every target is met by this plan.\n");
+  out += line;
+  if (!p.run.unobservable_directions.empty()) {
+    out += "Combinations the plan does not observe (prior-normalized):\n";
+    for (const auto& d : p.run.unobservable_directions)
+      out += "  " + d.text() + fmt("  (%.2f of the prior variance left)\n", d.remaining);
+  }
+  return out;
+}
+
+}  // namespace sinscal

@@ -1,0 +1,27 @@
+// What `sinscal design` writes: design.json (docs/formats.md "Design file"), the predicted sigmas
+// over plan time as a monitor file (sigma.jsonl, the format of `calibrate --monitor`, so
+// `sinscal plot` draws it), and the terminal tables.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "filter/design/prediction.hpp"
+
+namespace sinscal {
+
+/// Where the prediction came from (recorded in design.json and the table's title).
+struct DesignInputs {
+  std::string plan, sensor, table;  // paths ("" when no table file)
+  std::string plan_name, sensor_name, table_name;
+  double attitude_sigma = 0.0;  // rad, per dwell
+  double rate_hz = 0.0;
+  double cpu_seconds = 0.0;
+};
+
+nlohmann::ordered_json design_json(const PlanPrediction& p, const DesignInputs& in);
+/// The family table (target, predicted worst sigma and its coefficient, when reached), the
+/// coefficient table (prior, predicted sigma, observed) and the unobservable combinations.
+std::string design_tables(const PlanPrediction& p, const DesignInputs& in);
+
+}  // namespace sinscal

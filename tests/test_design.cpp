@@ -1,0 +1,193 @@
+// Plan design (filter/design/prediction.hpp): the covariance pass over a plan's truth motion
+// predicts the sigmas a calibration of that plan reports and the spread of its errors; table
+// descriptions and the plan's limits against them.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdlib>
+#include <map>
+
+#include "filter/design/prediction.hpp"
+#include "helpers.hpp"
+#include "models/coefficient_families.hpp"
+#include "models/config.hpp"
+#include "models/units.hpp"
+#include "rig/table_spec.hpp"
+
+using namespace sinscal;
+
+namespace {
+
+const char* kFog = "config/sensors/nav-fog-extended.ini";
+
+struct Calibration {
+  KalmanRun run;
+  Eigen::VectorXd truth;  // SI, catalog order
+};
+
+// What `calibrate --method kf` does with a session of `plan` simulated at `rate_hz` from the
+// profile (coefficients drawn and noise, seed `seed`), the samples streamed to the filter.
+Calibration calibrate_simulated(const Plan& plan, const SensorProfile& prof,
+                                const CalibratorOptions& ko, double rate_hz, std::uint64_t seed,
+                                const TableErrors& table = {}) {
+  const Motion motion = build_motion(plan, plan.site, table);
+  Calibration c;
+  const ImuErrorModel truth = prof.draw(seed);
+  c.truth = truth.vector();
+  SimulatorOptions so;
+  so.rate_hz = rate_hz;
+  so.noise_seed = seed + 1000;
+  ImuSimulator sim(motion, truth, prof.noise, so);
+  KalmanRunOptions run;
+  run.align = false;
+  c.run = run_kalman(design_session(plan, rate_hz), ko, &sim, run);
+  return c;
+}
+
+void check_equal_sigmas(const std::string& plan_file, double rate_hz) {
+  const Plan plan = test::load_plan(plan_file);
+  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
+  const CalibratorOptions ko = calibrator_options_from_profile(prof);
+  DesignOptions d;
+  d.rate_hz = rate_hz;
+  const PlanPrediction p = predict_plan(plan, ko, prof.sigma_targets, d);
+  const Calibration c = calibrate_simulated(plan, prof, ko, rate_hz, 7);
+  const auto& cat = coefficient_catalog();
+  int compared = 0;
+  double worst = 0.0;
+  for (std::size_t i = 0; i < cat.size(); ++i) {
+    const auto& e = p.run.estimates[i];
+    REQUIRE(e.status == c.run.estimates[i].status);
+    if (e.status != CoefficientEstimate::Status::Estimated) continue;
+    CAPTURE(plan_file, cat[i].name, e.sigma, c.run.estimates[i].sigma);
+    // The acceptance: within 5 % (the pass differs from the calibration only by its
+    // linearization point, the truth instead of the estimate).
+    CHECK(e.sigma == Approx(c.run.estimates[i].sigma).epsilon(0.05));
+    worst = std::max(worst, std::abs(e.sigma / c.run.estimates[i].sigma - 1.0));
+    ++compared;
+  }
+  WARN(plan_file << ": " << compared << " sigmas, worst relative difference " << worst);
+  CHECK(compared >= 30);
+}
+
+}  // namespace
+
+TEST_CASE("Design: predicted sigmas are those the calibration of the plan reports (rot19)",
+          "[design][kalman]") {
+  check_equal_sigmas("rot19.ini", 50.0);
+}
+
+TEST_CASE("Design: predicted sigmas are those the calibration of the plan reports (seed8)",
+          "[design][kalman][long]") {
+  check_equal_sigmas("seed8.ini", 50.0);
+}
+
+TEST_CASE("Design: the error spread over simulated sessions matches the predicted sigmas",
+          "[design][kalman][long]") {
+  // Per family, the RMS over seeds and components of error / predicted sigma within 0.8-1.25
+  // (the band; with 30 seeds and 3 or more components the RMS of a consistent filter
+  // has a relative spread of at most 1/sqrt(2 * 30 * 3) = 7.5 %, so the band is 3 of them).
+  // The filter as the Kalman NEES test runs it on rot19 (tests/test_kalman.cpp): the start
+  // attitude known to the table's 2.5 arcsec (the simulated start off by that much), the
+  // errors of the turns left to the gyros, the base known. (With an attitude update at every
+  // dwell the simulator has no table-error model of independent attitudes through continuous
+  // rotations: without table errors the misalignments come out at 0.37 of their sigmas.)
+  const char* env = std::getenv("SINSCAL_DESIGN_MC_SEEDS");
+  const int seeds = env ? std::atoi(env) : 30;
+  const Plan plan = test::load_plan("rot19.ini");
+  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
+  CalibratorOptions ko = calibrator_options_from_profile(prof);
+  ko.attitude = CalibratorOptions::AttitudeUpdates::First;
+  ko.base_attitude = false;
+  DesignOptions d;
+  d.rate_hz = 20.0;
+  const PlanPrediction p = predict_plan(plan, ko, prof.sigma_targets, d);
+  const auto& cat = coefficient_catalog();
+  std::map<std::string, std::pair<double, int>> sum;  // family: sum of squares, count
+  for (int k = 0; k < seeds; ++k) {
+    TableErrors table;
+    table.start_sigma = ko.attitude_sigma;
+    table.seed = 500 + static_cast<std::uint64_t>(k);
+    const Calibration c = calibrate_simulated(plan, prof, ko, d.rate_hz, 100 + k, table);
+    for (std::size_t i = 0; i < cat.size(); ++i) {
+      if (p.run.estimates[i].status != CoefficientEstimate::Status::Estimated) continue;
+      const double z = (c.run.estimates[i].value - c.truth(static_cast<Eigen::Index>(i))) /
+                       p.run.estimates[i].sigma;
+      sum[cat[i].family].first += z * z;
+      ++sum[cat[i].family].second;
+    }
+  }
+  for (const auto& [family, s] : sum) {
+    const double rms = std::sqrt(s.first / s.second);
+    CAPTURE(family, s.second, rms);
+    WARN(family << ": RMS error / predicted sigma " << rms << " over " << s.second);
+    CHECK(rms > 0.8);
+    CHECK(rms < 1.25);
+  }
+}
+
+TEST_CASE("Design: a family's target and the time it is reached", "[design]") {
+  const Plan plan = test::load_plan("rot19.ini");
+  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
+  DesignOptions d;
+  d.rate_hz = 20.0;
+  std::map<std::string, double> targets = {{"accel.lever_arm", 2e-3}, {"gyro.bias", 1e-9}};
+  const PlanPrediction p = predict_plan(plan, calibrator_options_from_profile(prof), targets, d);
+  REQUIRE(!p.history.empty());
+  for (const auto& f : p.families) {
+    if (f.family == "accel.lever_arm") {
+      REQUIRE(f.reached_at);
+      CHECK(f.meets_target());
+      // Before the time reached some lever arm is above 2 mm, from it on none is.
+      CHECK(*f.reached_at > 70.0);
+      CHECK(*f.reached_at < p.duration);
+    }
+    if (f.family == "gyro.bias") {
+      CHECK_FALSE(f.reached_at);
+      CHECK_FALSE(f.meets_target());
+    }
+  }
+  CHECK_FALSE(p.meets_targets());
+  CHECK_FALSE(p.last_to_reach());
+}
+
+TEST_CASE("Design: table descriptions are read and checked", "[design][input]") {
+  const TableSpec t = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
+  CHECK(t.max_rate == Approx(20.0 * units::deg_per_s));
+  CHECK(t.max_acceleration == Approx(20.0 * units::deg_per_s));
+  CHECK(t.attitude_sigma == Approx(2.5 * units::arcsec));
+  CHECK(t.reference_on_axes);
+  const std::string ok =
+      "[table]\nmax_rate = 20 deg/s\nmax_acceleration = 20 deg/s^2\nattitude_accuracy = 2 "
+      "arcsec\n";
+  CHECK_NOTHROW(TableSpec::parse("t.ini", ok));
+  CHECK_THROWS_WITH(TableSpec::parse("t.ini", ok + "max_speed = 3 deg/s\n"),
+                    Catch::Contains("t.ini") && Catch::Contains("max_speed"));
+  CHECK_THROWS_WITH(TableSpec::parse("t.ini", "[table]\nmax_rate = -1 deg/s\n"),
+                    Catch::Contains("t.ini:2") && Catch::Contains("positive"));
+  CHECK_THROWS_WITH(TableSpec::parse("t.ini", "[table]\nmax_rate = 20 m/s\n"),
+                    Catch::Contains("t.ini:2"));
+  CHECK_THROWS(TableSpec::parse("t.ini", "[table]\nmax_acceleration = 20 deg/s^2\n"));
+}
+
+TEST_CASE("Design: a plan beyond the table's rate, acceleration or settling is named",
+          "[design][input]") {
+  const Plan plan = test::load_plan("rot19.ini");  // 90 deg in 9 s at 10 deg/s^2: peak 11.3 deg/s
+  const Motion m = build_motion(plan, plan.site);
+  TableSpec t = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
+  CHECK(check_against_table(m, t, 0.5).empty());
+  t.max_rate = 10.0 * units::deg_per_s;
+  auto v = check_against_table(m, t, 0.5);
+  REQUIRE(v.size() == 18);  // every turn
+  CHECK(v[0].segment == 2);
+  CHECK(v[0].what.find("peak rate 11.") != std::string::npos);
+  t.max_rate = 20.0 * units::deg_per_s;
+  t.max_acceleration = 5.0 * units::deg_per_s;
+  v = check_against_table(m, t, 0.5);
+  REQUIRE(v.size() == 18);
+  CHECK(v[0].what.find("angular acceleration 10.000") != std::string::npos);
+  t.max_acceleration = 20.0 * units::deg_per_s;
+  t.settling_time = 19.8;  // the 20 s pauses keep 0.5 s from each end
+  v = check_against_table(m, t, 0.5);
+  REQUIRE(v.size() == 18);
+  CHECK(v[0].what.find("settling") != std::string::npos);
+}
