@@ -1,5 +1,5 @@
-// libFuzzer target: LogReader over an std::istream in a custom format (rig/io/log_io.hpp). Input: two
-// option bytes choosing the format (delimiter, header lines, rates or increments, units, axis
+// libFuzzer target: LogReader over an std::istream in a custom format (rig/io/log_io.hpp). Input:
+// two option bytes choosing the format (delimiter, header lines, rates or increments, units, axis
 // mapping, time and table columns, saturation, skipping bad samples), then the log text. Every
 // error is a LogError naming the file; every sample read is finite and moves time forward.
 #include <cmath>
