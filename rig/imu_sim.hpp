@@ -4,6 +4,7 @@
 // effect and time delay are exact), then noise and quantization.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 
 #include "models/imu_error_model.hpp"
@@ -30,6 +31,9 @@ class ImuSimulator : public SampleSource {
   bool next(ImuSample& sample) override;
   /// Number of samples: enough to cover the whole motion (the IMU rests after its end).
   std::size_t total_samples() const { return total_; }
+  /// Goes on from sample `k` (0-based: the next sample read is the one ending at (k + 1) / rate);
+  /// the samples before it are skipped, not simulated.
+  void skip_to(std::size_t k) { k_ = std::min(k, total_); }
   /// Samples clipped by the measurement range so far.
   std::size_t saturated() const { return saturated_; }
 

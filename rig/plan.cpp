@@ -481,7 +481,9 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
   } else {
     Eigen::Matrix3d known = C_b_n_from_euler(plan.convention, plan.start);
     Eigen::Vector3d start_error;
-    const double start_sigma = errors.start_sigma >= 0.0 ? errors.start_sigma : errors.angle_sigma;
+    const double start_sigma = errors.start_sigma >= 0.0      ? errors.start_sigma
+                               : errors.attitude_sigma > 0.0 ? errors.attitude_sigma
+                                                             : errors.angle_sigma;
     for (int k = 0; k < 3; ++k)
       start_error(k) = start_sigma > 0.0 ? start_sigma * normal(rng) : 0.0;
     Eigen::Matrix3d actual = dcm_from_rotvec(start_error) * known;
@@ -519,6 +521,21 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
         const Eigen::Vector3d nominal_axis =
             st.kind == RotationStep::Axis::Body ? st.axis_b : st.sign * nominal.inner_axis_b();
         known = known * rotation(nominal_axis, st.angle);
+      }
+      if (st.kind == RotationStep::Axis::Body && errors.attitude_sigma > 0.0 && st.pause > 0.0) {
+        // The table sets the dwell after the turn to its accuracy, whatever the earlier dwells'
+        // errors: the turn ends at R(w) known with an independent w, turning about a nav axis
+        // by the small correction in the same time (the gyros see it).
+        Eigen::Vector3d w;
+        for (int k = 0; k < 3; ++k) w(k) = errors.attitude_sigma * normal(rng);
+        const Eigen::Matrix3d nominal_end = m.C_b_n_end();
+        const Eigen::Vector3d correction =
+            rotvec_from_dcm(dcm_from_rotvec(w) * known * nominal_end.transpose());
+        if (correction.norm() > 0.0) {
+          m.axis_n = correction.normalized();
+          m.alpha = TrapezoidProfile::by_duration(correction.norm(), profile.duration(),
+                                                  plan.move_accel);
+        }
       }
       m.t1 = t + profile.duration();
       segments.push_back(m);

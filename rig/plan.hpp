@@ -80,9 +80,12 @@ struct Plan {
 /// axis. The known attitudes of the dwells stay the plan's.
 struct TableErrors {
   double angle_sigma = 0.0;  // rad, error of each commanded table angle
-  /// rad: orientation plans: an independent error of the IMU's attitude about each navigation
-  /// axis at every orientation (wobble, mounting repeatability): the table-error model of the
-  /// estimators (rig/table.hpp TableAttitudeError)
+  /// rad: an independent error of the IMU's attitude about each navigation axis at every dwell:
+  /// the table-error model of the estimators (rig/table.hpp TableAttitudeError). Orientation
+  /// plans: a wobble of the dwell (mounting repeatability). Rotation plans: every turn about a
+  /// body axis ends at its dwell's known attitude turned by an independent error (the turn
+  /// carries the correction, so the motion stays continuous and the gyros see it), and the
+  /// start is off by it unless start_sigma is given.
   double attitude_sigma = 0.0;
   double start_sigma = -1.0;       // rad, start attitude of rotation plans (< 0: angle_sigma)
   double non_orthogonality = 0.0;  // rad

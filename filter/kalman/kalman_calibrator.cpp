@@ -257,6 +257,17 @@ void Calibrator::update(double t_plan) {
   apply(m);
 }
 
+void Calibrator::extend_timeline(const PlanTimeline& longer) {
+  bool prefix = longer.dwells.size() >= dwells_.size();
+  for (std::size_t i = 0; prefix && i < dwells_.size(); ++i)
+    prefix = std::abs(longer.dwells[i].t_start - dwells_[i].t_start) < 1e-9 &&
+             std::abs(longer.dwells[i].t_end - dwells_[i].t_end) < 1e-9;
+  if (!prefix)
+    throw std::invalid_argument("extend_timeline: the longer plan's dwells do not begin with the "
+                                "plan's so far");
+  dwells_ = longer.dwells;
+}
+
 void Calibrator::apply(const Measurement& m) {
   if (m.empty()) return;
   const int r = m.rows(), n = layout_.size;

@@ -207,6 +207,10 @@ class Calibrator {
   /// filter/kalman/measurements.hpp) to the navigator and the coefficients: at once, or when the
   /// navigation starts if it has not yet. For tests of the error dynamics and Monte Carlo runs.
   void inject_error(const Eigen::VectorXd& dx);
+  /// Plan design's search (filter/design/search.hpp): the run goes on over a longer plan, whose
+  /// dwells begin with those given so far (the same plan with further turns). Throws
+  /// std::invalid_argument when they do not.
+  void extend_timeline(const PlanTimeline& longer);
 
  private:
   void process(const ImuSample& s, const Eigen::Vector3d& omega_dot, const Eigen::Vector3d& f_dot,
