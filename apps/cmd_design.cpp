@@ -1,32 +1,21 @@
 // sinscal design: the accuracy a plan will give, predicted without data (the Kalman filter's
 // covariance over the plan's truth motion, filter/design/prediction.hpp), on a table described by
-// config/tables/*.ini; writes design.json and the sigmas over time.
+// config/tables/*.ini; with --optimize, the search for the shortest plan that meets the targets
+// (design_optimize.cpp).
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 
-#include "apps/cli.hpp"
 #include "apps/commands.hpp"
-#include "filter/design/prediction.hpp"
+#include "apps/design.hpp"
+#include "models/config.hpp"
 #include "models/units.hpp"
-#include "report/design_output.hpp"
 #include "report/monitor.hpp"
 #include "report/output.hpp"
-#include "rig/table_spec.hpp"
 
 namespace sinscal::cli {
 
-namespace {
-
-struct DesignCliOptions {
-  std::string plan, sensor, table, out, terms;
-  double rate_hz = 50.0, table_sigma = 0.0, prior_scale = kDefaultPriorScale;
-  CalibratorOptions::AttitudeUpdates attitude = CalibratorOptions::AttitudeUpdates::Every;
-};
-
-// The options `calibrate --method kf` would run the session with, from the profile and table.
 CalibratorOptions design_options(const DesignCliOptions& o, const SensorProfile& profile,
                                  const TableSpec* table) {
   CalibratorOptions ko = calibrator_options_from_profile(profile, o.prior_scale);
@@ -59,6 +48,95 @@ void check_table(const Plan& plan, const TableSpec& table, double margin) {
   throw std::runtime_error(msg);
 }
 
+std::map<std::string, double> design_targets(const DesignCliOptions& o,
+                                             const SensorProfile& profile) {
+  if (o.targets.empty()) return profile.sigma_targets;
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(o.targets, ec))
+    return read_sigma_targets(IniFile(o.targets));
+  std::string text = "[targets]\n";
+  for (char c : o.targets) text += c == ';' ? '\n' : c;
+  try {
+    return read_sigma_targets(IniFile("--targets", text));
+  } catch (const ConfigError& e) {
+    // "--targets:3: ..." names the INI line: the user wrote items separated by ';'.
+    std::string msg = e.what();
+    int line = 0;
+    if (std::sscanf(msg.c_str(), "--targets:%d:", &line) == 1 && line > 1)
+      msg = "--targets, item " + std::to_string(line - 1) + msg.substr(msg.find(':', 10));
+    throw ConfigError(msg);
+  }
+}
+
+void write_design_files(const std::string& dir, const PlanPrediction& p, const DesignInputs& in,
+                        const nlohmann::ordered_json& extra) {
+  const std::string json_path = dir + "/design.json", sigma_path = dir + "/sigma.jsonl";
+  write_atomically(sigma_path, [&](std::ostream& s) {
+    for (const auto& r : p.history) s << monitor_line(r) << "\n";
+  });
+  nlohmann::ordered_json j = design_json(p, in);
+  for (const auto& [k, v] : extra.items()) j[k] = v;
+  write_atomically(json_path, [&](std::ostream& s) { s << j.dump(2) << "\n"; });
+  std::cout << "Wrote " << json_path << " and " << sigma_path
+            << " (sigmas over time; sinscal plot-convergence draws it)\n";
+}
+
+namespace {
+
+void check_design_options(const DesignCliOptions& o, const po::variables_map& vm) {
+  if (!(o.rate_hz >= 1.0 && o.rate_hz <= 10000.0))
+    throw UsageError("--rate must be within 1 and 10000 Hz");
+  if (!(o.search_rate_hz >= 1.0 && o.search_rate_hz <= 1000.0))
+    throw UsageError("--search-rate must be within 1 and 1000 Hz");
+  if (vm.count("table-sigma") && !(o.table_sigma > 0.0 && o.table_sigma < 3600.0))
+    throw UsageError("--table-sigma must be above 0 and below 3600 arcsec");
+  if (!(o.prior_scale > 0.0 && o.prior_scale < 1e6))
+    throw UsageError("--prior-scale must be above 0 and below 1e6");
+  if (!(o.budget_s >= 0.0 && o.budget_s <= 86400.0))
+    throw UsageError("--budget-s must be within 0 and 86400 s");
+  if (!(o.beam >= 1 && o.beam <= 64)) throw UsageError("--beam must be within 1 and 64");
+  if (o.optimize && (o.table.empty() || o.out.empty()))
+    throw UsageError("--optimize needs --table (the limits to search within) and --out");
+  auto given = [&](const char* key) { return vm.count(key) && !vm[key].defaulted(); };
+  if (!o.optimize && (given("budget-s") || given("compare") || given("targets") || given("beam") ||
+                      given("search-rate")))
+    throw UsageError(
+        "--budget-s, --compare, --targets, --beam and --search-rate belong to --optimize");
+}
+
+int design_one(const DesignCliOptions& o) {
+  const Plan plan = Plan::load(o.plan);
+  if (!plan.has_site)
+    throw UsageError(o.plan + ": the plan has no [site]: design needs the latitude and height");
+  const SensorProfile profile = SensorProfile::load(o.sensor);
+  std::optional<TableSpec> table;
+  if (!o.table.empty()) table = TableSpec::load(o.table);
+  const CalibratorOptions ko = design_options(o, profile, table ? &*table : nullptr);
+  if (table) check_table(plan, *table, ko.static_margin);
+  if (!o.out.empty()) {
+    std::filesystem::create_directories(o.out);
+    check_outputs(
+        {{"plan", o.plan}, {"sensor", o.sensor}, {"table", o.table}},
+        {{"design.json", o.out + "/design.json"}, {"sigma.jsonl", o.out + "/sigma.jsonl"}});
+  }
+  DesignOptions design;
+  design.rate_hz = o.rate_hz;
+  const std::clock_t c0 = std::clock();
+  const PlanPrediction p = predict_plan(plan, ko, profile.sigma_targets, design);
+  const DesignInputs in{o.plan,
+                        o.sensor,
+                        o.table,
+                        plan.name,
+                        profile.name,
+                        table ? table->name : std::string("a table of 2-3 arcsec"),
+                        ko.attitude_sigma,
+                        o.rate_hz,
+                        static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC};
+  std::cout << design_tables(p, in);
+  if (!o.out.empty()) write_design_files(o.out, p, in);
+  return 0;
+}
+
 }  // namespace
 
 int cmd_design(const std::vector<std::string>& args) {
@@ -67,7 +145,9 @@ int cmd_design(const std::vector<std::string>& args) {
   // clang-format off
   d.add_options()
       ("help,h", "this help")
-      ("plan", po::value(&o.plan)->required(), "plan INI (config/plans/*.ini) with its [site]")
+      ("plan", po::value(&o.plan)->required(),
+       "plan INI (config/plans/*.ini) with its [site]; with --optimize the reference plan: its "
+       "site, and the plan the search is compared with")
       ("sensor", po::value(&o.sensor)->required(),
        "sensor profile (config/sensors/*.ini): noise, priors, extended families, [targets]")
       ("table", po::value(&o.table),
@@ -83,59 +163,34 @@ int cmd_design(const std::vector<std::string>& args) {
        "every"), "table-attitude updates, as calibrate --method kf: every | first | none")
       ("terms", po::value(&o.terms), "extended terms on top of the profile's, as calibrate")
       ("prior-scale", po::value(&o.prior_scale)->default_value(kDefaultPriorScale),
-       "prior sigma = this times the profile's largest coefficient magnitude");
+       "prior sigma = this times the profile's largest coefficient magnitude")
+      ("optimize", "search for the shortest plan on the table whose sigmas meet every target "
+       "(writes DIR/optimized.ini)")
+      ("targets", po::value(&o.targets),
+       "--optimize: sigma targets, a file with [targets] or \"family = value unit; ...\" "
+       "(default: the profile's [targets])")
+      ("budget-s", po::value(&o.budget_s)->default_value(0.0),
+       "--optimize: the best plan no longer than this [s] (0: the shortest that meets)")
+      ("compare", po::value(&o.compare)->multitoken(),
+       "--optimize: further plans to compare with (besides --plan)")
+      ("beam", po::value(&o.beam)->default_value(4), "--optimize: plans kept per step")
+      ("search-rate", po::value(&o.search_rate_hz)->default_value(20.0),
+       "--optimize: ideal IMU rate of the search's passes [Hz] (the result is confirmed at "
+       "--rate)");
   // clang-format on
   const auto vm = parse(
       args, d,
       "Usage: sinscal design --plan P --sensor S [--table T] [--out DIR]\n"
+      "       sinscal design --optimize --plan REF --sensor S --table T --out DIR\n"
+      "         [--targets T] [--budget-s N] [--compare P2 ...]\n"
       "The accuracy the plan will give, without data: the Kalman filter of calibrate --method kf\n"
       "run over the plan's truth motion with an ideal IMU. Prints each family's predicted sigma\n"
       "against the profile's target and when it is reached, and the combinations the plan\n"
-      "cannot observe.");
+      "cannot observe. --optimize searches rotation plans at the table's limits.");
   if (!vm) return 0;
-  if (!(o.rate_hz >= 1.0 && o.rate_hz <= 10000.0))
-    throw UsageError("--rate must be within 1 and 10000 Hz");
-  if (vm->count("table-sigma") && !(o.table_sigma > 0.0 && o.table_sigma < 3600.0))
-    throw UsageError("--table-sigma must be above 0 and below 3600 arcsec");
-  if (!(o.prior_scale > 0.0 && o.prior_scale < 1e6))
-    throw UsageError("--prior-scale must be above 0 and below 1e6");
-  const Plan plan = Plan::load(o.plan);
-  if (!plan.has_site)
-    throw UsageError(o.plan + ": the plan has no [site]: design needs the latitude and height");
-  const SensorProfile profile = SensorProfile::load(o.sensor);
-  std::optional<TableSpec> table;
-  if (!o.table.empty()) table = TableSpec::load(o.table);
-  const CalibratorOptions ko = design_options(o, profile, table ? &*table : nullptr);
-  if (table) check_table(plan, *table, ko.static_margin);
-  if (!o.out.empty()) std::filesystem::create_directories(o.out);
-  const std::string json_path = o.out.empty() ? "" : o.out + "/design.json";
-  const std::string sigma_path = o.out.empty() ? "" : o.out + "/sigma.jsonl";
-  if (!o.out.empty())
-    check_outputs({{"plan", o.plan}, {"sensor", o.sensor}, {"table", o.table}},
-                  {{"design.json", json_path}, {"sigma.jsonl", sigma_path}});
-  DesignOptions design;
-  design.rate_hz = o.rate_hz;
-  const std::clock_t c0 = std::clock();
-  const PlanPrediction p = predict_plan(plan, ko, profile.sigma_targets, design);
-  DesignInputs in{o.plan,
-                  o.sensor,
-                  o.table,
-                  plan.name,
-                  profile.name,
-                  table ? table->name : std::string("a table of 2-3 arcsec"),
-                  ko.attitude_sigma,
-                  o.rate_hz,
-                  static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC};
-  std::cout << design_tables(p, in);
-  if (!o.out.empty()) {
-    write_atomically(sigma_path, [&](std::ostream& s) {
-      for (const auto& r : p.history) s << monitor_line(r) << "\n";
-    });
-    write_atomically(json_path, [&](std::ostream& s) { s << design_json(p, in).dump(2) << "\n"; });
-    std::cout << "Wrote " << json_path << " and " << sigma_path
-              << " (sigmas over time; sinscal plot-convergence draws it)\n";
-  }
-  return 0;
+  o.optimize = vm->count("optimize") > 0;
+  check_design_options(o, *vm);
+  return o.optimize ? design_optimize(o) : design_one(o);
 }
 
 }  // namespace sinscal::cli

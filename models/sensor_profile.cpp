@@ -15,6 +15,26 @@ bool SensorProfile::has(const std::string& family) const {
   return it != ranges.end() && it->second.present();
 }
 
+std::map<std::string, double> read_sigma_targets(const IniFile& ini) {
+  for (const auto& key : ini.keys()) {
+    if (key.rfind("targets.", 0) != 0) continue;
+    try {
+      coefficient_family_info(key.substr(8));
+    } catch (const std::invalid_argument& e) {
+      throw ConfigError(ini.where(key) + "in [targets]: " + e.what());
+    }
+  }
+  std::map<std::string, double> out;
+  for (const auto& f : coefficient_families()) {
+    const std::string key = "targets." + f.name;
+    if (!ini.has(key)) continue;
+    const double v = ini.get_quantities(key, f.units, f.unit(), 1).front();
+    if (!(v > 0.0)) throw ConfigError(ini.where(key) + "a sigma target must be positive");
+    out[f.name] = v;
+  }
+  return out;
+}
+
 SensorProfile SensorProfile::load(const std::string& path) {
   const IniFile ini(path);
   SensorProfile p;
@@ -36,13 +56,7 @@ SensorProfile SensorProfile::load(const std::string& path) {
       throw ConfigError(ini.where(key) + "a range needs 0 <= lo <= hi");
     p.ranges[f.name] = r;
   }
-  for (const auto& f : coefficient_families()) {
-    const std::string key = "targets." + f.name;
-    if (!ini.has(key)) continue;
-    const double v = ini.get_quantities(key, f.units, f.unit(), 1).front();
-    if (!(v > 0.0)) throw ConfigError(ini.where(key) + "a sigma target must be positive");
-    p.sigma_targets[f.name] = v;
-  }
+  p.sigma_targets = read_sigma_targets(ini);
   using Q = QuantityKind;
   // Noise amplitudes, quanta and measurement ranges: not negative (0 or absent: none);
   // correlation times: positive.

@@ -22,6 +22,11 @@ struct CoefficientRange {
   bool present() const { return hi != 0.0 || lo != 0.0; }
 };
 
+class IniFile;
+/// The [targets] section of an INI (a sensor profile, a targets file): every family's sigma
+/// target (SI). Unknown families and targets that are not positive are errors naming the line.
+std::map<std::string, double> read_sigma_targets(const IniFile& ini);
+
 struct SensorProfile {
   std::string name;
   std::string path;

@@ -691,6 +691,15 @@ fixed 2 "shorter than the table's settling time 25.000 s" dz
 new design-rate-zero; cp "$tab" "$d/table.ini"
 fixed 1 "--rate must be within 1 and 10000 Hz" dz --rate 0
 
+new design-optimize-without-table; cp "$tab" "$d/table.ini"
+fixed 1 "--optimize needs --table" S design --optimize --plan "$src/config/plans/rot19.ini" --sensor "$fog" --out out/o
+new design-targets-unknown-family; cp "$tab" "$d/table.ini"
+fixed 2 "--targets, item 2: 'targets.gyro.drift'|in [targets]" dz --optimize --out out/o --targets "gyro.scale = 3 ppm; gyro.drift = 1 deg/h"
+new design-targets-not-positive; cp "$tab" "$d/table.ini"
+fixed 2 "'targets.gyro.scale'|must be positive" dz --optimize --out out/o --targets "gyro.scale = 0 ppm"
+new design-targets-without-optimize; cp "$tab" "$d/table.ini"
+fixed 1 "belong to --optimize" dz --targets "gyro.scale = 3 ppm"
+
 # =============================================================================================
 # KNOWN: bad input still accepted or mishandled; the fix belongs to apps/, filter/ or the result
 # and compare code. Each line says the behaviour it needs.

@@ -245,5 +245,23 @@ sed 's/^max_rate = 20 deg\/s/max_rate = 5 deg\/s/' "$src/config/tables/two-axis-
 check "design with a plan beyond the table exits 2" test $? -eq 2
 check "... naming the segment and the rates" contains "$work/design2.err" "motion segment 2 (t = 70.0 s): peak rate 11.459 deg/s above the table's 5.000 deg/s"
 
+# design --optimize: a plan for reachable targets, written as a plan file that simulate and
+# calibrate run unchanged, its predicted sigmas those the calibration reports (within 5 %).
+"$bin" design --optimize --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog-extended.ini" \
+  --table "$src/config/tables/two-axis-20.ini" --targets "gyro.scale = 3 ppm; accel.scale = 3 ppm; accel.lever_arm = 2 mm" \
+  --search-rate 10 --beam 2 --out "$work/opt" > "$work/opt.txt"
+check "design --optimize exits 0" test $? -eq 0
+check "... meets the targets" grep -qE '^optimized .* yes ' "$work/opt.txt"
+check "... compares with rot19" grep -qE '^rot19 ' "$work/opt.txt"
+"$bin" simulate --plan "$work/opt/optimized.ini" --sensor "$src/config/sensors/nav-fog-extended.ini" --out "$work/opt/session" --rate 50 --seed 5 > /dev/null
+check "simulate runs the optimized plan" test $? -eq 0
+"$bin" calibrate --session "$work/opt/session/session.ini" --method kf --out "$work/opt/result.json" > /dev/null
+check "calibrate runs the optimized plan" test $? -eq 0
+check "design's sigmas of the optimized plan are calibrate's within 5 %" python3 -c "
+import json, sys
+d = json.load(open('$work/opt/design.json')); r = json.load(open('$work/opt/result.json'))['coefficients']
+ratios = [c['predicted_sigma'] / r[c['name']]['sigma'] for c in d['coefficients']]
+sys.exit(not (len(ratios) >= 30 and all(abs(x - 1) < 0.05 for x in ratios)))"
+
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0

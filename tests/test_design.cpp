@@ -7,6 +7,7 @@
 #include <map>
 
 #include "filter/design/prediction.hpp"
+#include "filter/design/search.hpp"
 #include "helpers.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/config.hpp"
@@ -90,11 +91,15 @@ TEST_CASE("Design: the error spread over simulated sessions matches the predicte
   // on sessions whose table sets every dwell to its 2.5 arcsec (TableErrors::attitude_sigma).
   const char* env = std::getenv("SINSCAL_DESIGN_MC_SEEDS");
   const int seeds = env ? std::atoi(env) : 30;
-  const Plan plan = test::load_plan("rot19.ini");
+  // SINSCAL_DESIGN_MC_PLAN: another plan of config/plans (the documented command runs the
+  // searched plan too).
+  const char* plan_env = std::getenv("SINSCAL_DESIGN_MC_PLAN");
+  const Plan plan = test::load_plan(plan_env ? plan_env : "rot19.ini");
   const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
   const CalibratorOptions ko = calibrator_options_from_profile(prof);
   DesignOptions d;
-  d.rate_hz = 20.0;
+  const char* rate_env = std::getenv("SINSCAL_DESIGN_MC_RATE");  // Hz, of sessions and design
+  d.rate_hz = rate_env ? std::atof(rate_env) : 20.0;
   const PlanPrediction p = predict_plan(plan, ko, prof.sigma_targets, d);
   const auto& cat = coefficient_catalog();
   std::map<std::string, std::pair<double, int>> sum;  // family: sum of squares, count
@@ -185,4 +190,114 @@ TEST_CASE("Design: a plan beyond the table's rate, acceleration or settling is n
   v = check_against_table(m, t, 0.5);
   REQUIRE(v.size() == 18);
   CHECK(v[0].what.find("settling") != std::string::npos);
+}
+
+namespace {
+
+SearchOptions lab_targets() {
+  // The reference toolbox's errors on its 19-position log (issue 17), SI.
+  SearchOptions so;
+  so.targets = {{"gyro.bias", 0.0054 * units::deg_per_h},
+                {"gyro.scale", 1.4e-6},
+                {"gyro.misalignment", 0.48 * units::arcsec},
+                {"accel.bias", 2.1e-6 * 9.80665},
+                {"accel.scale", 1.2e-6},
+                {"accel.misalignment", 0.30 * units::arcsec},
+                {"accel.k2", 2.2e-6 / 9.80665},
+                {"accel.lever_arm", 2.1e-3},
+                {"time_delay", 0.05e-3}};
+  return so;
+}
+
+}  // namespace
+
+TEST_CASE("Plan search: a searched plan is a plan file, and its incremental passes are exact",
+          "[design][search]") {
+  const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
+  const Plan rot19 = test::load_plan("rot19.ini");
+  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
+  const CalibratorOptions ko = calibrator_options_from_profile(prof);
+  PlanGenome g;
+  g.start = 0;
+  g.start_dwell = 10.0;
+  g.turns = {
+      {2, 90.0 * units::deg, 2.5}, {0, 180.0 * units::deg, 10.0}, {5, 90.0 * units::deg, 2.5}};
+  const Plan p = plan_of(g, table, rot19.site, "searched");
+  REQUIRE(p.steps.size() == 3);
+  CHECK(p.steps[1].angle == Approx(180.0 * units::deg));
+  CHECK(p.steps[1].duration == Approx(10.0));  // 180 deg at 20 deg/s and 20 deg/s^2, on 0.1 s
+  CHECK(p.steps[2].pause == Approx(2.5));
+  // Within the table's limits, and the same plan read back from its text.
+  CHECK(check_against_table(build_motion(p, p.site), table, 0.5).empty());
+  const Plan again = Plan::parse("again.ini", plan_text(g, table, rot19.site, "searched"));
+  CHECK(again.text == p.text);
+  // The search's pass (one filter grown turn by turn) against the design's own pass over the
+  // whole plan at the same rate: the same excess.
+  SearchOptions so = lab_targets();
+  so.rate_hz = 20.0;
+  const Excess e = evaluate_genome(g, ko, table, rot19.site, so);
+  DesignOptions d;
+  d.rate_hz = 20.0;
+  const PlanPrediction full = predict_plan(p, ko, so.targets, d);
+  const Excess f = excess(full.run.estimates, so.targets);
+  CHECK(e.J == Approx(f.J).epsilon(1e-6));
+  CHECK(e.worst_family == f.worst_family);
+}
+
+TEST_CASE("Plan search: the beam against every plan of four turns", "[design][search]") {
+  // Turns of 90 deg about the 6 axes after a 10 s start with body x up, 2.5 s dwells: 6^4 =
+  // 1296 plans of four turns, all of one duration (so the beam's gain per second ranks as J).
+  const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
+  const Plan rot19 = test::load_plan("rot19.ini");
+  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
+  const CalibratorOptions ko = calibrator_options_from_profile(prof);
+  SearchOptions so = lab_targets();
+  so.rate_hz = 10.0;
+  SearchSpace space;
+  space.starts = {0};
+  space.start_dwells = {10.0};
+  space.pauses = {2.5};
+  space.angles = {90.0 * units::deg};
+  int scored = 0;
+  const auto best = enumerate_plans(ko, table, rot19.site, space, so, 4, &scored);
+  CHECK(scored == 1296);
+  for (const int beam : {1, 4}) {
+    so.beam = beam;
+    const auto found = beam_plans(ko, table, rot19.site, space, so, 4);
+    REQUIRE(found.first.turns.size() == 4);
+    CAPTURE(beam, best.second.J, found.second.J);
+    // The enumeration is the optimum: the beam cannot beat it.
+    CHECK(found.second.J >= best.second.J - 1e-9);
+    WARN("beam " << beam << ": J " << found.second.J << " against the best of " << scored
+                 << " plans " << best.second.J << " (gap "
+                 << 100.0 * (found.second.J - best.second.J) / best.second.J << " %)");
+  }
+}
+
+TEST_CASE("Plan search: the shortest plan meeting reachable targets", "[design][search]") {
+  // Targets a few minutes reach: the search meets them, and the refined plan still does.
+  const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
+  const Plan rot19 = test::load_plan("rot19.ini");
+  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
+  const CalibratorOptions ko = calibrator_options_from_profile(prof);
+  SearchOptions so;
+  so.rate_hz = 10.0;
+  so.beam = 2;
+  so.targets = {{"gyro.scale", 3e-6}, {"accel.scale", 3e-6}, {"accel.lever_arm", 2e-3}};
+  const SearchResult r = search_plan(ko, table, rot19.site, SearchSpace{}, so);
+  CHECK(r.meets);
+  CHECK(r.excess.J == 0.0);
+  CHECK(r.plan.steps.size() >= 2);
+  const double duration = build_motion(r.plan, r.plan.site).duration();
+  CHECK(duration <= r.duration_before_refinement + 1e-9);
+  CHECK(duration < 300.0);
+  // One turn fewer (the last) no longer meets them: the refinement left none to spare.
+  PlanGenome shorter = r.best;
+  shorter.turns.pop_back();
+  if (!shorter.turns.empty()) CHECK(evaluate_genome(shorter, ko, table, rot19.site, so).J > 0.0);
+  // A budget below the time they need: the best within it, not meeting.
+  so.budget_s = 40.0;
+  const SearchResult b = search_plan(ko, table, rot19.site, SearchSpace{}, so);
+  CHECK_FALSE(b.meets);
+  CHECK(build_motion(b.plan, b.plan.site).duration() <= 40.0 + 1e-9);
 }

@@ -1,0 +1,138 @@
+// sinscal design --optimize: the search for the shortest plan on a table whose predicted sigmas
+// meet every target (filter/design/search.hpp), confirmed by a covariance pass at the design
+// rate, compared with reference plans, written as a plan file that simulate and calibrate run.
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <iostream>
+
+#include "apps/design.hpp"
+#include "filter/design/search.hpp"
+#include "models/coefficient_families.hpp"
+#include "report/output.hpp"
+
+namespace sinscal::cli {
+
+namespace {
+
+struct Compared {
+  std::string name, file;
+  double duration = 0.0;
+  Excess excess;
+  bool within_table = true;
+};
+
+Compared compare_plan(const Plan& plan, const std::string& file, const CalibratorOptions& ko,
+                      const TableSpec& table, const std::map<std::string, double>& targets,
+                      double rate_hz) {
+  DesignOptions d;
+  d.rate_hz = rate_hz;
+  const PlanPrediction p = predict_plan(plan, ko, targets, d);
+  Compared c{plan.name, file, p.duration, excess(p.run.estimates, targets), true};
+  c.within_table =
+      check_against_table(build_motion(plan, plan.site), table, ko.static_margin).empty();
+  return c;
+}
+
+std::string comparison_table(const std::vector<Compared>& rows) {
+  std::string out = "\nComparison (predicted at the design rate, the same targets):\n";
+  char line[256];
+  std::snprintf(line, sizeof line, "%-14s %10s %6s %8s  %-24s %s\n", "plan", "duration", "meets",
+                "J", "worst family", "sigma/target");
+  out += line;
+  for (const auto& r : rows) {
+    std::snprintf(line, sizeof line, "%-14s %8.1f s %6s %8.3f  %-24s %.2f%s\n", r.name.c_str(),
+                  r.duration, r.excess.J <= 0.0 ? "yes" : "no", r.excess.J,
+                  r.excess.worst_family.c_str(), r.excess.worst_ratio,
+                  r.within_table ? "" : "  (beyond the table's limits)");
+    out += line;
+  }
+  return out;
+}
+
+nlohmann::ordered_json search_json(const SearchResult& r, const SearchOptions& so, double cpu,
+                                   const std::vector<Compared>& rows) {
+  nlohmann::ordered_json path = nlohmann::ordered_json::array();
+  for (const auto& s : r.path)
+    path.push_back({{"duration_s", s.duration},
+                    {"J", s.J},
+                    {"worst_ratio", s.worst_ratio},
+                    {"worst_family", s.worst_family}});
+  nlohmann::ordered_json cmp = nlohmann::ordered_json::array();
+  for (const auto& c : rows)
+    cmp.push_back({{"plan", c.name},
+                   {"file", c.file},
+                   {"duration_s", c.duration},
+                   {"meets_targets", c.excess.J <= 0.0},
+                   {"J", c.excess.J},
+                   {"worst_family", c.excess.worst_family},
+                   {"worst_ratio", c.excess.worst_ratio},
+                   {"within_table", c.within_table}});
+  return {{"search",
+           {{"beam", so.beam},
+            {"search_rate_hz", so.rate_hz},
+            {"budget_s", so.budget_s},
+            {"evaluations", r.evaluations},
+            {"cpu_s", cpu},
+            {"duration_before_refinement_s", r.duration_before_refinement},
+            {"meets_targets", r.meets},
+            {"path", path}}},
+          {"comparison", cmp}};
+}
+
+}  // namespace
+
+int design_optimize(const DesignCliOptions& o) {
+  const Plan reference = Plan::load(o.plan);
+  if (!reference.has_site)
+    throw UsageError(o.plan + ": the reference plan has no [site]: the search needs the site");
+  const SensorProfile profile = SensorProfile::load(o.sensor);
+  const TableSpec table = TableSpec::load(o.table);
+  const CalibratorOptions ko = design_options(o, profile, &table);
+  SearchOptions so;
+  so.targets = design_targets(o, profile);
+  if (so.targets.empty())
+    throw UsageError(o.sensor + ": no [targets] in the profile: give --targets");
+  so.budget_s = o.budget_s;
+  so.beam = o.beam;
+  so.rate_hz = o.search_rate_hz;
+  std::filesystem::create_directories(o.out);
+  const std::string plan_path = o.out + "/optimized.ini";
+  check_outputs({{"plan", o.plan}, {"sensor", o.sensor}, {"table", o.table}},
+                {{"optimized.ini", plan_path},
+                 {"design.json", o.out + "/design.json"},
+                 {"sigma.jsonl", o.out + "/sigma.jsonl"}});
+  const std::clock_t c0 = std::clock();
+  const SearchResult r = search_plan(ko, table, reference.site, SearchSpace{}, so);
+  const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+  write_atomically(plan_path, [&](std::ostream& s) {
+    s << plan_text(r.best, table, reference.site, "optimized");
+  });
+  const Plan best = Plan::load(plan_path);
+  DesignOptions d;
+  d.rate_hz = o.rate_hz;
+  const PlanPrediction p = predict_plan(best, ko, so.targets, d);
+  std::printf(
+      "Searched rotation plans on %s: %d covariance passes, %.1f s CPU; %.1f s before "
+      "refinement, %.1f s after.\n\n",
+      table.name.c_str(), r.evaluations, cpu, r.duration_before_refinement, p.duration);
+  const DesignInputs in{plan_path,  o.sensor,          o.table,   "optimized", profile.name,
+                        table.name, ko.attitude_sigma, o.rate_hz, cpu};
+  std::cout << design_tables(p, in);
+  std::vector<Compared> rows = {compare_plan(best, plan_path, ko, table, so.targets, o.rate_hz),
+                                compare_plan(reference, o.plan, ko, table, so.targets, o.rate_hz)};
+  for (const auto& f : o.compare)
+    rows.push_back(compare_plan(Plan::load(f), f, ko, table, so.targets, o.rate_hz));
+  std::cout << comparison_table(rows);
+  if (!r.meets)
+    std::printf(
+        "\nNo plan found%s meets every target: the best leaves %s at %.2f times its "
+        "target.\n",
+        so.budget_s > 0.0 ? " within the budget" : " within the search's limit",
+        r.excess.worst_family.c_str(), r.excess.worst_ratio);
+  write_design_files(o.out, p, in, search_json(r, so, cpu, rows));
+  std::cout << "Wrote " << plan_path << " (runs unchanged through simulate and calibrate)\n";
+  return 0;
+}
+
+}  // namespace sinscal::cli

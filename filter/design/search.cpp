@@ -1,0 +1,404 @@
+#include "filter/design/search.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+
+#include "models/coefficient_families.hpp"
+#include "models/imu_error_model.hpp"
+#include "models/units.hpp"
+#include "rig/imu_sim.hpp"
+#include "rig/timeline.hpp"
+
+namespace sinscal {
+
+namespace {
+
+const char* const kAxisNames[6] = {"+x", "-x", "+y", "-y", "+z", "-z"};
+// Heading, pitch, roll (deg, ned-frd) that put body +x, -x, +y, -y, +z, -z up.
+const double kStartAngles[6][3] = {{0, 90, 0}, {0, -90, 0}, {0, 0, -90},
+                                   {0, 0, 90}, {0, 0, 180}, {0, 0, 0}};
+constexpr double kGrid = 0.1;  // s: every duration of a searched plan is a multiple of it
+
+double on_grid(double seconds) { return std::ceil(seconds / kGrid - 1e-9) * kGrid; }
+
+// A plan's turn duration on the table: at its rate and acceleration limits, on the grid.
+double turn_duration(double angle, const TableSpec& table) {
+  return on_grid(
+      TrapezoidProfile::by_rate(angle, table.max_rate, table.max_acceleration).duration());
+}
+
+// What a search evaluation needs beside the genome.
+struct Context {
+  const CalibratorOptions& options;
+  const TableSpec& table;
+  const Site& site;
+  const SearchOptions& search;
+  double limit = 1e300;  // s: plans longer than this are not kept
+};
+
+CalibratorOptions design_filter_options(const CalibratorOptions& options) {
+  CalibratorOptions o = options;
+  o.time_offset = 0.0;
+  o.initial_model.reset();
+  o.static_from = CalibratorOptions::StaticFrom::Plan;
+  o.use_table_angles = false;
+  return o;
+}
+
+// A covariance pass over a genome's plan that can be extended by further turns: the filter is
+// kept unfinished after the plan's last sample; an extension copies it and runs the new turn
+// and dwell only (the samples before are the same in the longer plan).
+class Grower {
+ public:
+  Grower(const PlanGenome& genome, const Context& c) : g_(genome) {
+    const Plan plan = plan_of(g_, c.table, c.site, c.search.name);
+    kf_ = std::make_shared<Calibrator>(PlanTimeline::of(plan, c.site), c.site,
+                                       design_filter_options(c.options));
+    run(plan, c);
+  }
+  Grower extended(const TurnChoice& turn, const Context& c) const {
+    Grower next = *this;
+    next.kf_ = std::make_shared<Calibrator>(*kf_);  // the copy goes on, this one stays
+    next.g_.turns.push_back(turn);
+    const Plan plan = plan_of(next.g_, c.table, c.site, c.search.name);
+    next.kf_->extend_timeline(PlanTimeline::of(plan, c.site));
+    next.run(plan, c);
+    return next;
+  }
+  Excess score(const Context& c) const {
+    Calibrator done = *kf_;
+    done.finish();
+    return excess(done.estimate(), c.search.targets);
+  }
+  const PlanGenome& genome() const { return g_; }
+  double duration() const { return duration_; }
+
+ private:
+  void run(const Plan& plan, const Context& c) {
+    const Motion motion = build_motion(plan, c.site);
+    SimulatorOptions so;
+    so.rate_hz = c.search.rate_hz;
+    so.noise = false;
+    ImuSimulator ideal(motion, ImuErrorModel{}, NoiseModel{}, so);
+    ideal.skip_to(pushed_);
+    ImuSample s;
+    while (ideal.next(s)) kf_->push(s);
+    pushed_ = ideal.total_samples();
+    duration_ = motion.duration();
+  }
+  PlanGenome g_;
+  std::shared_ptr<Calibrator> kf_;  // not shared while it runs: extended() copies it first
+  std::size_t pushed_ = 0;
+  double duration_ = 0.0;
+};
+
+std::vector<TurnChoice> turn_options(const SearchSpace& space) {
+  std::vector<TurnChoice> out;
+  for (int axis = 0; axis < 6; ++axis)
+    for (double angle : space.angles)
+      for (double pause : space.pauses) out.push_back({axis, angle, pause});
+  return out;
+}
+
+SearchSpace completed(SearchSpace space, const TableSpec& table) {
+  if (space.angles.empty()) space.angles = {90.0 * units::deg, 180.0 * units::deg};
+  if (space.pauses.empty()) space.pauses = {on_grid(table.settling_time + 1.0 + 0.5), 10.0};
+  if (space.starts.empty() || space.start_dwells.empty())
+    throw std::invalid_argument("plan search: no start orientation or start dwell to search");
+  return space;
+}
+
+struct Member {
+  Grower grower;
+  Excess excess;
+  SearchStep step() const {
+    return {grower.duration(), excess.J, excess.worst_ratio, excess.worst_family};
+  }
+};
+
+// The members' extensions by every turn option, ranked by the decrease of J per second.
+std::vector<Member> expand(const std::vector<Member>& beam, const std::vector<TurnChoice>& turns,
+                           const Context& c, int& evaluations) {
+  std::vector<Member> children;
+  std::vector<double> gain;
+  for (const Member& m : beam)
+    for (const TurnChoice& t : turns) {
+      Grower g = m.grower.extended(t, c);
+      if (g.duration() > c.limit + 1e-9) continue;
+      const Excess e = g.score(c);
+      ++evaluations;
+      gain.push_back((m.excess.J - e.J) / std::max(1e-9, g.duration() - m.grower.duration()));
+      children.push_back(Member{std::move(g), e});
+    }
+  std::vector<std::size_t> order(children.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return gain[a] != gain[b] ? gain[a] > gain[b] : children[a].excess.J < children[b].excess.J;
+  });
+  std::vector<Member> out;
+  for (std::size_t i = 0; i < order.size() && static_cast<int>(out.size()) < c.search.beam; ++i)
+    out.push_back(children[order[i]]);
+  return out;
+}
+
+// Plans of one turn (a rotation plan has at least one), from every start and start dwell: the
+// best `beam` of them by J.
+std::vector<Member> initial_beam(const SearchSpace& space, const std::vector<TurnChoice>& turns,
+                                 const Context& c, int& evaluations) {
+  std::vector<Member> all;
+  for (int start : space.starts)
+    for (double dwell : space.start_dwells)
+      for (const TurnChoice& t : turns) {
+        PlanGenome g;
+        g.start = start;
+        g.start_dwell = on_grid(dwell);
+        g.turns = {t};
+        Grower grower(g, c);
+        if (grower.duration() > c.limit + 1e-9) continue;
+        const Excess e = grower.score(c);
+        ++evaluations;
+        all.push_back({std::move(grower), e});
+      }
+  std::vector<std::size_t> order(all.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return all[a].excess.J < all[b].excess.J; });
+  std::vector<Member> kept;
+  for (std::size_t i = 0; i < order.size() && static_cast<int>(kept.size()) < c.search.beam; ++i)
+    kept.push_back(all[order[i]]);
+  return kept;
+}
+
+bool meets(const Excess& e) { return e.J <= 0.0; }
+
+// Turns removed, dwells shortened while the plan still meets every target.
+PlanGenome refine(PlanGenome g, const Context& c, int& evaluations) {
+  auto ok = [&](const PlanGenome& trial) {
+    ++evaluations;
+    return meets(evaluate_genome(trial, c.options, c.table, c.site, c.search));
+  };
+  const double min_pause = on_grid(c.table.settling_time + 1.0 + 0.5);
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t i = g.turns.size(); i-- > 0 && g.turns.size() > 1;) {
+      PlanGenome trial = g;
+      trial.turns.erase(trial.turns.begin() + static_cast<std::ptrdiff_t>(i));
+      if (ok(trial)) {
+        g = trial;
+        changed = true;
+      }
+    }
+    for (std::size_t i = 0; i < g.turns.size(); ++i) {
+      if (g.turns[i].pause <= min_pause) continue;
+      PlanGenome trial = g;
+      trial.turns[i].pause = std::max(min_pause, on_grid(0.5 * g.turns[i].pause));
+      if (ok(trial)) {
+        g = trial;
+        changed = true;
+      }
+    }
+    if (g.start_dwell > min_pause) {
+      PlanGenome trial = g;
+      trial.start_dwell = std::max(min_pause, on_grid(0.5 * g.start_dwell));
+      if (ok(trial)) {
+        g = trial;
+        changed = true;
+      }
+    }
+  }
+  return g;
+}
+
+}  // namespace
+
+std::string plan_text(const PlanGenome& g, const TableSpec& table, const Site& site,
+                      const std::string& name) {
+  if (g.start < 0 || g.start > 5) throw std::invalid_argument("plan search: start out of range");
+  std::ostringstream out;
+  out.precision(12);
+  out << "# Searched by sinscal design --optimize for the table " << table.name
+      << ": turns at its limits (" << table.max_rate / units::deg_per_s << " deg/s, "
+      << table.max_acceleration / units::deg_per_s << " deg/s^2).\n"
+      << "[plan]\nname = " << name << "\ntype = rotations\nconvention = ned-frd\n"
+      << "rotation_acceleration = " << table.max_acceleration / units::deg_per_s << " deg/s^2\n"
+      << "\n[site]\nlatitude = " << site.lat_rad / units::deg
+      << " deg\nlongitude = " << site.lon_rad / units::deg << " deg\nheight = " << site.h_m
+      << " m\n"
+      << "\n[start]\nheading = " << kStartAngles[g.start][0]
+      << " deg\npitch = " << kStartAngles[g.start][1] << " deg\nroll = " << kStartAngles[g.start][2]
+      << " deg\ndwell = " << g.start_dwell << " s\n";
+  if (g.turns.empty()) return out.str();
+  std::string axes, angles, durations, pauses;
+  char buf[64];
+  for (const auto& t : g.turns) {
+    axes += std::string(axes.empty() ? "" : " ") + kAxisNames[t.axis];
+    std::snprintf(buf, sizeof buf, "%s%.6g", angles.empty() ? "" : " ", t.angle / units::deg);
+    angles += buf;
+    std::snprintf(buf, sizeof buf, "%s%.1f", durations.empty() ? "" : " ",
+                  turn_duration(t.angle, table));
+    durations += buf;
+    std::snprintf(buf, sizeof buf, "%s%.1f", pauses.empty() ? "" : " ", t.pause);
+    pauses += buf;
+  }
+  out << "\n[rotations]\naxes = " << axes << "\nangles = " << angles
+      << " deg\ndurations = " << durations << " s\npauses = " << pauses << " s\n";
+  return out.str();
+}
+
+Plan plan_of(const PlanGenome& g, const TableSpec& table, const Site& site,
+             const std::string& name) {
+  Plan p = Plan::parse(name + ".ini", plan_text(g, table, site, name));
+  return p;
+}
+
+Excess excess(const std::vector<CoefficientEstimate>& estimates,
+              const std::map<std::string, double>& targets) {
+  std::map<std::string, double> worst;  // family: sigma / target
+  const auto& cat = coefficient_catalog();
+  for (std::size_t i = 0; i < cat.size(); ++i) {
+    if (estimates[i].status != CoefficientEstimate::Status::Estimated) continue;
+    const auto t = targets.find(cat[i].family);
+    if (t == targets.end() || !(t->second > 0.0)) continue;
+    double& w = worst[cat[i].family];
+    w = std::max(w, estimates[i].sigma / t->second);
+  }
+  Excess e;
+  for (const auto& [family, ratio] : worst) {
+    e.J += std::max(0.0, std::log(ratio));
+    if (ratio > e.worst_ratio) {
+      e.worst_ratio = ratio;
+      e.worst_family = family;
+    }
+  }
+  return e;
+}
+
+Excess evaluate_genome(const PlanGenome& genome, const CalibratorOptions& options,
+                       const TableSpec& table, const Site& site, const SearchOptions& search) {
+  const Context c{options, table, site, search};
+  return Grower(genome, c).score(c);
+}
+
+SearchResult search_plan(const CalibratorOptions& options, const TableSpec& table, const Site& site,
+                         const SearchSpace& space_in, const SearchOptions& search) {
+  if (search.targets.empty()) throw std::invalid_argument("plan search: no targets");
+  const SearchSpace space = completed(space_in, table);
+  const double limit = search.budget_s > 0.0 ? search.budget_s : search.max_duration;
+  const Context c{options, table, site, search, limit};
+  SearchResult r;
+  const auto turns = turn_options(space);
+  std::vector<Member> beam = initial_beam(space, turns, c, r.evaluations);
+  std::optional<Member> best;  // meeting: the shortest; else (budget) the smallest J
+  std::vector<std::vector<SearchStep>> paths(beam.size());
+  for (std::size_t i = 0; i < beam.size(); ++i) paths[i] = {beam[i].step()};
+  std::vector<SearchStep> best_path;
+  for (;;) {
+    for (std::size_t i = 0; i < beam.size(); ++i) {
+      const Member& m = beam[i];
+      if (m.grower.duration() > limit + 1e-9) continue;
+      const bool better = !best ||
+                          (meets(m.excess) && (!meets(best->excess) ||
+                                               m.grower.duration() < best->grower.duration())) ||
+                          (!meets(best->excess) && m.excess.J < best->excess.J);
+      if (better) {
+        best = m;
+        best_path = paths[i];
+      }
+    }
+    if (best && meets(best->excess)) break;
+    std::vector<Member> next = expand(beam, turns, c, r.evaluations);
+    std::vector<std::vector<SearchStep>> next_paths;
+    for (const Member& m : next) {
+      // The parent: the beam member whose genome is the child's without its last turn.
+      PlanGenome parent = m.grower.genome();
+      parent.turns.pop_back();
+      std::size_t k = 0;
+      for (; k < beam.size(); ++k)
+        if (beam[k].grower.genome().turns.size() == parent.turns.size() &&
+            plan_text(beam[k].grower.genome(), table, site, "p") ==
+                plan_text(parent, table, site, "p"))
+          break;
+      auto path = k < paths.size() ? paths[k] : std::vector<SearchStep>{};
+      path.push_back(m.step());
+      next_paths.push_back(path);
+    }
+    beam = std::move(next);
+    paths = std::move(next_paths);
+    const bool all_beyond = std::all_of(beam.begin(), beam.end(), [&](const Member& m) {
+      return m.grower.duration() > limit + 1e-9;
+    });
+    if (beam.empty() || all_beyond) break;
+  }
+  if (!best) throw std::runtime_error("plan search: no plan within the time limit");
+  r.path = best_path;
+  r.duration_before_refinement = best->grower.duration();
+  r.best = best->grower.genome();
+  if (meets(best->excess)) r.best = refine(r.best, c, r.evaluations);
+  r.plan = plan_of(r.best, table, site, search.name);
+  r.excess = evaluate_genome(r.best, options, table, site, search);
+  ++r.evaluations;
+  r.meets = meets(r.excess);
+  return r;
+}
+
+std::pair<PlanGenome, Excess> enumerate_plans(const CalibratorOptions& options,
+                                              const TableSpec& table, const Site& site,
+                                              const SearchSpace& space_in,
+                                              const SearchOptions& search, int turns, int* scored) {
+  const SearchSpace space = completed(space_in, table);
+  const Context c{options, table, site, search};
+  PlanGenome root;
+  root.start = space.starts.front();
+  root.start_dwell = on_grid(space.start_dwells.front());
+  const auto options_list = turn_options(space);
+  std::pair<PlanGenome, Excess> best{root, Excess{1e300, 0.0, ""}};
+  int count = 0;
+  // Depth first: each prefix's filter is shared by its extensions.
+  std::vector<std::pair<Grower, int>> stack;
+  for (const TurnChoice& t : options_list) {
+    PlanGenome g = root;
+    g.turns = {t};
+    stack.emplace_back(Grower(g, c), 1);
+  }
+  while (!stack.empty()) {
+    auto [g, depth] = std::move(stack.back());
+    stack.pop_back();
+    if (depth == turns) {
+      const Excess e = g.score(c);
+      ++count;
+      if (e.J < best.second.J) best = {g.genome(), e};
+      continue;
+    }
+    for (const TurnChoice& t : options_list) stack.emplace_back(g.extended(t, c), depth + 1);
+  }
+  if (scored) *scored = count;
+  return best;
+}
+
+std::pair<PlanGenome, Excess> beam_plans(const CalibratorOptions& options, const TableSpec& table,
+                                         const Site& site, const SearchSpace& space_in,
+                                         const SearchOptions& search, int turns) {
+  const SearchSpace space = completed(space_in, table);
+  const Context c{options, table, site, search};
+  PlanGenome root;
+  root.start = space.starts.front();
+  root.start_dwell = on_grid(space.start_dwells.front());
+  const auto options_list = turn_options(space);
+  int evaluations = 0;
+  SearchSpace one = space;
+  one.starts = {space.starts.front()};
+  one.start_dwells = {space.start_dwells.front()};
+  std::vector<Member> beam = initial_beam(one, options_list, c, evaluations);
+  for (int k = 1; k < turns; ++k) beam = expand(beam, options_list, c, evaluations);
+  const auto it = std::min_element(beam.begin(), beam.end(), [](const Member& a, const Member& b) {
+    return a.excess.J < b.excess.J;
+  });
+  return {it->grower.genome(), it->excess};
+}
+
+}  // namespace sinscal

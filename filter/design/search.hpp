@@ -1,0 +1,111 @@
+// Plan design, second part: the search for the shortest plan whose predicted sigmas meet every
+// target on a given table (or the plan of smallest excess within a time budget).
+//
+// Plans searched: rotation plans about body axes, executed at the table's rate and acceleration
+// limits: a start orientation (a body axis up or down, as a two-axis table sets it) with its
+// dwell, then turns of 90 or 180 deg about +-x, +-y, +-z, each followed by a dwell. The
+// objective is the excess of the predicted sigmas over their targets,
+//   J = sum over families of max(0, ln(sigma_f / target_f)),  sigma_f the family's worst sigma,
+// zero when every target is met. The search is a beam search over the turns (each extension of
+// a plan is scored by the decrease of J per second of table time it costs), its predictions an
+// incremental covariance pass (one filter per beam member, copied and run over the new turn
+// only), then a refinement of the best plan: turns removed and dwells shortened while the
+// targets stay met (or J does not grow), every change confirmed by a full pass.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "filter/design/prediction.hpp"
+#include "rig/table_spec.hpp"
+
+namespace sinscal {
+
+/// One turn of a searched plan.
+struct TurnChoice {
+  int axis = 0;        // 0..5: +x -x +y -y +z -z (body axes)
+  double angle = 0.0;  // rad, positive
+  double pause = 0.0;  // s, the dwell after it
+};
+
+/// A searched plan before it is written as a plan file.
+struct PlanGenome {
+  int start = 0;             // 0..5: body +x, -x, +y, -y, +z, -z up at the start
+  double start_dwell = 0.0;  // s
+  std::vector<TurnChoice> turns;
+};
+
+struct SearchSpace {
+  std::vector<int> starts = {0, 1, 2, 3, 4, 5};
+  std::vector<double> start_dwells = {10.0, 30.0};  // s
+  std::vector<double> angles;                       // rad (default: 90 and 180 deg)
+  std::vector<double> pauses;  // s (default: the shortest dwell the table allows, and 10 s)
+};
+
+struct SearchOptions {
+  std::map<std::string, double> targets;  // by family, SI
+  double budget_s = 0.0;  // > 0: the best plan no longer than this; 0: the shortest that meets
+  double max_duration = 1800.0;  // s: the search gives up beyond (no budget)
+  int beam = 4;
+  double rate_hz = 20.0;  // of the ideal IMU in the search (the result is confirmed at 50 Hz)
+  std::string name = "optimized";
+};
+
+/// The plan file of a genome on `table` at `site` (docs/formats.md, type = rotations): turns at
+/// the table's acceleration, durations rounded up to 0.1 s so that every segment starts on a
+/// sample of the search's rates.
+std::string plan_text(const PlanGenome& genome, const TableSpec& table, const Site& site,
+                      const std::string& name);
+Plan plan_of(const PlanGenome& genome, const TableSpec& table, const Site& site,
+             const std::string& name);
+
+/// The objective J of the estimates (catalog order, SI) against the targets; also the worst
+/// ratio sigma / target over every targeted coefficient and the family it belongs to.
+struct Excess {
+  double J = 0.0;
+  double worst_ratio = 0.0;
+  std::string worst_family;
+};
+Excess excess(const std::vector<CoefficientEstimate>& estimates,
+              const std::map<std::string, double>& targets);
+
+struct SearchStep {
+  double duration = 0.0;  // s, of the plan so far
+  double J = 0.0;
+  double worst_ratio = 0.0;
+  std::string worst_family;
+};
+
+struct SearchResult {
+  PlanGenome best;
+  Plan plan;                     // `best` as a plan (plan_of)
+  Excess excess;                 // of the best, from the search's pass
+  bool meets = false;            // every target met
+  int evaluations = 0;           // covariance passes, incremental and full
+  std::vector<SearchStep> path;  // the best plan's growth, turn by turn (before refinement)
+  double duration_before_refinement = 0.0;
+};
+
+/// The search. Throws std::invalid_argument for an empty space or no targets.
+SearchResult search_plan(const CalibratorOptions& options, const TableSpec& table, const Site& site,
+                         const SearchSpace& space, const SearchOptions& search);
+
+/// The excess of one genome by a full covariance pass (the search's rate).
+Excess evaluate_genome(const PlanGenome& genome, const CalibratorOptions& options,
+                       const TableSpec& table, const Site& site, const SearchOptions& search);
+
+/// Exhaustive search over every sequence of `turns` turns of the space (one start, one start
+/// dwell, each turn from the angles and pauses): the smallest J, for the optimality gap of the
+/// beam on cases small enough to enumerate. Also returns how many sequences were scored.
+std::pair<PlanGenome, Excess> enumerate_plans(const CalibratorOptions& options,
+                                              const TableSpec& table, const Site& site,
+                                              const SearchSpace& space, const SearchOptions& search,
+                                              int turns, int* scored = nullptr);
+/// The beam search restricted to exactly `turns` turns from the same space (no refinement): the
+/// plan it finds for the gap.
+std::pair<PlanGenome, Excess> beam_plans(const CalibratorOptions& options, const TableSpec& table,
+                                         const Site& site, const SearchSpace& space,
+                                         const SearchOptions& search, int turns);
+
+}  // namespace sinscal
