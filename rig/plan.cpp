@@ -481,7 +481,7 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
   } else {
     Eigen::Matrix3d known = C_b_n_from_euler(plan.convention, plan.start);
     Eigen::Vector3d start_error;
-    const double start_sigma = errors.start_sigma >= 0.0      ? errors.start_sigma
+    const double start_sigma = errors.start_sigma >= 0.0     ? errors.start_sigma
                                : errors.attitude_sigma > 0.0 ? errors.attitude_sigma
                                                              : errors.angle_sigma;
     for (int k = 0; k < 3; ++k)
@@ -533,8 +533,8 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
             rotvec_from_dcm(dcm_from_rotvec(w) * known * nominal_end.transpose());
         if (correction.norm() > 0.0) {
           m.axis_n = correction.normalized();
-          m.alpha = TrapezoidProfile::by_duration(correction.norm(), profile.duration(),
-                                                  plan.move_accel);
+          m.alpha =
+              TrapezoidProfile::by_duration(correction.norm(), profile.duration(), plan.move_accel);
         }
       }
       m.t1 = t + profile.duration();

@@ -263,8 +263,9 @@ void Calibrator::extend_timeline(const PlanTimeline& longer) {
     prefix = std::abs(longer.dwells[i].t_start - dwells_[i].t_start) < 1e-9 &&
              std::abs(longer.dwells[i].t_end - dwells_[i].t_end) < 1e-9;
   if (!prefix)
-    throw std::invalid_argument("extend_timeline: the longer plan's dwells do not begin with the "
-                                "plan's so far");
+    throw std::invalid_argument(
+        "extend_timeline: the longer plan's dwells do not begin with the "
+        "plan's so far");
   dwells_ = longer.dwells;
 }
 
