@@ -9,6 +9,7 @@
 
 #include "apps/commands.hpp"
 #include "apps/design.hpp"
+#include "filter/design/robustness.hpp"
 #include "models/config.hpp"
 #include "models/units.hpp"
 #include "report/monitor.hpp"
@@ -95,6 +96,8 @@ void check_design_options(const DesignCliOptions& o, const po::variables_map& vm
   if (!(o.budget_s >= 0.0 && o.budget_s <= 86400.0))
     throw UsageError("--budget-s must be within 0 and 86400 s");
   if (!(o.beam >= 1 && o.beam <= 64)) throw UsageError("--beam must be within 1 and 64");
+  if (o.robustness != 0 && !(o.robustness >= 2 && o.robustness <= 1000))
+    throw UsageError("--robustness must be within 2 and 1000 seeds");
   if (o.optimize && (o.table.empty() || o.out.empty()))
     throw UsageError("--optimize needs --table (the limits to search within) and --out");
   auto given = [&](const char* key) { return vm.count(key) && !vm[key].defaulted(); };
@@ -133,7 +136,14 @@ int design_one(const DesignCliOptions& o) {
                         o.rate_hz,
                         static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC};
   std::cout << design_tables(p, in);
-  if (!o.out.empty()) write_design_files(o.out, p, in);
+  nlohmann::ordered_json extra;
+  if (o.robustness > 0) {
+    const auto rows =
+        robustness(plan, profile, ko, standard_perturbations(), o.robustness, o.rate_hz);
+    std::cout << robustness_table(rows, o.robustness, o.rate_hz);
+    extra["robustness"] = robustness_json(rows, o.robustness, o.rate_hz);
+  }
+  if (!o.out.empty()) write_design_files(o.out, p, in, extra);
   return 0;
 }
 
@@ -164,6 +174,9 @@ int cmd_design(const std::vector<std::string>& args) {
       ("terms", po::value(&o.terms), "extended terms on top of the profile's, as calibrate")
       ("prior-scale", po::value(&o.prior_scale)->default_value(kDefaultPriorScale),
        "prior sigma = this times the profile's largest coefficient magnitude")
+      ("robustness", po::value(&o.robustness)->default_value(0),
+       "N simulated sessions per perturbation (the table 2x worse, the reference point 50 mm off "
+       "the axes, the noise 2x): RMS of error / predicted sigma per family")
       ("optimize", "search for the shortest plan on the table whose sigmas meet every target "
        "(writes DIR/optimized.ini)")
       ("targets", po::value(&o.targets),

@@ -111,4 +111,50 @@ std::string design_tables(const PlanPrediction& p, const DesignInputs& in) {
   return out;
 }
 
+std::string robustness_table(const std::vector<RobustnessRow>& rows, int seeds, double rate_hz) {
+  if (rows.empty()) return "";
+  std::string out =
+      fmt("\nRobustness: RMS of error / predicted sigma per family over %.0f", seeds) +
+      fmt(" simulated sessions at %.0f Hz (1: as predicted)\n", rate_hz);
+  char cell[64];
+  std::snprintf(cell, sizeof cell, "%-30s", "");
+  out += cell;
+  for (const auto& [family, r] : rows.front().rms_ratio) {
+    std::string shortname = family;
+    for (const char* prefix : {"gyro.", "accel."})
+      if (shortname.rfind(prefix, 0) == 0)
+        shortname = (prefix[0] == 'g' ? "g." : "a.") + shortname.substr(std::string(prefix).size());
+    std::snprintf(cell, sizeof cell, " %11.11s", shortname.c_str());
+    out += cell;
+  }
+  out += "\n";
+  for (const auto& row : rows) {
+    std::snprintf(cell, sizeof cell, "%-30.30s", row.perturbation.c_str());
+    out += cell;
+    for (const auto& [family, r] : rows.front().rms_ratio) {
+      const auto it = row.rms_ratio.find(family);
+      std::snprintf(cell, sizeof cell, " %11.2f", it == row.rms_ratio.end() ? 0.0 : it->second);
+      out += cell;
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+nlohmann::ordered_json robustness_json(const std::vector<RobustnessRow>& rows, int seeds,
+                                       double rate_hz) {
+  nlohmann::ordered_json j = {{"seeds", seeds}, {"rate_hz", rate_hz}};
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const auto& row : rows) {
+    nlohmann::ordered_json fams = nlohmann::ordered_json::object();
+    for (const auto& [family, r] : row.rms_ratio) fams[family] = r;
+    list.push_back({{"perturbation", row.perturbation},
+                    {"rms_error_over_sigma", fams},
+                    {"worst_family", row.worst_family},
+                    {"worst", row.worst}});
+  }
+  j["runs"] = list;
+  return j;
+}
+
 }  // namespace sinscal

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "filter/design/prediction.hpp"
+#include "filter/design/robustness.hpp"
 
 namespace sinscal {
 
@@ -23,5 +24,10 @@ nlohmann::ordered_json design_json(const PlanPrediction& p, const DesignInputs& 
 /// The family table (target, predicted worst sigma and its coefficient, when reached), the
 /// coefficient table (prior, predicted sigma, observed) and the unobservable combinations.
 std::string design_tables(const PlanPrediction& p, const DesignInputs& in);
+
+/// The robustness runs as a table (a row per perturbation, a column per family) and as JSON.
+std::string robustness_table(const std::vector<RobustnessRow>& rows, int seeds, double rate_hz);
+nlohmann::ordered_json robustness_json(const std::vector<RobustnessRow>& rows, int seeds,
+                                       double rate_hz);
 
 }  // namespace sinscal

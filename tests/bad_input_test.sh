@@ -697,6 +697,8 @@ new design-targets-unknown-family; cp "$tab" "$d/table.ini"
 fixed 2 "--targets, item 2: 'targets.gyro.drift'|in [targets]" dz --optimize --out out/o --targets "gyro.scale = 3 ppm; gyro.drift = 1 deg/h"
 new design-targets-not-positive; cp "$tab" "$d/table.ini"
 fixed 2 "'targets.gyro.scale'|must be positive" dz --optimize --out out/o --targets "gyro.scale = 0 ppm"
+new design-robustness-one-seed; cp "$tab" "$d/table.ini"
+fixed 1 "--robustness must be within 2 and 1000 seeds" dz --robustness 1
 new design-targets-without-optimize; cp "$tab" "$d/table.ini"
 fixed 1 "belong to --optimize" dz --targets "gyro.scale = 3 ppm"
 

@@ -263,5 +263,11 @@ d = json.load(open('$work/opt/design.json')); r = json.load(open('$work/opt/resu
 ratios = [c['predicted_sigma'] / r[c['name']]['sigma'] for c in d['coefficients']]
 sys.exit(not (len(ratios) >= 30 and all(abs(x - 1) < 0.05 for x in ratios)))"
 
+"$bin" design --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog-extended.ini" \
+  --robustness 2 --rate 10 --out "$work/robust" > "$work/robust.txt"
+check "design --robustness exits 0" test $? -eq 0
+check "... prints the table 2x worse row" grep -qE '^table 2x worse +[0-9]' "$work/robust.txt"
+check "... and writes it to design.json" python3 -c "import json,sys; d=json.load(open('$work/robust/design.json')); sys.exit(len(d['robustness']['runs']) != 4)"
+
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0

@@ -7,6 +7,7 @@
 #include <map>
 
 #include "filter/design/prediction.hpp"
+#include "filter/design/robustness.hpp"
 #include "filter/design/search.hpp"
 #include "helpers.hpp"
 #include "models/coefficient_families.hpp"
@@ -300,4 +301,33 @@ TEST_CASE("Plan search: the shortest plan meeting reachable targets", "[design][
   const SearchResult b = search_plan(ko, table, rot19.site, SearchSpace{}, so);
   CHECK_FALSE(b.meets);
   CHECK(build_motion(b.plan, b.plan.site).duration() <= 40.0 + 1e-9);
+}
+
+TEST_CASE("Design robustness: the nominal world as predicted, twice the noise twice the errors",
+          "[design][robustness]") {
+  // rot19 at 20 Hz, 8 sessions per perturbation. Nominal: the RMS of error / predicted sigma of
+  // a family of n errors has a relative spread of 1/sqrt(2 n) (n >= 24: 14 %), so 0.6-1.45 is
+  // beyond 2.5 of them. Twice the white noise: the families the noise limits (scale factors,
+  // K2) come out near 2 (their sigma is noise-limited on this plan), the misalignments, which
+  // the table's attitude accuracy limits, stay near 1; a table twice worse does the opposite.
+  const Plan plan = test::load_plan("rot19.ini");
+  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
+  const CalibratorOptions ko = calibrator_options_from_profile(prof);
+  const auto rows = robustness(plan, prof, ko, standard_perturbations(), 8, 20.0);
+  REQUIRE(rows.size() == 4);
+  for (const auto& [family, r] : rows[0].rms_ratio) {
+    CAPTURE(family, r);
+    CHECK(r > 0.6);
+    CHECK(r < 1.45);
+  }
+  const auto& table2 = rows[1].rms_ratio;
+  const auto& noise2 = rows[3].rms_ratio;
+  CHECK(noise2.at("accel.scale") > 1.5);
+  CHECK(noise2.at("accel.k2") > 1.5);
+  CHECK(noise2.at("accel.misalignment") < 1.45);
+  CHECK(table2.at("accel.misalignment") > 1.4);
+  CHECK(table2.at("gyro.misalignment") > 1.4);
+  CHECK(table2.at("accel.scale") < 1.45);
+  CHECK_THROWS_AS(robustness(plan, prof, ko, standard_perturbations(), 1, 20.0),
+                  std::invalid_argument);
 }
