@@ -2,6 +2,7 @@
 // covariance over the plan's truth motion, filter/design/prediction.hpp), on a table described by
 // config/tables/*.ini; with --optimize, the search for the shortest plan that meets the targets
 // (design_optimize.cpp).
+#include <algorithm>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
@@ -9,6 +10,7 @@
 
 #include "apps/commands.hpp"
 #include "apps/design.hpp"
+#include "filter/design/advice.hpp"
 #include "filter/design/robustness.hpp"
 #include "models/config.hpp"
 #include "models/units.hpp"
@@ -137,6 +139,9 @@ int design_one(const DesignCliOptions& o) {
                         static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC};
   std::cout << design_tables(p, in);
   nlohmann::ordered_json extra;
+  const auto advice = separation_advice(plan, ko, p, std::min(o.rate_hz, 20.0));
+  std::cout << advice_table(advice);
+  if (!advice.empty()) extra["separation_advice"] = advice_json(advice);
   if (o.robustness > 0) {
     const auto rows =
         robustness(plan, profile, ko, standard_perturbations(), o.robustness, o.rate_hz);

@@ -111,6 +111,37 @@ std::string design_tables(const PlanPrediction& p, const DesignInputs& in) {
   return out;
 }
 
+std::string advice_table(const std::vector<SeparationAdvice>& advice) {
+  if (advice.empty()) return "";
+  std::string out =
+      "\nFamilies the plan does not observe, and the turn that separates each best:\n";
+  for (const auto& a : advice) {
+    const std::string unit = coefficient_family_info(a.family).unit();
+    out += "  " + a.family + ": sigma " + fmt("%.4g", in_unit(a.family, a.sigma_before)) + " " +
+           unit + " (prior " + fmt("%.4g", in_unit(a.family, a.prior)) + ")";
+    if (a.turn.empty())
+      out += "; no single turn about a body axis improves it\n";
+    else
+      out += "; append " + a.turn + ": " + fmt("%.4g", in_unit(a.family, a.sigma_after)) + " " +
+             unit + (a.observed_after ? " (observed)" : " (still not observed)") + "\n";
+  }
+  return out;
+}
+
+nlohmann::ordered_json advice_json(const std::vector<SeparationAdvice>& advice) {
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const auto& a : advice)
+    list.push_back({{"family", a.family},
+                    {"unit", coefficient_family_info(a.family).unit()},
+                    {"predicted_sigma", in_unit(a.family, a.sigma_before)},
+                    {"prior_sigma", in_unit(a.family, a.prior)},
+                    {"turn", a.turn.empty() ? nlohmann::ordered_json(nullptr)
+                                            : nlohmann::ordered_json(a.turn)},
+                    {"predicted_sigma_with_turn", in_unit(a.family, a.sigma_after)},
+                    {"observed_with_turn", a.observed_after}});
+  return list;
+}
+
 std::string robustness_table(const std::vector<RobustnessRow>& rows, int seeds, double rate_hz) {
   if (rows.empty()) return "";
   std::string out =

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "filter/design/advice.hpp"
 #include "filter/design/prediction.hpp"
 #include "filter/design/robustness.hpp"
 
@@ -25,6 +26,9 @@ nlohmann::ordered_json design_json(const PlanPrediction& p, const DesignInputs& 
 /// coefficient table (prior, predicted sigma, observed) and the unobservable combinations.
 std::string design_tables(const PlanPrediction& p, const DesignInputs& in);
 
+/// The identifiability advice: per family the plan does not observe, the turn that separates it.
+std::string advice_table(const std::vector<SeparationAdvice>& advice);
+nlohmann::ordered_json advice_json(const std::vector<SeparationAdvice>& advice);
 /// The robustness runs as a table (a row per perturbation, a column per family) and as JSON.
 std::string robustness_table(const std::vector<RobustnessRow>& rows, int seeds, double rate_hz);
 nlohmann::ordered_json robustness_json(const std::vector<RobustnessRow>& rows, int seeds,

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <map>
 
+#include "filter/design/advice.hpp"
 #include "filter/design/prediction.hpp"
 #include "filter/design/robustness.hpp"
 #include "filter/design/search.hpp"
@@ -330,4 +331,36 @@ TEST_CASE("Design robustness: the nominal world as predicted, twice the noise tw
   CHECK(table2.at("accel.scale") < 1.45);
   CHECK_THROWS_AS(robustness(plan, prof, ko, standard_perturbations(), 1, 20.0),
                   std::invalid_argument);
+}
+
+TEST_CASE("Design advice: the turn that separates a family the plan does not observe",
+          "[design][advice]") {
+  // Turns about y only: the accelerometer misalignments and bias, with x and z never turned,
+  // are not observed; a turn about z is what separates them. rot19 observes every family.
+  const Plan rot19 = test::load_plan("rot19.ini");
+  std::string text = rot19.text;
+  const auto at = text.find("axes = ");
+  REQUIRE(at != std::string::npos);
+  text.replace(at, text.find('\n', at) - at, "axes = +y +y +y -y -y -y");
+  const Plan yonly = Plan::parse("y-only.ini", text);
+  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
+  const CalibratorOptions ko = calibrator_options_from_profile(prof);
+  DesignOptions d;
+  d.rate_hz = 20.0;
+  const PlanPrediction p = predict_plan(yonly, ko, {}, d);
+  const auto advice = separation_advice(yonly, ko, p, 20.0);
+  bool misalignment = false;
+  for (const auto& a : advice) {
+    CAPTURE(a.family, a.turn, a.sigma_before, a.sigma_after);
+    CHECK(a.sigma_after <= a.sigma_before);
+    if (a.family == "accel.misalignment") {
+      misalignment = true;
+      CHECK(a.turn.find('z') != std::string::npos);
+      CHECK(a.observed_after);
+      CHECK(a.sigma_after < 0.1 * a.sigma_before);
+    }
+  }
+  CHECK(misalignment);
+  const PlanPrediction full = predict_plan(rot19, ko, {}, d);
+  CHECK(separation_advice(rot19, ko, full, 20.0).empty());
 }
