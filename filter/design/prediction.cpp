@@ -75,6 +75,15 @@ std::optional<std::pair<std::string, double>> PlanPrediction::last_to_reach() co
   return last;
 }
 
+CalibratorOptions design_filter_options(const CalibratorOptions& options) {
+  CalibratorOptions o = options;
+  o.time_offset = 0.0;
+  o.initial_model.reset();  // linearized about the truth: zero errors
+  o.static_from = CalibratorOptions::StaticFrom::Plan;
+  o.use_table_angles = false;
+  return o;
+}
+
 Session design_session(const Plan& plan, double rate_hz) {
   if (!plan.has_site)
     throw std::invalid_argument(plan.path +
@@ -82,7 +91,6 @@ Session design_session(const Plan& plan, double rate_hz) {
                                 "and height the table stands at");
   Session s;
   s.path = plan.path;
-  s.dir = "";
   s.name = plan.name;
   s.site = plan.site;
   s.rate_hz = rate_hz;
@@ -102,11 +110,7 @@ PlanPrediction predict_plan(const Plan& plan, const CalibratorOptions& options,
   sim.rate_hz = design.rate_hz;
   sim.noise = false;
   ImuSimulator ideal(motion, ImuErrorModel{}, NoiseModel{}, sim);
-  CalibratorOptions o = options;
-  o.time_offset = 0.0;
-  o.initial_model.reset();  // linearized about the truth: zero errors
-  o.static_from = CalibratorOptions::StaticFrom::Plan;
-  o.use_table_angles = false;
+  const CalibratorOptions o = design_filter_options(options);
   PlanPrediction p;
   p.duration = motion.duration();
   KalmanRunOptions run;

@@ -54,6 +54,10 @@ struct PlanPrediction {
 /// file (the options carry the profile's content).
 Session design_session(const Plan& plan, double rate_hz);
 
+/// The calibration's options as the design runs them: linearized about the truth (zero errors),
+/// the dwells from the plan's timing, no log time offset, no table-angle columns.
+CalibratorOptions design_filter_options(const CalibratorOptions& options);
+
 /// The covariance pass over `plan`. `options`: as the calibration would run (from the sensor
 /// profile and the table); `targets`: sigma targets by family (SI). Throws std::invalid_argument
 /// for a plan without a site.

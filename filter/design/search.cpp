@@ -41,15 +41,6 @@ struct Context {
   double limit = 1e300;  // s: plans longer than this are not kept
 };
 
-CalibratorOptions design_filter_options(const CalibratorOptions& options) {
-  CalibratorOptions o = options;
-  o.time_offset = 0.0;
-  o.initial_model.reset();
-  o.static_from = CalibratorOptions::StaticFrom::Plan;
-  o.use_table_angles = false;
-  return o;
-}
-
 // A covariance pass over a genome's plan that can be extended by further turns: the filter is
 // kept unfinished after the plan's last sample; an extension copies it and runs the new turn
 // and dwell only (the samples before are the same in the longer plan).
@@ -116,6 +107,7 @@ SearchSpace completed(SearchSpace space, const TableSpec& table) {
 struct Member {
   Grower grower;
   Excess excess;
+  std::vector<SearchStep> path;  // its growth, turn by turn
   SearchStep step() const {
     return {grower.duration(), excess.J, excess.worst_ratio, excess.worst_family};
   }
@@ -133,7 +125,8 @@ std::vector<Member> expand(const std::vector<Member>& beam, const std::vector<Tu
       const Excess e = g.score(c);
       ++evaluations;
       gain.push_back((m.excess.J - e.J) / std::max(1e-9, g.duration() - m.grower.duration()));
-      children.push_back(Member{std::move(g), e});
+      children.push_back(Member{std::move(g), e, m.path});
+      children.back().path.push_back(children.back().step());
     }
   std::vector<std::size_t> order(children.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
@@ -162,7 +155,8 @@ std::vector<Member> initial_beam(const SearchSpace& space, const std::vector<Tur
         if (grower.duration() > c.limit + 1e-9) continue;
         const Excess e = grower.score(c);
         ++evaluations;
-        all.push_back({std::move(grower), e});
+        all.push_back({std::move(grower), e, {}});
+        all.back().path = {all.back().step()};
       }
   std::vector<std::size_t> order(all.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
@@ -252,8 +246,7 @@ std::string plan_text(const PlanGenome& g, const TableSpec& table, const Site& s
 
 Plan plan_of(const PlanGenome& g, const TableSpec& table, const Site& site,
              const std::string& name) {
-  Plan p = Plan::parse(name + ".ini", plan_text(g, table, site, name));
-  return p;
+  return Plan::parse(name + ".ini", plan_text(g, table, site, name));
 }
 
 Excess excess(const std::vector<CoefficientEstimate>& estimates,
@@ -294,48 +287,20 @@ SearchResult search_plan(const CalibratorOptions& options, const TableSpec& tabl
   const auto turns = turn_options(space);
   std::vector<Member> beam = initial_beam(space, turns, c, r.evaluations);
   std::optional<Member> best;  // meeting: the shortest; else (budget) the smallest J
-  std::vector<std::vector<SearchStep>> paths(beam.size());
-  for (std::size_t i = 0; i < beam.size(); ++i) paths[i] = {beam[i].step()};
-  std::vector<SearchStep> best_path;
   for (;;) {
-    for (std::size_t i = 0; i < beam.size(); ++i) {
-      const Member& m = beam[i];
-      if (m.grower.duration() > limit + 1e-9) continue;
+    for (const Member& m : beam) {
       const bool better = !best ||
                           (meets(m.excess) && (!meets(best->excess) ||
                                                m.grower.duration() < best->grower.duration())) ||
                           (!meets(best->excess) && m.excess.J < best->excess.J);
-      if (better) {
-        best = m;
-        best_path = paths[i];
-      }
+      if (better) best = m;
     }
     if (best && meets(best->excess)) break;
-    std::vector<Member> next = expand(beam, turns, c, r.evaluations);
-    std::vector<std::vector<SearchStep>> next_paths;
-    for (const Member& m : next) {
-      // The parent: the beam member whose genome is the child's without its last turn.
-      PlanGenome parent = m.grower.genome();
-      parent.turns.pop_back();
-      std::size_t k = 0;
-      for (; k < beam.size(); ++k)
-        if (beam[k].grower.genome().turns.size() == parent.turns.size() &&
-            plan_text(beam[k].grower.genome(), table, site, "p") ==
-                plan_text(parent, table, site, "p"))
-          break;
-      auto path = k < paths.size() ? paths[k] : std::vector<SearchStep>{};
-      path.push_back(m.step());
-      next_paths.push_back(path);
-    }
-    beam = std::move(next);
-    paths = std::move(next_paths);
-    const bool all_beyond = std::all_of(beam.begin(), beam.end(), [&](const Member& m) {
-      return m.grower.duration() > limit + 1e-9;
-    });
-    if (beam.empty() || all_beyond) break;
+    beam = expand(beam, turns, c, r.evaluations);
+    if (beam.empty()) break;  // every extension beyond the limit
   }
   if (!best) throw std::runtime_error("plan search: no plan within the time limit");
-  r.path = best_path;
+  r.path = best->path;
   r.duration_before_refinement = best->grower.duration();
   r.best = best->grower.genome();
   if (meets(best->excess)) r.best = refine(r.best, c, r.evaluations);
@@ -385,9 +350,6 @@ std::pair<PlanGenome, Excess> beam_plans(const CalibratorOptions& options, const
                                          const SearchOptions& search, int turns) {
   const SearchSpace space = completed(space_in, table);
   const Context c{options, table, site, search};
-  PlanGenome root;
-  root.start = space.starts.front();
-  root.start_dwell = on_grid(space.start_dwells.front());
   const auto options_list = turn_options(space);
   int evaluations = 0;
   SearchSpace one = space;
