@@ -104,9 +104,10 @@ void check_design_options(const DesignCliOptions& o, const po::variables_map& vm
     throw UsageError("--optimize needs --table (the limits to search within) and --out");
   auto given = [&](const char* key) { return vm.count(key) && !vm[key].defaulted(); };
   if (!o.optimize && (given("budget-s") || given("compare") || given("targets") || given("beam") ||
-                      given("search-rate")))
+                      given("search-rate") || given("require")))
     throw UsageError(
-        "--budget-s, --compare, --targets, --beam and --search-rate belong to --optimize");
+        "--budget-s, --compare, --targets, --require, --beam and --search-rate belong to "
+        "--optimize");
 }
 
 int design_one(const DesignCliOptions& o) {
@@ -187,6 +188,9 @@ int cmd_design(const std::vector<std::string>& args) {
       ("targets", po::value(&o.targets),
        "--optimize: sigma targets, a file with [targets] or \"family = value unit; ...\" "
        "(default: the profile's [targets])")
+      ("require", po::value(&o.require)->multitoken(),
+       "--optimize: families the plan must determine (sigma at most half the prior), e.g. "
+       "accel.lever_arm time_delay; without --targets the search targets these only")
       ("budget-s", po::value(&o.budget_s)->default_value(0.0),
        "--optimize: the best plan no longer than this [s] (0: the shortest that meets)")
       ("compare", po::value(&o.compare)->multitoken(),
@@ -200,7 +204,7 @@ int cmd_design(const std::vector<std::string>& args) {
       args, d,
       "Usage: sinscal design --plan P --sensor S [--table T] [--out DIR]\n"
       "       sinscal design --optimize --plan REF --sensor S --table T --out DIR\n"
-      "         [--targets T] [--budget-s N] [--compare P2 ...]\n"
+      "         [--targets T] [--require FAMILY ...] [--budget-s N] [--compare P2 ...]\n"
       "The accuracy the plan will give, without data: the Kalman filter of calibrate --method kf\n"
       "run over the plan's truth motion with an ideal IMU. Prints each family's predicted sigma\n"
       "against the profile's target and when it is reached, and the combinations the plan\n"

@@ -90,12 +90,23 @@ int design_optimize(const DesignCliOptions& o) {
   const TableSpec table = TableSpec::load(o.table);
   const CalibratorOptions ko = design_options(o, profile, &table);
   SearchOptions so;
-  so.targets = design_targets(o, profile);
-  if (so.targets.empty())
-    throw UsageError(o.sensor + ": no [targets] in the profile: give --targets");
   so.budget_s = o.budget_s;
   so.beam = o.beam;
   so.rate_hz = o.search_rate_hz;
+  // With --require only, the search targets the required families alone.
+  if (o.require.empty() || !o.targets.empty()) so.targets = design_targets(o, profile);
+  if (!o.require.empty()) {
+    DesignOptions d;
+    d.rate_hz = so.rate_hz;
+    try {
+      so.targets =
+          required_targets(so.targets, o.require, predict_plan(reference, ko, {}, d).run.estimates);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--require: ") + e.what());
+    }
+  }
+  if (so.targets.empty())
+    throw UsageError(o.sensor + ": no [targets] in the profile: give --targets or --require");
   std::filesystem::create_directories(o.out);
   const std::string plan_path = o.out + "/optimized.ini";
   check_outputs({{"plan", o.plan}, {"sensor", o.sensor}, {"table", o.table}},
@@ -130,7 +141,12 @@ int design_optimize(const DesignCliOptions& o) {
         "target.\n",
         so.budget_s > 0.0 ? " within the budget" : " within the search's limit",
         r.excess.worst_family.c_str(), r.excess.worst_ratio);
-  write_design_files(o.out, p, in, search_json(r, so, cpu, rows));
+  nlohmann::ordered_json extra = search_json(r, so, cpu, rows);
+  if (!o.require.empty()) {
+    std::cout << required_table(o.require, p, so.targets);
+    extra["search"]["required"] = required_json(o.require, p, so.targets);
+  }
+  write_design_files(o.out, p, in, extra);
   std::cout << "Wrote " << plan_path << " (runs unchanged through simulate and calibrate)\n";
   return 0;
 }

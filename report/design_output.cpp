@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 
 #include "models/coefficient_families.hpp"
 #include "models/imu_error_model.hpp"
@@ -113,14 +114,18 @@ std::string design_tables(const PlanPrediction& p, const DesignInputs& in) {
 
 std::string advice_table(const std::vector<SeparationAdvice>& advice) {
   if (advice.empty()) return "";
+  const bool turns = advice.front().kind == "turn";
   std::string out =
-      "\nFamilies the plan does not observe, and the turn that separates each best:\n";
+      turns ? "\nFamilies the plan does not observe, and the turn that separates each best:\n"
+            : "\nFamilies the plan does not observe, and the orientation that separates each "
+              "best:\n";
   for (const auto& a : advice) {
     const std::string unit = coefficient_family_info(a.family).unit();
     out += "  " + a.family + ": sigma " + fmt("%.4g", in_unit(a.family, a.sigma_before)) + " " +
            unit + " (prior " + fmt("%.4g", in_unit(a.family, a.prior)) + ")";
     if (a.turn.empty())
-      out += "; no single turn about a body axis improves it\n";
+      out += turns ? "; no single turn about a body axis improves it\n"
+                   : "; no added orientation improves it (static dwells cannot: it needs turns)\n";
     else
       out += "; append " + a.turn + ": " + fmt("%.4g", in_unit(a.family, a.sigma_after)) + " " +
              unit + (a.observed_after ? " (observed)" : " (still not observed)") + "\n";
@@ -130,15 +135,61 @@ std::string advice_table(const std::vector<SeparationAdvice>& advice) {
 
 nlohmann::ordered_json advice_json(const std::vector<SeparationAdvice>& advice) {
   nlohmann::ordered_json list = nlohmann::ordered_json::array();
-  for (const auto& a : advice)
+  for (const auto& a : advice) {
+    const auto text =
+        a.turn.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(a.turn);
+    const bool turn = a.kind == "turn";
     list.push_back({{"family", a.family},
                     {"unit", coefficient_family_info(a.family).unit()},
                     {"predicted_sigma", in_unit(a.family, a.sigma_before)},
                     {"prior_sigma", in_unit(a.family, a.prior)},
-                    {"turn", a.turn.empty() ? nlohmann::ordered_json(nullptr)
-                                            : nlohmann::ordered_json(a.turn)},
+                    {"append_kind", a.kind},
+                    {"turn", turn ? text : nlohmann::ordered_json(nullptr)},
+                    {"orientation", turn ? nlohmann::ordered_json(nullptr) : text},
                     {"predicted_sigma_with_turn", in_unit(a.family, a.sigma_after)},
                     {"observed_with_turn", a.observed_after}});
+  }
+  return list;
+}
+
+namespace {
+
+const FamilyPrediction& family_of(const PlanPrediction& p, const std::string& family) {
+  for (const auto& f : p.families)
+    if (f.family == family) return f;
+  throw std::logic_error("design: no prediction for " + family);
+}
+
+}  // namespace
+
+std::string required_table(const std::vector<std::string>& required, const PlanPrediction& p,
+                           const std::map<std::string, double>& targets) {
+  std::string out = "\nRequired families (target: half the prior sigma, or the given target):\n";
+  for (const auto& family : required) {
+    const FamilyPrediction& f = family_of(p, family);
+    char line[200];
+    const std::string unit = coefficient_family_info(family).unit();
+    std::snprintf(line, sizeof line, "  %-20s sigma %.4g %s, target %.4g %s: %s\n", family.c_str(),
+                  in_unit(family, f.worst_sigma), unit.c_str(), in_unit(family, targets.at(family)),
+                  unit.c_str(),
+                  f.observed ? "determined" : "NOT determined (in a combination the plan misses)");
+    out += line;
+  }
+  return out;
+}
+
+nlohmann::ordered_json required_json(const std::vector<std::string>& required,
+                                     const PlanPrediction& p,
+                                     const std::map<std::string, double>& targets) {
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const auto& family : required) {
+    const FamilyPrediction& f = family_of(p, family);
+    list.push_back({{"family", family},
+                    {"unit", coefficient_family_info(family).unit()},
+                    {"target", in_unit(family, targets.at(family))},
+                    {"predicted_sigma", in_unit(family, f.worst_sigma)},
+                    {"observed", f.observed}});
+  }
   return list;
 }
 

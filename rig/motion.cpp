@@ -71,7 +71,8 @@ std::vector<double> TrapezoidProfile::knots() const {
 }
 
 Eigen::Matrix3d MotionSegment::C_b_n_end() const {
-  return rotation(axis_n, alpha.angle()) * C_b_n_start * rotation(axis_b, beta.angle());
+  return rotation(axis_c_n, gamma.angle()) * rotation(axis_n, alpha.angle()) * C_b_n_start *
+         rotation(axis_b, beta.angle());
 }
 
 Motion::Motion(const Site& site, std::vector<MotionSegment> segments, std::vector<Dwell> dwells)
@@ -83,10 +84,12 @@ Motion::Motion(const Site& site, std::vector<MotionSegment> segments, std::vecto
   for (auto& s : segments_) {
     s.axis_n.normalize();
     s.axis_b.normalize();
+    s.axis_c_n.normalize();
     knots_.push_back(s.t0);
     knots_.push_back(s.t1);
     for (double k : s.alpha.knots()) knots_.push_back(s.t0 + k);
     for (double k : s.beta.knots()) knots_.push_back(s.t0 + k);
+    for (double k : s.gamma.knots()) knots_.push_back(s.t0 + k);
   }
   std::sort(knots_.begin(), knots_.end());
   knots_.erase(std::unique(knots_.begin(), knots_.end()), knots_.end());
@@ -123,15 +126,22 @@ bool Motion::table_angles(double t, double& outer, double& inner) const {
 KinematicState Motion::at(double t) const {
   const MotionSegment& s = segments_[segment_index(t)];
   const double tau = t - s.t0;
-  double al, al_d, al_dd, be, be_d, be_dd;
+  double al, al_d, al_dd, be, be_d, be_dd, ga, ga_d, ga_dd;
   s.alpha.eval(tau, al, al_d, al_dd);
   s.beta.eval(tau, be, be_d, be_dd);
+  s.gamma.eval(tau, ga, ga_d, ga_dd);
   KinematicState k;
-  k.C_b_n = rotation(s.axis_n, al) * s.C_b_n_start * rotation(s.axis_b, be);
-  const Eigen::Vector3d u_b = k.C_b_n.transpose() * s.axis_n;  // nav-fixed axis in body
-  k.omega_nb_b = al_d * u_b + be_d * s.axis_b;
-  const Eigen::Vector3d omega_dot_nb_b =
-      al_dd * u_b - al_d * be_d * s.axis_b.cross(u_b) + be_dd * s.axis_b;
+  const Eigen::Matrix3d C_c = rotation(s.axis_c_n, ga);
+  k.C_b_n = C_c * rotation(s.axis_n, al) * s.C_b_n_start * rotation(s.axis_b, be);
+  // The axes in body: u_b (the move's outer axis, fixed in the frame the correction turns) and
+  // c_b (the correction's axis, fixed in the navigation frame).
+  const Eigen::Vector3d u_b = k.C_b_n.transpose() * (C_c * s.axis_n);
+  const Eigen::Vector3d c_b = k.C_b_n.transpose() * s.axis_c_n;
+  k.omega_nb_b = ga_d * c_b + al_d * u_b + be_d * s.axis_b;
+  // d(c_b)/dt = -omega_nb_b x c_b; d(u_b)/dt = -be_d axis_b x u_b; axis_b is body-fixed.
+  const Eigen::Vector3d omega_dot_nb_b = ga_dd * c_b - ga_d * k.omega_nb_b.cross(c_b) +
+                                         al_dd * u_b - al_d * be_d * s.axis_b.cross(u_b) +
+                                         be_dd * s.axis_b;
   const Eigen::Vector3d omega_ie_b = k.C_b_n.transpose() * omega_ie_n_;
   k.imu.omega_ib_b = k.omega_nb_b + omega_ie_b;
   k.imu.omega_dot_ib_b = omega_dot_nb_b - k.omega_nb_b.cross(omega_ie_b);

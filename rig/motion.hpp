@@ -37,9 +37,12 @@ class TrapezoidProfile {
   double angle_ = 0.0, accel_ = 0.0, t_acc_ = 0.0, t_cruise_ = 0.0;
 };
 
-/// One piece of motion: C_b_n(t) = R(axis_n, alpha(t)) * C_b_n_start * R(axis_b, beta(t)), a
-/// rotation about an axis fixed in the navigation frame composed with one about an axis fixed in
-/// the body. Both profiles start at t0. A static piece has both angles zero.
+/// One piece of motion:
+///   C_b_n(t) = R(axis_c_n, gamma(t)) * R(axis_n, alpha(t)) * C_b_n_start * R(axis_b, beta(t)),
+/// a rotation about an axis fixed in the navigation frame composed with one about an axis fixed in
+/// the body; gamma is a small correction about a second navigation-frame axis that a simulated
+/// table makes during a move to set the next dwell to its accuracy (TableErrors::attitude_sigma),
+/// zero otherwise. The profiles start at t0. A static piece has every angle zero.
 struct MotionSegment {
   double t0 = 0.0;
   double t1 = 0.0;
@@ -48,7 +51,11 @@ struct MotionSegment {
   TrapezoidProfile alpha;
   Eigen::Vector3d axis_b = Eigen::Vector3d::UnitZ();
   TrapezoidProfile beta;
-  bool is_static() const { return alpha.angle() == 0.0 && beta.angle() == 0.0; }
+  Eigen::Vector3d axis_c_n = Eigen::Vector3d::UnitZ();
+  TrapezoidProfile gamma;
+  bool is_static() const {
+    return alpha.angle() == 0.0 && beta.angle() == 0.0 && gamma.angle() == 0.0;
+  }
   Eigen::Matrix3d C_b_n_end() const;
   /// Table axis angles, when the piece is a table move (alpha about the outer axis, beta about
   /// the inner one): outer = outer0 + outer_sign * alpha(t), inner likewise.

@@ -440,6 +440,7 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
 
   if (plan.type == Plan::Type::Orientations) {
     TableAngles prev{};
+    Eigen::Matrix3d actual = Eigen::Matrix3d::Identity();  // of the dwell before
     for (std::size_t i = 0; i < plan.orientations.size(); ++i) {
       const auto& o = plan.orientations[i];
       const Eigen::Matrix3d known = C_b_n_from_euler(plan.convention, o.angles);
@@ -451,7 +452,7 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
         auto wrap = [](double a) { return std::remainder(a, 2.0 * M_PI); };
         MotionSegment m;
         m.t0 = t;
-        m.C_b_n_start = truth.C_b_n(prev);
+        m.C_b_n_start = actual;
         m.axis_n = truth.geometry().outer_axis_n;
         m.alpha = TrapezoidProfile::by_rate(wrap(cmd.outer - prev.outer), plan.move_rate,
                                             plan.move_accel);
@@ -475,7 +476,19 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
       Eigen::Vector3d wobble = Eigen::Vector3d::Zero();
       if (errors.attitude_sigma > 0.0)
         for (int k = 0; k < 3; ++k) wobble(k) = errors.attitude_sigma * normal(rng);
-      add_dwell(o.label, known, dcm_from_rotvec(wobble) * truth.C_b_n(cmd), o.dwell);
+      const Eigen::Matrix3d target = dcm_from_rotvec(wobble) * truth.C_b_n(cmd);
+      if (i > 0 && segments.back().t1 > segments.back().t0) {
+        // The table sets the dwell to its accuracy during the move (the gyros see the
+        // correction, as on a real table): a small turn about a navigation-frame axis.
+        MotionSegment& m = segments.back();
+        const Eigen::Vector3d c = rotvec_from_dcm(target * m.C_b_n_end().transpose());
+        if (c.norm() > 0.0) {
+          m.axis_c_n = c.normalized();
+          m.gamma = TrapezoidProfile::by_duration(c.norm(), m.t1 - m.t0, plan.move_accel);
+        }
+      }
+      add_dwell(o.label, known, target, o.dwell);
+      actual = target;
       prev = cmd;
     }
   } else {
@@ -554,6 +567,7 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
     for (auto& s : segments) {
       s.C_b_n_start = C_base * s.C_b_n_start * C_b_p;
       s.axis_n = C_base * s.axis_n;
+      s.axis_c_n = C_base * s.axis_c_n;
       s.axis_b = C_b_p.transpose() * s.axis_b;
     }
     for (auto& d : dwells) d.C_b_n_true = C_base * d.C_b_n_true * C_b_p;

@@ -701,6 +701,12 @@ new design-robustness-one-seed; cp "$tab" "$d/table.ini"
 fixed 1 "--robustness must be within 2 and 1000 seeds" dz --robustness 1
 new design-targets-without-optimize; cp "$tab" "$d/table.ini"
 fixed 1 "belong to --optimize" dz --targets "gyro.scale = 3 ppm"
+new design-require-not-estimated; cp "$tab" "$d/table.ini"
+fixed 1 "--require: required family 'gyro.g_sensitivity' is not estimated" dz --optimize --out out/o --require gyro.g_sensitivity
+new design-require-unknown-family; cp "$tab" "$d/table.ini"
+fixed 1 "--require: required family 'gyro.drift' is not estimated" dz --optimize --out out/o --require gyro.scale gyro.drift
+new design-require-without-optimize; cp "$tab" "$d/table.ini"
+fixed 1 "belong to --optimize" dz --require accel.lever_arm
 
 # =============================================================================================
 # KNOWN: bad input still accepted or mishandled; the fix belongs to apps/, filter/ or the result

@@ -269,5 +269,40 @@ check "design --robustness exits 0" test $? -eq 0
 check "... prints the table 2x worse row" grep -qE '^table 2x worse +[0-9]' "$work/robust.txt"
 check "... and writes it to design.json" python3 -c "import json,sys; d=json.load(open('$work/robust/design.json')); sys.exit(len(d['robustness']['runs']) != 4)"
 
+# design --optimize --require: the shortest plan that determines the lever arms (they show only in
+# turns), confirmed observed by the final pass.
+"$bin" design --optimize --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog-extended.ini" \
+  --table "$src/config/tables/two-axis-20.ini" --require accel.lever_arm --search-rate 10 --beam 2 \
+  --out "$work/req" > "$work/req.txt"
+check "design --optimize --require exits 0" test $? -eq 0
+check "... says the lever arms are determined" grep -qE '^  accel.lever_arm +sigma .*: determined$' "$work/req.txt"
+check "... and records it in design.json" python3 -c "import json,sys; r=json.load(open('$work/req/design.json'))['search']['required']; sys.exit(not (r[0]['family'] == 'accel.lever_arm' and r[0]['observed']))"
+
+# design on an orientation plan that misses families: the orientation to append.
+cat > "$work/z-only.ini" <<'PLAN'
+[plan]
+name = z-only
+type = orientations
+convention = ned-frd
+move_rate = 15 deg/s
+move_acceleration = 15 deg/s^2
+[site]
+latitude = 55.75 deg
+[orientation.1]
+heading = 0 deg
+pitch = 0 deg
+roll = 0 deg
+dwell = 120 s
+[orientation.2]
+heading = 180 deg
+pitch = 0 deg
+roll = 180 deg
+dwell = 120 s
+PLAN
+"$bin" design --plan "$work/z-only.ini" --sensor "$src/config/sensors/nav-fog.ini" --rate 20 --out "$work/zonly" > "$work/zonly.txt"
+check "design of an orientation plan missing families exits 0" test $? -eq 0
+check "... names the orientation to append" grep -qE '^  accel.scale: .*append body .* (up|down), .* \(heading .*\(observed\)$' "$work/zonly.txt"
+check "... and writes it as orientation advice" python3 -c "import json,sys; a=json.load(open('$work/zonly/design.json'))['separation_advice']; sys.exit(not any(x['append_kind'] == 'orientation' and x['orientation'] and x['turn'] is None for x in a))"
+
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0

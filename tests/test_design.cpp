@@ -111,7 +111,9 @@ TEST_CASE("Design: the error spread over simulated sessions matches the predicte
     table.seed = 500 + static_cast<std::uint64_t>(k);
     const Calibration c = calibrate_simulated(plan, prof, ko, d.rate_hz, 100 + k, table);
     for (std::size_t i = 0; i < cat.size(); ++i) {
-      if (p.run.estimates[i].status != CoefficientEstimate::Status::Estimated) continue;
+      // Coefficients the plan observes: an unobserved one keeps its prior, and the profile draws
+      // its truth from its range, not from the prior, so its ratio says nothing of the filter.
+      if (!p.run.estimates[i].observed()) continue;
       const double z = (c.run.estimates[i].value - c.truth(static_cast<Eigen::Index>(i))) /
                        p.run.estimates[i].sigma;
       sum[cat[i].family].first += z * z;
@@ -304,6 +306,51 @@ TEST_CASE("Plan search: the shortest plan meeting reachable targets", "[design][
   CHECK(build_motion(b.plan, b.plan.site).duration() <= 40.0 + 1e-9);
 }
 
+TEST_CASE("Plan search: --require, the shortest plan that determines a family",
+          "[design][search]") {
+  // The lever arms and the time delay show only in turns: the search for a plan that determines
+  // them finds one of a few turns, and the full pass confirms they are observed (below prior /
+  // sqrt(2) and in no unobservable combination); one turn fewer does not determine them.
+  const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
+  const Plan rot19 = test::load_plan("rot19.ini");
+  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
+  const CalibratorOptions ko = calibrator_options_from_profile(prof);
+  DesignOptions d;
+  d.rate_hz = 10.0;
+  const PlanPrediction ref = predict_plan(rot19, ko, {}, d);
+  SearchOptions so;
+  so.rate_hz = 10.0;
+  so.beam = 2;
+  so.targets = required_targets({}, {"accel.lever_arm", "time_delay"}, ref.run.estimates);
+  REQUIRE(so.targets.size() == 2);
+  const auto& cat = coefficient_catalog();
+  for (std::size_t i = 0; i < cat.size(); ++i)
+    if (cat[i].family == "accel.lever_arm")
+      CHECK(so.targets.at("accel.lever_arm") ==
+            Approx(kRequiredFraction * ref.run.estimates[i].prior_sigma));
+  // A given target smaller than half the prior stays; a larger one is lowered.
+  CHECK(required_targets({{"time_delay", 1e-6}}, {"time_delay"}, ref.run.estimates)
+            .at("time_delay") == 1e-6);
+  CHECK(
+      required_targets({{"time_delay", 1.0}}, {"time_delay"}, ref.run.estimates).at("time_delay") ==
+      Approx(so.targets.at("time_delay")));
+  const SearchResult r = search_plan(ko, table, rot19.site, SearchSpace{}, so);
+  REQUIRE(r.meets);
+  const PlanPrediction p = predict_plan(r.plan, ko, so.targets, d);
+  for (const auto& f : p.families)
+    if (f.family == "accel.lever_arm" || f.family == "time_delay") {
+      CAPTURE(f.family, f.worst_sigma);
+      CHECK(f.observed);
+    }
+  CHECK(p.duration < 120.0);
+  PlanGenome shorter = r.best;
+  shorter.turns.pop_back();
+  if (!shorter.turns.empty()) CHECK(evaluate_genome(shorter, ko, table, rot19.site, so).J > 0.0);
+  // A family the profile does not estimate is refused by name.
+  CHECK_THROWS_WITH(required_targets({}, {"gyro.g_sensitivity"}, ref.run.estimates),
+                    Catch::Matchers::Contains("gyro.g_sensitivity"));
+}
+
 TEST_CASE("Design robustness: the nominal world as predicted, twice the noise twice the errors",
           "[design][robustness]") {
   // rot19 at 20 Hz, 8 sessions per perturbation. Nominal: the RMS of error / predicted sigma of
@@ -363,4 +410,55 @@ TEST_CASE("Design advice: the turn that separates a family the plan does not obs
   CHECK(misalignment);
   const PlanPrediction full = predict_plan(rot19, ko, {}, d);
   CHECK(separation_advice(rot19, ko, full, 20.0).empty());
+}
+
+TEST_CASE("Design advice: the orientation that separates a family an orientation plan misses",
+          "[design][advice]") {
+  // Four orientations with body z up or down: gravity never along x or y in a dwell, so the
+  // accelerometers' x and y scale factors are not observed; the advice appends an orientation
+  // of the table's reach that determines them. seed8 observes every family of nav-fog.
+  const std::string text =
+      "[plan]\nname = z-only\ntype = orientations\nconvention = ned-frd\nmove_rate = 15 deg/s\n"
+      "move_acceleration = 15 deg/s^2\n[site]\nlatitude = 55.75 deg\n"
+      "[orientation.1]\nheading = 0 deg\npitch = 0 deg\nroll = 0 deg\ndwell = 120 s\n"
+      "[orientation.2]\nheading = 90 deg\npitch = 0 deg\nroll = 0 deg\ndwell = 120 s\n"
+      "[orientation.3]\nheading = 180 deg\npitch = 0 deg\nroll = 180 deg\ndwell = 120 s\n"
+      "[orientation.4]\nheading = 270 deg\npitch = 0 deg\nroll = 180 deg\ndwell = 120 s\n";
+  const Plan zonly = Plan::parse("z-only.ini", text);
+  const SensorProfile prof = SensorProfile::load(test::source_path("config/sensors/nav-fog.ini"));
+  const CalibratorOptions ko = calibrator_options_from_profile(prof);
+  DesignOptions d;
+  d.rate_hz = 20.0;
+  const PlanPrediction p = predict_plan(zonly, ko, {}, d);
+  const auto advice = separation_advice(zonly, ko, p, 20.0);
+  bool scale = false;
+  for (const auto& a : advice) {
+    CAPTURE(a.family, a.turn, a.sigma_before, a.sigma_after);
+    CHECK(a.kind == "orientation");
+    CHECK(a.sigma_after <= a.sigma_before);
+    if (a.family == "accel.scale") {
+      scale = true;
+      CHECK(a.turn.find(" 120 s") != std::string::npos);
+      CHECK(a.observed_after);
+      CHECK(a.sigma_after < 0.3 * a.sigma_before);
+      // The advice's orientation, appended, gives the sigma it states.
+      const auto open = a.turn.find("(heading ");
+      REQUIRE(open != std::string::npos);
+      double h = 0, pt = 0, r = 0;
+      REQUIRE(std::sscanf(a.turn.c_str() + open, "(heading %lf, pitch %lf, roll %lf", &h, &pt,
+                          &r) == 3);
+      const Plan longer = Plan::parse(
+          "z-only-plus.ini", text + "[orientation.5]\nheading = " + std::to_string(h) +
+                                 " deg\npitch = " + std::to_string(pt) +
+                                 " deg\nroll = " + std::to_string(r) + " deg\ndwell = 120 s\n");
+      const PlanPrediction q = predict_plan(longer, ko, {}, d);
+      double worst = 0.0;
+      for (const auto& f : q.families)
+        if (f.family == "accel.scale") worst = f.worst_sigma;
+      CHECK(worst == Approx(a.sigma_after).epsilon(1e-6));
+    }
+  }
+  CHECK(scale);
+  const Plan seed8 = test::load_plan("seed8.ini");
+  CHECK(separation_advice(seed8, ko, predict_plan(seed8, ko, {}, d), 20.0).empty());
 }

@@ -92,6 +92,67 @@ TEST_CASE("Motion: rates and angular accelerations match finite differences", "[
   }
 }
 
+TEST_CASE("Motion: a move with a correction about a third axis matches finite differences",
+          "[motion]") {
+  // All three profiles at once and large, so that a wrong term of the kinematics shows.
+  MotionSegment s;
+  s.t0 = 0.0;
+  s.t1 = 10.0;
+  s.C_b_n_start = dcm_from_rotvec(Vector3d(0.3, -0.2, 0.5));
+  s.axis_n = Vector3d(0.2, 0.1, 1.0);
+  s.alpha = TrapezoidProfile::by_duration(1.2, 10.0, 0.5);
+  s.axis_b = Vector3d(1.0, -0.3, 0.2);
+  s.beta = TrapezoidProfile::by_duration(-0.8, 10.0, 0.4);
+  s.axis_c_n = Vector3d(-0.4, 1.0, 0.3);
+  s.gamma = TrapezoidProfile::by_duration(0.6, 10.0, 0.3);
+  MotionSegment rest;
+  rest.t0 = 10.0;
+  rest.t1 = 20.0;
+  rest.C_b_n_start = s.C_b_n_end();
+  const Motion m(Site{}, {s, rest}, {});
+  const double h = 1e-4;
+  for (double t : {0.3, 2.9, 5.0, 7.7, 9.6}) {
+    const KinematicState k = m.at(t), kp = m.at(t + h), km = m.at(t - h);
+    const Vector3d w_fd = rotvec_from_dcm(km.C_b_n.transpose() * kp.C_b_n) / (2 * h);
+    CHECK((w_fd - k.omega_nb_b).norm() < 1e-8 * (1 + k.omega_nb_b.norm()));
+    const Vector3d wd_fd = (kp.imu.omega_ib_b - km.imu.omega_ib_b) / (2 * h);
+    CHECK((wd_fd - k.imu.omega_dot_ib_b).norm() < 1e-6);
+  }
+  CHECK(rotvec_from_dcm(m.at(10.0).C_b_n * s.C_b_n_end().transpose()).norm() < 1e-12);
+}
+
+TEST_CASE(
+    "Plans: the table sets each orientation's dwell to its accuracy by a correction the "
+    "gyros see",
+    "[plan]") {
+  // TableErrors::attitude_sigma on an orientation plan: each dwell's attitude is the known one
+  // turned by an independent error, reached during the move (no jump the gyros miss).
+  const Plan s8 = test::load_plan("seed8.ini");
+  TableErrors e;
+  e.attitude_sigma = 2.5 * units::arcsec;
+  e.seed = 4;
+  const Motion m = build_motion(s8, s8.site, e);
+  double sum2 = 0.0;
+  int n = 0;
+  for (const auto& d : m.dwells()) {
+    const Vector3d w = rotvec_from_dcm(d.C_b_n_true * d.C_b_n_known.transpose());
+    sum2 += w.squaredNorm() / (units::arcsec * units::arcsec);
+    n += 3;
+  }
+  CHECK(std::sqrt(sum2 / n) > 1.0);  // 24 components of sigma 2.5 arcsec
+  CHECK(std::sqrt(sum2 / n) < 4.0);
+  // Continuity: each segment starts where the one before ends, and every dwell's attitude is
+  // the motion's there.
+  const auto& segs = m.segments();
+  for (std::size_t i = 1; i < segs.size(); ++i)
+    CHECK(rotvec_from_dcm(segs[i].C_b_n_start * segs[i - 1].C_b_n_end().transpose()).norm() <
+          1e-12);
+  for (const auto& d : m.dwells())
+    CHECK(
+        rotvec_from_dcm(m.at(0.5 * (d.t_start + d.t_end)).C_b_n * d.C_b_n_true.transpose()).norm() <
+        1e-12);
+}
+
 TEST_CASE("Plans: bad plans are clear errors naming file and line", "[plan]") {
   const std::string dir = test::temp_dir("plans");
   const std::string head =

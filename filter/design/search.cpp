@@ -271,6 +271,25 @@ Excess excess(const std::vector<CoefficientEstimate>& estimates,
   return e;
 }
 
+std::map<std::string, double> required_targets(std::map<std::string, double> targets,
+                                               const std::vector<std::string>& required,
+                                               const std::vector<CoefficientEstimate>& estimates) {
+  const auto& cat = coefficient_catalog();
+  for (const std::string& family : required) {
+    double prior = 0.0;
+    for (std::size_t i = 0; i < cat.size(); ++i)
+      if (cat[i].family == family && estimates[i].status == CoefficientEstimate::Status::Estimated)
+        prior = prior > 0.0 ? std::min(prior, estimates[i].prior_sigma) : estimates[i].prior_sigma;
+    if (!(prior > 0.0))
+      throw std::invalid_argument("required family '" + family +
+                                  "' is not estimated with this profile and these terms");
+    const double t = kRequiredFraction * prior;
+    const auto it = targets.find(family);
+    if (it == targets.end() || !(it->second > 0.0) || it->second > t) targets[family] = t;
+  }
+  return targets;
+}
+
 Excess evaluate_genome(const PlanGenome& genome, const CalibratorOptions& options,
                        const TableSpec& table, const Site& site, const SearchOptions& search) {
   const Context c{options, table, site, search};

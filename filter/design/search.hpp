@@ -87,6 +87,18 @@ struct SearchResult {
   double duration_before_refinement = 0.0;
 };
 
+/// `--require`: a family the plan must determine gets the target kRequiredFraction of its prior
+/// sigma (the rule of "observed" is 1/sqrt(2) of it; half leaves a margin), or its own target
+/// when that is smaller. Whether the found plan observes it (also outside every unobservable
+/// combination) is confirmed by the final pass.
+constexpr double kRequiredFraction = 0.5;
+/// `targets` with the `required` families added, their priors from `estimates` (any pass's: the
+/// prior does not depend on the plan). Throws std::invalid_argument naming a family that is not
+/// an estimated family of the options.
+std::map<std::string, double> required_targets(std::map<std::string, double> targets,
+                                               const std::vector<std::string>& required,
+                                               const std::vector<CoefficientEstimate>& estimates);
+
 /// The search. Throws std::invalid_argument for an empty space or no targets.
 SearchResult search_plan(const CalibratorOptions& options, const TableSpec& table, const Site& site,
                          const SearchSpace& space, const SearchOptions& search);
