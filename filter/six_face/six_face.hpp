@@ -1,0 +1,155 @@
+// Calibration by hand without a table: the six-face and known-turn procedure of Ferraris, Grimaldi
+// and Parvis (1995), as imucal records it. The unit rests on each of its six faces (a box against
+// a flat surface: "+x up" ... "-z up"), then is turned by hand about each axis, that axis up,
+// through a known total angle (360 deg). Parts are labelled in the log.
+//
+// Model (sinscal's one error model, base terms, both triads): y = A x + b, A = I + diag(k) + M,
+// in the frame of the box's faces (every misalignment estimated; none fixed by convention).
+//
+// Accelerometers, one linear least-squares problem: each face's mean specific force
+//   m_k = g A (u_k + T_k d_k) + b,
+// u_k the face's nominal up direction (body), T_k two unit vectors across it and d_k the face's
+// placement tilt (two small angles, rad) with the prior sigma `face_accuracy`: the faces are
+// known to their sign and axis only. Unknowns A (9), b (3), d (12); 18 equations plus the 12
+// priors. The sum of the tilts of opposite faces shows in the data (their common across-axis
+// reading against the bias the other faces give), their difference does not: it trades with the
+// accelerometer misalignments, which are therefore determined to about face_accuracy / sqrt(2)
+// relative to the box (named in the result). The scale factors and biases are determined to the
+// noise (the tilt changes a face's reading along its axis by its square only; the scale factors
+// are solved with the tilts' second-order term, relinearized).
+//
+// Gyros, a second linear least-squares problem with A and b known:
+//   rests:  r_k = b_g + G w_ie,k                       (mean rate of face k)
+//   turns:  W_j = G theta a_j + b_g T_j                (sum of the increments of turn j)
+// a_j the turn's axis: the direction of the calibrated mean specific force over the turn (the
+// turn is about the vertical, the turned axis up), theta the declared angle (right-handed about
+// the up-pointing axis) with sigma `turn_accuracy`: the hand's return to its start heading, which
+// no gravity reference sees, so it bounds the gyro scale factors (1 deg in 360: 0.28 %).
+// Earth rate: with a site its vertical part along each rest's up direction is modelled and its
+// horizontal part (unknown heading) is noise of (Omega cos lat)^2 / 2 per horizontal axis; without
+// a site the whole of it is noise (Omega^2 / 3 per axis): a bound stated in the sigmas, which a
+// MEMS gyro's bias far exceeds.
+// Noise: each part's per-reading variance from its own readings (white noise: a mean over n
+// readings has variance / n); a turn's sum has the rests' pooled per-reading variance times n.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "models/earth.hpp"
+#include "models/imu_error_model.hpp"
+#include "models/units.hpp"
+#include "rig/handheld.hpp"
+#include "rig/imu_sample.hpp"
+
+namespace sinscal {
+
+class SixFaceError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// The statistics of one labelled part of a log (constant memory: accumulated sample by sample).
+struct PartStatistics {
+  std::string label;
+  std::size_t count = 0;                                      // readings
+  double duration = 0.0;                                      // s, sum of the intervals
+  double t_start = 0.0, t_end = 0.0;                          // s
+  Eigen::Vector3d mean_rate = Eigen::Vector3d::Zero();        // rad/s, gyro output
+  Eigen::Vector3d mean_f = Eigen::Vector3d::Zero();           // m/s^2, accelerometer output
+  Eigen::Vector3d var_rate = Eigen::Vector3d::Zero();         // (rad/s)^2 per reading
+  Eigen::Vector3d var_f = Eigen::Vector3d::Zero();            // (m/s^2)^2 per reading
+  Eigen::Vector3d integral_dtheta = Eigen::Vector3d::Zero();  // rad, sum of the increments
+  /// The readings (rates, SI), kept for the parts whose label the accumulator was told to keep
+  /// (the turns: a few seconds each), empty otherwise.
+  std::vector<ImuReading> readings;
+};
+
+/// Accumulates parts from samples with a label each: a part is a run of samples with the same
+/// label; a label that comes back after another part is an error (parts are contiguous).
+class PartAccumulator {
+ public:
+  /// `keep`: labels whose readings are kept (the turns).
+  explicit PartAccumulator(std::vector<std::string> keep = {}) : keep_(std::move(keep)) {}
+  /// `label` empty: the sample belongs to no part (between parts). Throws SixFaceError.
+  void push(const ImuSample& sample, const std::string& label);
+  const std::vector<PartStatistics>& parts() const { return parts_; }
+
+ private:
+  std::vector<PartStatistics> parts_;
+  std::vector<std::string> keep_;
+  bool keeping_ = false;
+  std::string current_;
+  Eigen::Vector3d m2_rate_ = Eigen::Vector3d::Zero(), m2_f_ = Eigen::Vector3d::Zero();
+  void close();
+};
+
+struct SixFaceOptions {
+  /// Labels of the faces with +x, -x, +y, -y, +z, -z up (imucal's names by default), and of the
+  /// turns about x, y, z (the turned axis up).
+  std::array<std::string, 6> faces = {"x_p", "x_a", "y_p", "y_a", "z_p", "z_a"};
+  std::array<std::string, 3> turns = {"x_rot", "y_rot", "z_rot"};
+  double turn_angle = 2.0 * 3.14159265358979323846;  // rad, right-handed about the up axis
+  double turn_accuracy = 1.0 * units::deg;           // rad, 1-sigma of each turn's total angle
+  double face_accuracy = 2.0 * units::deg;           // rad, 1-sigma of each placement tilt
+  double min_rest = 1.0;                             // s: shortest face
+  double gravity = 0.0;                              // m/s^2; 0: normal gravity at `site`
+  std::optional<Site> site;  // the Earth rate's vertical part; without: noise
+  /// A turn whose integrated angle (with the nominal scaling) is farther than this from the
+  /// declared one is not the declared turn (wrong axis, direction or rate).
+  double turn_tolerance = 30.0 * units::deg;
+  /// s at each end of a turn's part whose mean specific force gives the gravity direction
+  /// before and after the turn (the part starts and ends at rest).
+  double turn_edge = 0.2;
+  /// 1-sigma of each triad's in-run bias (Gauss-Markov bias instability, from the sensor profile
+  /// when one is given): a session of minutes is shorter than its correlation time, so it is a
+  /// common offset of every rest that the readings' own scatter does not show; it adds to the
+  /// biases' variance (rad/s, m/s^2).
+  double gyro_bias_instability = 0.0, accel_bias_instability = 0.0;
+};
+
+struct SixFaceCoefficient {
+  std::string name;                 // coefficient_catalog() name
+  double value = 0.0, sigma = 0.0;  // SI
+};
+
+struct SixFaceFace {
+  std::string label;
+  double duration = 0.0;                                 // s
+  Eigen::Vector2d tilt = Eigen::Vector2d::Zero();        // rad, estimated placement tilt
+  Eigen::Vector2d tilt_sigma = Eigen::Vector2d::Zero();  // rad
+  double gravity_error = 0.0;                            // |A^-1 (m - b)| - g, m/s^2
+};
+
+struct SixFaceTurn {
+  std::string label;
+  double duration = 0.0;  // s
+  double angle = 0.0;     // rad: the calibrated gyros' angle about the turn's axis
+  Eigen::Vector3d axis = Eigen::Vector3d::Zero();  // body, unit: the mean specific force's
+};
+
+struct SixFaceResult {
+  ImuErrorModel model;                           // base terms, SI, the faces' frame
+  std::vector<SixFaceCoefficient> coefficients;  // 24 base terms, catalog order
+  std::vector<SixFaceFace> faces;
+  std::vector<SixFaceTurn> turns;
+  double gravity = 0.0;     // m/s^2 used
+  double accel_chi2 = 0.0;  // of the accelerometer fit (priors included)
+  int accel_dof = 0;
+  double earth_rate_bound = 0.0;  // rad/s: the Earth rate not modelled (noise), per axis
+  /// What the procedure cannot determine, one sentence each.
+  std::vector<std::string> undetermined;
+};
+
+/// The calibration from the parts (the nine declared labels must all be present; other labels
+/// are ignored). Throws SixFaceError naming the part and the cause: a missing or repeated part,
+/// a face shorter than min_rest, a face whose reading is not near its declared axis, a turn far
+/// from its declared angle or axis.
+SixFaceResult six_face_calibrate(const std::vector<PartStatistics>& parts,
+                                 const SixFaceOptions& options);
+
+}  // namespace sinscal

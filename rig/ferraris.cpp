@@ -1,0 +1,123 @@
+#include "rig/ferraris.hpp"
+
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include "models/attitude.hpp"
+
+namespace sinscal {
+
+namespace {
+
+const char* const kFaces[6] = {"x_p", "x_a", "y_p", "y_a", "z_p", "z_a"};
+const char* const kTurns[3] = {"x_rot", "y_rot", "z_rot"};
+
+// C_b_n with body direction `up_b` pointing up (NED: -D) at heading `psi` about the vertical.
+Eigen::Matrix3d attitude_with_up(const Eigen::Vector3d& up_b, double psi) {
+  const Eigen::Vector3d up_n(0.0, 0.0, -1.0);
+  const Eigen::Vector3d u = up_b.normalized();
+  Eigen::Matrix3d C = Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d axis = u.cross(up_n);
+  const double s = axis.norm(), c = u.dot(up_n);
+  if (s > 1e-12)
+    C = rotation(axis / s, std::atan2(s, c));
+  else if (c < 0.0)
+    C = rotation(Eigen::Vector3d::UnitX(), M_PI);
+  return rotation(up_n, psi) * C;
+}
+
+struct Builder {
+  std::vector<MotionSegment> segments;
+  double t = 0.0;
+  Eigen::Matrix3d C = Eigen::Matrix3d::Identity();
+  void rest(double duration) {
+    MotionSegment s;
+    s.t0 = t;
+    s.t1 = t + duration;
+    s.C_b_n_start = C;
+    segments.push_back(s);
+    t = s.t1;
+  }
+  void move_to(const Eigen::Matrix3d& target, double duration) {
+    const Eigen::Vector3d r = rotvec_from_dcm(target * C.transpose());
+    MotionSegment s;
+    s.t0 = t;
+    s.t1 = t + duration;
+    s.C_b_n_start = C;
+    if (r.norm() > 0.0) {
+      s.axis_n = r.normalized();
+      s.alpha =
+          TrapezoidProfile::by_duration(r.norm(), duration, 6.0 * r.norm() / (duration * duration));
+    }
+    segments.push_back(s);
+    t = s.t1;
+    C = target;
+  }
+};
+
+}  // namespace
+
+std::string FerrarisSession::label_at(double t) const {
+  for (const auto& p : parts)
+    if (t > p.t_start && t <= p.t_end) return p.label;
+  return "";
+}
+
+FerrarisSession ferraris_session(const Site& site, const FerrarisOptions& o, std::uint64_t seed) {
+  if (!(o.rest > 0.0 && o.move > 0.0 && o.pause > o.label_margin && o.turn > 0.0 &&
+        o.label_margin >= 0.0 && o.face_tilt >= 0.0 && o.turn_angle_error >= 0.0))
+    throw std::invalid_argument("ferraris_session: durations and errors must be positive");
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> heading(-M_PI, M_PI);
+  auto tilted = [&](int axis, double sign) {
+    Eigen::Vector3d u = sign * Eigen::Vector3d::Unit(axis);
+    u(static_cast<Eigen::Index>((axis + 1) % 3)) += o.face_tilt * normal(rng);
+    u(static_cast<Eigen::Index>((axis + 2) % 3)) += o.face_tilt * normal(rng);
+    return u.normalized();
+  };
+  Builder b;
+  std::vector<LabelledPart> parts;
+  b.C = attitude_with_up(tilted(0, 1.0), heading(rng));
+  b.rest(2.0);
+  for (int k = 0; k < 6; ++k) {
+    b.move_to(attitude_with_up(tilted(k / 2, k % 2 ? -1.0 : 1.0), heading(rng)), o.move);
+    parts.push_back({kFaces[k], b.t, b.t + o.rest});
+    b.rest(o.rest);
+  }
+  const Eigen::Vector3d up_n(0.0, 0.0, -1.0);
+  for (int j = 0; j < 3; ++j) {
+    b.move_to(attitude_with_up(tilted(j, 1.0), heading(rng)), o.move);
+    b.rest(o.pause);
+    // The turn: about the vertical by the declared angle plus the hand's error, while the axis
+    // leans out and back in the body (a body-axis rotation there and back: uneven rates).
+    const double angle = o.turn_angle + o.turn_angle_error * normal(rng);
+    Eigen::Vector3d lean = Eigen::Vector3d::Unit((j + 1) % 3) * normal(rng) +
+                           Eigen::Vector3d::Unit((j + 2) % 3) * normal(rng);
+    if (lean.norm() < 1e-9) lean = Eigen::Vector3d::Unit((j + 1) % 3);
+    const double half = 0.5 * o.turn;
+    const double t0 = b.t;
+    for (int h = 0; h < 2; ++h) {
+      MotionSegment s;
+      s.t0 = b.t;
+      s.t1 = b.t + half;
+      s.C_b_n_start = b.C;
+      s.axis_n = up_n;
+      s.alpha =
+          TrapezoidProfile::by_duration(0.5 * angle, half, 8.0 * std::abs(angle) / (half * half));
+      s.axis_b = lean.normalized();
+      s.beta = TrapezoidProfile::by_duration(h == 0 ? o.wobble : -o.wobble, half,
+                                             8.0 * o.wobble / (half * half) + 1e-9);
+      b.segments.push_back(s);
+      b.t = s.t1;
+      b.C = s.C_b_n_end();
+    }
+    parts.push_back({kTurns[j], t0 - o.label_margin, b.t + o.label_margin});
+    b.rest(o.pause);
+  }
+  FerrarisSession out{Motion(site, std::move(b.segments), {}), std::move(parts)};
+  return out;
+}
+
+}  // namespace sinscal

@@ -1,0 +1,47 @@
+// Simulated six-face and known-turn sessions (Ferraris et al. 1995, filter/six_face/six_face.hpp)
+// for the tests: a hand puts the unit on each of its six faces in turn (each face tilted by a
+// random placement error, at a random heading), then turns it by hand through a full turn about
+// each body axis with that axis up (the total angle off by a random error, the rate uneven: the
+// turn's axis wobbles in the body), with rests between. Every part is labelled with imucal's names.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "models/earth.hpp"
+#include "models/units.hpp"
+#include "rig/motion.hpp"
+
+namespace sinscal {
+
+struct FerrarisOptions {
+  double rest = 6.0;                           // s on each face
+  double face_tilt = 0.5 * units::deg;         // rad, 1-sigma of each face's two tilt angles
+  double move = 3.0;                           // s: the hand's move between two parts
+  double pause = 2.0;                          // s at rest before and after each turn
+  double turn = 6.0;                           // s: duration of each turn
+  double turn_angle = 360.0 * units::deg;      // rad, declared (right-handed about the up axis)
+  double turn_angle_error = 1.0 * units::deg;  // rad, 1-sigma of the angle the hand really turns
+  double wobble = 3.0 * units::deg;            // rad: the turn's axis leans this far in the body
+  double label_margin = 0.5;  // s of the rests before and after a turn inside its label
+};
+
+/// A labelled part of a simulated session.
+struct LabelledPart {
+  std::string label;
+  double t_start = 0.0, t_end = 0.0;  // s
+};
+
+struct FerrarisSession {
+  Motion motion;
+  std::vector<LabelledPart> parts;  // x_p x_a y_p y_a z_p z_a x_rot y_rot z_rot, in that order
+  /// The label of time t ("" between parts).
+  std::string label_at(double t) const;
+};
+
+/// The same seed gives the same session. Throws std::invalid_argument for bad options.
+FerrarisSession ferraris_session(const Site& site, const FerrarisOptions& options,
+                                 std::uint64_t seed);
+
+}  // namespace sinscal

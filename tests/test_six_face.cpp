@@ -1,0 +1,106 @@
+// The six-face and known-turn calibration (filter/six_face/six_face.hpp) on simulated Ferraris
+// sessions (rig/ferraris.hpp).
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <map>
+
+#include "filter/six_face/six_face.hpp"
+#include "helpers.hpp"
+#include "models/coefficient_families.hpp"
+#include "models/sensor_profile.hpp"
+#include "rig/ferraris.hpp"
+#include "rig/imu_sim.hpp"
+
+using namespace sinscal;
+
+namespace {
+
+struct Run {
+  ImuErrorModel truth;
+  SixFaceResult result;
+};
+
+// A MEMS unit (the profile's base terms; its extended terms zero unless `keep_extended`) on a
+// simulated Ferraris session at 100 Hz, calibrated with the session's own accuracies declared.
+Run run_session(std::uint64_t seed, const FerrarisOptions& fo, bool keep_extended = false) {
+  const SensorProfile prof = SensorProfile::load(test::source_path("config/sensors/mems.ini"));
+  Site site;
+  site.lat_rad = 49.6 * units::deg;
+  site.h_m = 280.0;
+  const FerrarisSession session = ferraris_session(site, fo, seed);
+  Run r;
+  r.truth = prof.draw(seed + 17);
+  if (!keep_extended) {
+    r.truth.accel.k2.setZero();
+    r.truth.gyro_g_sensitivity.setZero();
+  }
+  SimulatorOptions so;
+  so.rate_hz = 100.0;
+  so.noise_seed = seed + 31;
+  ImuSimulator sim(session.motion, r.truth, prof.noise, so);
+  PartAccumulator parts({"x_rot", "y_rot", "z_rot"});
+  ImuSample s;
+  while (sim.next(s)) parts.push(s, session.label_at(s.t - 0.5 * s.dt));
+  SixFaceOptions o;
+  o.site = site;
+  o.face_accuracy = fo.face_tilt;
+  o.turn_accuracy = fo.turn_angle_error;
+  o.gyro_bias_instability = prof.noise.gyro.bias_instability;
+  o.accel_bias_instability = prof.noise.accel.bias_instability;
+  r.result = six_face_calibrate(parts.parts(), o);
+  return r;
+}
+
+double truth_of(const ImuErrorModel& m, const std::string& name) {
+  const auto& cat = coefficient_catalog();
+  const Eigen::VectorXd v = m.vector();
+  for (std::size_t i = 0; i < cat.size(); ++i)
+    if (cat[i].name == name) return v(static_cast<Eigen::Index>(i));
+  FAIL("no coefficient " << name);
+  return 0.0;
+}
+
+}  // namespace
+
+TEST_CASE("Six-face: a simulated Ferraris session calibrates every base coefficient",
+          "[six_face]") {
+  const Run r = run_session(3, FerrarisOptions{});
+  REQUIRE(r.result.coefficients.size() == 24);
+  for (const auto& c : r.result.coefficients) {
+    const double err = c.value - truth_of(r.truth, c.name);
+    CAPTURE(c.name, c.value, err, c.sigma);
+    CHECK(c.sigma > 0.0);
+    CHECK(std::abs(err) < 4.0 * c.sigma);
+  }
+  // The turns' calibrated angles are the declared one within the hand's error.
+  for (const auto& t : r.result.turns) CHECK(std::abs(t.angle - 2.0 * M_PI) < 4.0 * units::deg);
+  CHECK(r.result.undetermined.size() >= 3);
+}
+
+TEST_CASE("Six-face: Monte Carlo, errors as the sigmas say", "[six_face][long]") {
+  // Per family, the RMS over seeds and components of error / sigma within 0.8-1.25, and at most
+  // 1 % of the coefficients beyond 3 sigma.
+  const char* env = std::getenv("SINSCAL_SIX_FACE_SEEDS");
+  const int seeds = env ? std::atoi(env) : 30;
+  std::map<std::string, std::pair<double, int>> sum;
+  int beyond = 0, total = 0;
+  for (int k = 0; k < seeds; ++k) {
+    const Run r = run_session(100 + static_cast<std::uint64_t>(k), FerrarisOptions{});
+    for (const auto& c : r.result.coefficients) {
+      const double z = (c.value - truth_of(r.truth, c.name)) / c.sigma;
+      const std::string family = c.name.substr(0, c.name.rfind('.'));
+      sum[family].first += z * z;
+      ++sum[family].second;
+      beyond += std::abs(z) > 3.0;
+      ++total;
+    }
+  }
+  for (const auto& [family, s] : sum) {
+    const double rms = std::sqrt(s.first / s.second);
+    WARN(family << ": RMS error / sigma " << rms << " over " << s.second);
+    CHECK(rms > 0.8);
+    CHECK(rms < 1.25);
+  }
+  WARN(beyond << " of " << total << " beyond 3 sigma");
+  CHECK(beyond <= total / 100 + 1);
+}
