@@ -50,6 +50,11 @@ SessionSummary calibrate_table_free_session(const CalibrateOptions& o,
                                             const std::string& session_path,
                                             const std::string& out_path, bool verbose);
 
+/// One session of the six-face and known-turn procedure (apps/calibrate_six_face.cpp).
+SessionSummary calibrate_six_face_session(const CalibrateOptions& o,
+                                          const std::string& session_path,
+                                          const std::string& out_path, bool verbose);
+
 /// One session by the options' method: the result file, the monitor file (kf, may be empty);
 /// `verbose`: tables and verdicts on standard output (a single session); `live`: the live table
 /// on the terminal. Returns the session's summary row (status by the run-status rules).

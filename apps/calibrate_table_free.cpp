@@ -42,17 +42,17 @@ void check_table_free_options(const po::variables_map& vm, const CalibrateOption
                               const std::vector<std::vector<std::string>>& table_methods_options) {
   if (o.method != Method::TableFree) {
     for (const auto& name : kTableFreeOnly)
-      if (given(vm, name))
+      if (given(vm, name) && !(o.method == Method::SixFace && name == "gravity"))
         throw UsageError("--" + name + " acts in --method table-free only, not in --method " +
                          name_of(o.method));
-    return;
+    if (o.method != Method::SixFace) return;
   }
   for (const auto& list : table_methods_options)
     for (const auto& name : list)
       if (given(vm, name))
         throw UsageError("--" + name +
-                         " is an option of the table methods (closed-form, kf), not of --method "
-                         "table-free");
+                         " is an option of the table methods (closed-form, kf), not of --method " +
+                         name_of(o.method));
   if (given(vm, "gravity") && !(o.gravity >= 9.7 && o.gravity <= 9.9))
     throw UsageError("--gravity must be within 9.7 and 9.9 m/s^2 (the Earth's surface)");
   if (!(o.pose_window > 0.0 && o.pose_window <= 60.0))

@@ -107,9 +107,11 @@ void choose(boost::any& v, const std::vector<std::string>& values,
 }  // namespace
 
 void validate(boost::any& v, const std::vector<std::string>& values, Method*, int) {
-  choose<Method>(
-      v, values,
-      {{"closed-form", Method::ClosedForm}, {"kf", Method::Kf}, {"table-free", Method::TableFree}});
+  choose<Method>(v, values,
+                 {{"closed-form", Method::ClosedForm},
+                  {"kf", Method::Kf},
+                  {"table-free", Method::TableFree},
+                  {"six-face", Method::SixFace}});
 }
 void validate(boost::any& v, const std::vector<std::string>& values, OnBadSample*, int) {
   choose<OnBadSample>(v, values, {{"stop", OnBadSample::Stop}, {"skip", OnBadSample::Skip}});
@@ -119,7 +121,10 @@ void validate(boost::any& v, const std::vector<std::string>& values, Vertical*, 
 }
 
 std::string name_of(Method m) {
-  return m == Method::Kf ? "kf" : m == Method::TableFree ? "table-free" : "closed-form";
+  return m == Method::Kf          ? "kf"
+         : m == Method::TableFree ? "table-free"
+         : m == Method::SixFace   ? "six-face"
+                                  : "closed-form";
 }
 std::string name_of(Stage1Method m) { return m == Stage1Method::Point ? "point" : "fit"; }
 std::string name_of(ErrorModelKind m) {

@@ -53,7 +53,7 @@ struct Choice {
 };
 
 /// Calibration method of `calibrate`.
-enum class Method { ClosedForm, Kf, TableFree };
+enum class Method { ClosedForm, Kf, TableFree, SixFace };
 /// What a bad sample does.
 enum class OnBadSample { Stop, Skip };
 /// The vertical channel of `navigate`.

@@ -19,7 +19,8 @@ void add_options(po::options_description& d, CalibrateOptions& o) {
   // clang-format off
   d.add_options()
       ("method", po::value(&o.method)->default_value(Method::ClosedForm, "closed-form"),
-       "closed-form | kf (error-state Kalman filter) | table-free (hand-held session, no table)")
+       "closed-form | kf (error-state Kalman filter) | table-free (hand-held session, no table) | "
+       "six-face (faces and known turns, labelled)")
       ("force", "run even when the plausibility gate fails (static gravity and Earth rate, gravity "
        "direction against the plan, saturation, stage-1 fit); the failed checks go in the result")
       ("table-sigma", po::value(&o.table_sigma)->default_value(2.5),
@@ -92,7 +93,7 @@ void check_method_options(const po::variables_map& vm, const CalibrateOptions& o
                                                    "static-rate-threshold",
                                                    "on-bad-sample"};
   check_table_free_options(vm, o, {closed_form_only, kf_only, {"table-sigma"}});
-  if (o.method == Method::TableFree) return;
+  if (o.method == Method::TableFree || o.method == Method::SixFace) return;
   const bool kf = o.method == Method::Kf;
   for (const auto& name : kf ? closed_form_only : kf_only)
     if (vm.count(name) && !vm[name].defaulted())
@@ -200,7 +201,8 @@ int cmd_calibrate(const std::vector<std::string>& args) {
   add_options(d, o);
   const auto vm = parse(
       args, d,
-      "Usage: sinscal calibrate --session DIR/session.ini --method closed-form|kf|table-free "
+      "Usage: sinscal calibrate --session DIR/session.ini --method "
+      "closed-form|kf|table-free|six-face "
       "--out result.json\n"
       "       sinscal calibrate --session DIR_OF_SESSIONS | --session-list FILE [--session ...] "
       "--out OUT_DIR\n"
@@ -211,6 +213,7 @@ int cmd_calibrate(const std::vector<std::string>& args) {
       "--stream reads the samples from standard input as they arrive.\n"
       "table-free: a hand-held session (no plan needed): static poses found in the data, both\n"
       "triads from gravity's magnitude and the turns between poses, the raw-count view.\n"
+      "six-face: the six faces and three known turns, labelled in the log ([six_face]).\n"
       "Batch (several sessions): OUT_DIR/NAME.json per session and OUT_DIR/summary.csv.");
   if (!vm) return 0;
   o.stream = vm->count("stream") > 0;

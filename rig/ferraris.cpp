@@ -2,9 +2,11 @@
 
 #include <cmath>
 #include <random>
+#include <sstream>
 #include <stdexcept>
 
 #include "models/attitude.hpp"
+#include "models/config.hpp"
 
 namespace sinscal {
 
@@ -57,6 +59,52 @@ struct Builder {
 };
 
 }  // namespace
+
+FerrarisDeclaration read_ferraris_declaration(const IniFile& ini) {
+  ini.check_keys("six_face", {"faces", "turns", "turn_angle", "turn_accuracy", "face_accuracy",
+                              "min_rest", "turn_edge"});
+  FerrarisDeclaration d;
+  auto labels = [&](const char* key, std::size_t n, auto& out) {
+    const std::string k = std::string("six_face.") + key;
+    if (!ini.has(k)) return;
+    std::istringstream in(ini.get_string(k));
+    std::vector<std::string> v;
+    for (std::string w; in >> w;) v.push_back(w);
+    if (v.size() != n)
+      throw ConfigError(ini.where(k) + "needs " + std::to_string(n) + " labels, found " +
+                        std::to_string(v.size()));
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = 0; j < i; ++j)
+        if (v[i] == v[j]) throw ConfigError(ini.where(k) + "label '" + v[i] + "' given twice");
+    for (std::size_t i = 0; i < n; ++i) out[i] = v[i];
+  };
+  labels("faces", 6, d.faces);
+  labels("turns", 3, d.turns);
+  for (const auto& f : d.faces)
+    for (const auto& t : d.turns)
+      if (f == t) throw ConfigError(ini.path() + ": label '" + f + "' is both a face and a turn");
+  auto angle = [&](const char* key, double def, double lo, double hi) {
+    const std::string k = std::string("six_face.") + key;
+    const double v = ini.get_quantity(k, QuantityKind::Angle, "deg", def);
+    if (!(std::abs(v) > lo && std::abs(v) <= hi))
+      throw ConfigError(ini.where(k) + "must be within " + std::to_string(lo / units::deg) +
+                        " and " + std::to_string(hi / units::deg) + " deg");
+    return v;
+  };
+  d.turn_angle = angle("turn_angle", d.turn_angle, 10.0 * units::deg, 3600.0 * units::deg);
+  d.turn_accuracy = angle("turn_accuracy", d.turn_accuracy, 0.0, 45.0 * units::deg);
+  d.face_accuracy = angle("face_accuracy", d.face_accuracy, 0.0, 20.0 * units::deg);
+  auto seconds = [&](const char* key, double def) {
+    const std::string k = std::string("six_face.") + key;
+    const double v = ini.get_quantity(k, QuantityKind::Time, "s", def);
+    if (!(v > 0.0 && v <= 3600.0))
+      throw ConfigError(ini.where(k) + "must be above 0 and at most 3600 s");
+    return v;
+  };
+  d.min_rest = seconds("min_rest", d.min_rest);
+  d.turn_edge = seconds("turn_edge", d.turn_edge);
+  return d;
+}
 
 std::string FerrarisSession::label_at(double t) const {
   for (const auto& p : parts)

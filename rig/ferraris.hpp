@@ -5,6 +5,7 @@
 // turn's axis wobbles in the body), with rests between. Every part is labelled with imucal's names.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -14,6 +15,26 @@
 #include "rig/motion.hpp"
 
 namespace sinscal {
+
+/// What a six-face session declares ([six_face] in session.ini, docs/formats.md): the labels of
+/// its parts and how well the hand did them.
+struct FerrarisDeclaration {
+  /// Labels of the faces with +x, -x, +y, -y, +z, -z up (imucal's names by default), and of the
+  /// turns about x, y, z (the turned axis up).
+  std::array<std::string, 6> faces = {"x_p", "x_a", "y_p", "y_a", "z_p", "z_a"};
+  std::array<std::string, 3> turns = {"x_rot", "y_rot", "z_rot"};
+  double turn_angle = 360.0 * units::deg;   // rad, right-handed about the up-pointing axis
+  double turn_accuracy = 1.0 * units::deg;  // rad, 1-sigma of each turn's total angle
+  double face_accuracy = 0.5 * units::deg;  // rad, 1-sigma of each face's two placement tilts
+  double min_rest = 1.0;                    // s: shortest face
+  /// s at each end of a turn's part whose mean specific force gives the gravity direction
+  /// before and after it (a turn's part starts and ends at rest).
+  double turn_edge = 0.2;
+};
+
+class IniFile;
+/// The [six_face] section (every key optional); throws ConfigError naming file, line and key.
+FerrarisDeclaration read_ferraris_declaration(const IniFile& ini);
 
 struct FerrarisOptions {
   double rest = 6.0;                           // s on each face

@@ -15,6 +15,9 @@ struct ImuSample {
   bool has_table = false;
   double table_outer = 0.0;  // rad
   double table_inner = 0.0;  // rad
+  /// The sample's label (a text column of the log, e.g. a part of a six-face session): an index
+  /// into LogReader::labels(); -1 when the log has no label column.
+  int label = -1;
 };
 
 /// Anything that yields IMU samples in time order (simulator, log reader).

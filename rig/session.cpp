@@ -48,18 +48,21 @@ Session Session::load(const std::string& path, PlanNeed plan_need) {
   const bool optional_plan = plan_need == PlanNeed::Optional;
   const IniFile ini(path);
   for (const auto& section : ini.sections())
-    if (section != "session" && section != "site" && section != "log") {
+    if (section != "session" && section != "site" && section != "log" && section != "six_face") {
       std::string where = path + ": ";
       for (const auto& key : ini.keys())
         if (key.compare(0, section.size() + 1, section + ".") == 0) {
           where = ini.where(key);
           break;
         }
-      throw ConfigError(where + "unknown section [" + section + "] (known: session, site, log)");
+      throw ConfigError(where + "unknown section [" + section +
+                        "] (known: session, site, log, six_face)");
     }
   ini.check_keys("session", {"name", "rate", "time_offset", "plan", "truth", "sensor"});
   ini.check_keys("site", {"latitude", "longitude", "height", "gravity"});
   Session s;
+  if (std::find(ini.sections().begin(), ini.sections().end(), "six_face") != ini.sections().end())
+    s.six_face = read_ferraris_declaration(ini);
   s.path = path;
   s.dir = directory_of(path);
   s.name = ini.get_string("session.name", "session");

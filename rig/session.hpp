@@ -11,6 +11,7 @@
 #include "models/earth.hpp"
 #include "models/imu_error_model.hpp"
 #include "models/sensor_profile.hpp"
+#include "rig/ferraris.hpp"
 #include "rig/io/log_io.hpp"
 #include "rig/plan.hpp"
 
@@ -34,6 +35,9 @@ struct Session {
   bool has_plan = true;     // false: no [session] plan (loaded with PlanNeed::Optional)
   bool has_site = true;     // false: no site in the session or its plan (PlanNeed::Optional)
   double gravity = 0.0;     // m/s^2: [site] gravity, the local gravity magnitude (0: not given)
+  /// [six_face]: the session is a six-face and known-turn procedure (its parts labelled in the
+  /// log's label column).
+  std::optional<FerrarisDeclaration> six_face;
 
   /// Throws ConfigError naming the file, line and key. With PlanNeed::Required (the table
   /// methods) the plan and a site are required and [site] gravity is refused (they use the

@@ -488,7 +488,7 @@ fixed 2 "session.ini:$L: 'log.columns': unknown key in [log]" nav
 
 # --- calibrate: options -----------------------------------------------------------------------
 new calibrate-unknown-method; mini
-fixed 1 "--method' must be closed-form | kf | table-free, not 'magic'" S calibrate --method magic --session session.ini --out out/r.json
+fixed 1 "--method' must be closed-form | kf | table-free | six-face, not 'magic'" S calibrate --method magic --session session.ini --out out/r.json
 new calibrate-channels-one; s8
 fixed 1 "--channels' must be a list with at least north,east" cf --channels north
 new calibrate-stream-closed-form; mini
@@ -707,6 +707,41 @@ new design-require-unknown-family; cp "$tab" "$d/table.ini"
 fixed 1 "--require: required family 'gyro.drift' is not estimated" dz --optimize --out out/o --require gyro.scale gyro.drift
 new design-require-without-optimize; cp "$tab" "$d/table.ini"
 fixed 1 "belong to --optimize" dz --require accel.lever_arm
+
+# --- six-face (issue 18): imucal's labelled session, its declaration or its log changed
+sf_session="$src/config/measured/imucal-ferraris/session.ini"
+sf_log="$src/tests/data/imucal/annotated_session.csv"
+# sfnew NAME: the session in $d, its log named by absolute path.
+sfnew() { new "$1"; sed "s|^file = .*|file = $sf_log|" "$sf_session" > "$d/session.ini"; }
+sf() { S calibrate --method six-face --session session.ini --out out/result.json "$@"; }
+sfnew six-face-control
+control 0 "" sf
+sfnew six-face-part-not-in-log; set_key "$d/session.ini" faces "x_p x_a y_p y_a z_p z_down"
+fixed 2 "no part labelled 'z_down' (the face with -z up); the log's parts: x_a x_p x_rot" sf
+sfnew six-face-faces-swapped; set_key "$d/session.ini" faces "x_a x_p y_p y_a z_p z_a"
+fixed 2 "face 'x_a' is declared +x up, but its specific force (|points along -x: labels swapped" sf
+sfnew six-face-turn-other-direction; set_key "$d/session.ini" turn_angle "-360 deg"
+fixed 2 "turn 'x_rot' integrates to 367.|declared -360.0 deg" sf
+sfnew six-face-turn-half; set_key "$d/session.ini" turn_angle "180 deg"
+fixed 2 "turn 'x_rot' integrates to 367.|declared 180.0 deg" sf
+sfnew six-face-face-too-short; add_line "$d/session.ini" "min_rest = 4 s"
+fixed 2 "face 'y_p' lasts 3.58 s, shorter than the minimum rest of 4.00 s" sf
+sfnew six-face-five-faces; set_key "$d/session.ini" faces "x_p x_a y_p y_a z_p"
+fixed 2 "session.ini:$L: 'six_face.faces'|needs 6 labels, found 5" sf
+sfnew six-face-label-face-and-turn; set_key "$d/session.ini" turns "x_rot y_rot z_p"
+fixed 2 "label 'z_p' is both a face and a turn" sf
+sfnew six-face-no-label-column; set_key "$d/session.ini" columns "- - ax ay az gx gy gz"
+fixed 2 "annotated_session.csv:2: a six-face log needs a label column" sf
+sfnew six-face-no-section; grep -v -E '^(\[six_face\]|faces|turns|turn_angle)' "$sf_session" | sed "s|^file = .*|file = $sf_log|" > "$d/session.ini"
+fixed 2 "needs a [six_face] section" sf
+sfnew six-face-unknown-key; add_line "$d/session.ini" "placement = 2 deg"
+fixed 2 "session.ini:$L: 'six_face.placement'|unknown key" sf
+sfnew six-face-accuracy-zero; add_line "$d/session.ini" "face_accuracy = 0 deg"
+fixed 2 "session.ini:$L: 'six_face.face_accuracy'|must be within" sf
+sfnew six-face-out-is-input; 
+fixed 1 "--out session.ini is the session: an output never replaces an input" S calibrate --method six-face --session session.ini --out session.ini
+sfnew six-face-table-option; 
+fixed 1 "--table-sigma is an option of the table methods (closed-form, kf), not of --method six-face" sf --table-sigma 3
 
 # =============================================================================================
 # KNOWN: bad input still accepted or mishandled; the fix belongs to apps/, filter/ or the result

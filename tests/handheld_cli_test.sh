@@ -163,5 +163,21 @@ check "an unknown candidate is a usage error" test $? -eq 1
 check "diagnose with a calibration that fails exits 2" test $? -eq 2
 check "... saying why" contains "$work/df.err" "needs at least 10 static poses"
 
+# calibrate --method six-face on imucal's labelled session: the table as a person reads it, and
+# the sensitivities against imucal's stored calibration.
+"$bin" calibrate --method six-face --session "$src/config/measured/imucal-ferraris/session.ini" \
+  --out "$work/six-face.json" > "$work/six-face.txt"
+check "six-face calibration exits 0" test $? -eq 0
+check "... prints each turn's calibrated angle" grep -qE '^  x_rot +[0-9.]+ s +(359\.9|360\.0)[0-9]* deg$' "$work/six-face.txt"
+check "... names what it cannot determine" grep -q "accel.misalignment: relative to the box's faces only to the placement accuracy" "$work/six-face.txt"
+check "... sensitivities within 0.1 % (accel) and 0.5 % (gyro) of imucal's" python3 -c "
+import json, math, sys
+r = json.load(open('$work/six-face.json'))['raw_counts']
+ref = json.load(open('$src/tests/data/imucal/example_cal.json'))
+ok = all(abs(r['accel']['sensitivity.' + a] / ref['K_a'][i][i] - 1) < 1e-3 and
+         abs(r['gyro']['sensitivity.' + a] * math.pi / 180 / ref['K_g'][i][i] - 1) < 5e-3
+         for i, a in enumerate('xyz'))
+sys.exit(not ok)"
+
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0

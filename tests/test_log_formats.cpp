@@ -563,3 +563,51 @@ TEST_CASE("Log configuration: header_lines, axes, scales and max_gap out of rang
   test::write_file(dir + "/c.ini", "[log]\nfile = f.txt\nformat = csv\n");
   CHECK_THAT(config_error(dir + "/c.ini", dir), Catch::Contains("c.ini:3"));
 }
+
+TEST_CASE("Custom log: text columns skipped, a label column, a sample counter as time",
+          "[log][label]") {
+  // imucal's layout: a text label first, a counter, then counts; '-' skips any text.
+  const std::string dir = test::temp_dir("label-log");
+  test::write_file(dir + "/log.csv",
+                   "part,samples,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n"
+                   "x_p,10,2048,0,0,1,2,3\n"
+                   "x_p,11,2048,0,0,1,2,3\n"
+                   "x_a,12,-2048,0,0,1,2,3\n"
+                   ",13,0,0,2048,1,2,3\n");
+  test::write_file(dir + "/session.ini",
+                   "[session]\nrate = 100 Hz\n[site]\ngravity = 9.81 m/s^2\n[log]\nfile = log.csv\n"
+                   "format = custom\nheader_lines = 1\ncolumns = label t ax ay az gx gy gz\n"
+                   "time_unit = samples\naccel = rate\naccel_unit = g\n"
+                   "accel_scale = 0.00048828125\ngyro = rate\ngyro_unit = deg/s\n");
+  const Session s = Session::load(dir + "/session.ini", Session::PlanNeed::Optional);
+  LogReader r(s.log);
+  ImuSample x;
+  std::vector<int> labels;
+  std::vector<double> times;
+  while (r.next(x)) {
+    labels.push_back(x.label);
+    times.push_back(x.t);
+  }
+  REQUIRE(labels.size() == 4);
+  CHECK(r.labels() == std::vector<std::string>{"x_p", "x_a", ""});
+  CHECK(labels == std::vector<int>{0, 0, 1, 2});
+  CHECK(times[0] == Approx(0.10));  // counter 10 at 100 Hz
+  CHECK(times[3] == Approx(0.13));
+  // '-' skips a text column too; a label in a numeric column is still an error.
+  test::write_file(dir + "/session2.ini",
+                   "[session]\nrate = 100 Hz\n[site]\ngravity = 9.81 m/s^2\n[log]\nfile = log.csv\n"
+                   "format = custom\nheader_lines = 1\ncolumns = - - ax ay az gx gy gz\n"
+                   "accel = rate\ngyro = rate\n");
+  LogReader r2(Session::load(dir + "/session2.ini", Session::PlanNeed::Optional).log);
+  std::size_t n = 0;
+  while (r2.next(x)) ++n;
+  CHECK(n == 4);
+  CHECK(x.label == -1);
+  test::write_file(dir + "/session3.ini",
+                   "[session]\nrate = 100 Hz\n[site]\ngravity = 9.81 m/s^2\n[log]\nfile = log.csv\n"
+                   "format = custom\nheader_lines = 1\ncolumns = t - ax ay az gx gy gz\n"
+                   "accel = rate\ngyro = rate\n");
+  LogReader r3(Session::load(dir + "/session3.ini", Session::PlanNeed::Optional).log);
+  CHECK_THROWS_WITH(r3.next(x),
+                    Catch::Matchers::Contains("log.csv:2: field 1 'x_p' is not a number"));
+}

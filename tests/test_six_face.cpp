@@ -2,7 +2,9 @@
 // sessions (rig/ferraris.hpp).
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 
 #include "filter/six_face/six_face.hpp"
 #include "helpers.hpp"
@@ -10,6 +12,7 @@
 #include "models/sensor_profile.hpp"
 #include "rig/ferraris.hpp"
 #include "rig/imu_sim.hpp"
+#include "rig/session.hpp"
 
 using namespace sinscal;
 
@@ -43,8 +46,8 @@ Run run_session(std::uint64_t seed, const FerrarisOptions& fo, bool keep_extende
   while (sim.next(s)) parts.push(s, session.label_at(s.t - 0.5 * s.dt));
   SixFaceOptions o;
   o.site = site;
-  o.face_accuracy = fo.face_tilt;
-  o.turn_accuracy = fo.turn_angle_error;
+  o.declared.face_accuracy = fo.face_tilt;
+  o.declared.turn_accuracy = fo.turn_angle_error;
   o.gyro_bias_instability = prof.noise.gyro.bias_instability;
   o.accel_bias_instability = prof.noise.accel.bias_instability;
   r.result = six_face_calibrate(parts.parts(), o);
@@ -103,4 +106,34 @@ TEST_CASE("Six-face: Monte Carlo, errors as the sigmas say", "[six_face][long]")
   }
   WARN(beyond << " of " << total << " beyond 3 sigma");
   CHECK(beyond <= total / 100 + 1);
+}
+
+TEST_CASE("Six-face: imucal's recording against its stored calibration", "[six_face][real]") {
+  // tests/data/imucal: the sensitivities (counts per unit along each sensor's own axis) within
+  // 0.1 % (accelerometers) and 0.5 % (gyros) of imucal's, as the issue asks; the biases within
+  // their sigma's reach. Measured: 0.004-0.012 % and 0.009-0.050 %.
+  const Session s = Session::load(test::source_path("config/measured/imucal-ferraris/session.ini"),
+                                  Session::PlanNeed::Optional);
+  REQUIRE(s.six_face);
+  LogReader reader(s.log);
+  PartAccumulator parts({s.six_face->turns.begin(), s.six_face->turns.end()});
+  ImuSample x;
+  while (reader.next(x)) parts.push(x, reader.labels()[static_cast<std::size_t>(x.label)]);
+  SixFaceOptions o;
+  o.declared = *s.six_face;
+  o.gravity = s.gravity;
+  const SixFaceResult r = six_face_calibrate(parts.parts(), o);
+  const nlohmann::json ref =
+      nlohmann::json::parse(std::ifstream(test::source_path("tests/data/imucal/example_cal.json")));
+  const Eigen::Matrix3d A = r.model.accel.linear(), G = r.model.gyro.linear();
+  for (int i = 0; i < 3; ++i) {
+    const double ka = A.row(i).norm() / s.log.accel.scale;              // counts per m/s^2
+    const double kg = G.row(i).norm() / s.log.gyro.scale * units::deg;  // counts per deg/s
+    CAPTURE(i, ka, kg);
+    CHECK(ka == Approx(ref["K_a"][i][i].get<double>()).epsilon(1e-3));
+    CHECK(kg == Approx(ref["K_g"][i][i].get<double>()).epsilon(5e-3));
+    const double ba = s.log.accel.offset + r.model.accel.bias(i) / s.log.accel.scale;
+    CHECK(std::abs(ba - ref["b_a"][i].get<double>()) < 1.0);  // counts (sigma 0.2-0.3)
+  }
+  for (const auto& t : r.turns) CHECK(std::abs(t.angle - 2.0 * M_PI) < 0.1 * units::deg);
 }

@@ -96,11 +96,13 @@ Located locate(const std::vector<PartStatistics>& parts, const SixFaceOptions& o
   for (int k = 0; k < 6; ++k) {
     const std::string what =
         std::string("the face with ") + (k % 2 ? "-" : "+") + kAxis[k / 2] + " up";
-    l.faces[static_cast<std::size_t>(k)] = find(o.faces[static_cast<std::size_t>(k)], what.c_str());
+    l.faces[static_cast<std::size_t>(k)] =
+        find(o.declared.faces[static_cast<std::size_t>(k)], what.c_str());
   }
   for (int j = 0; j < 3; ++j) {
     const std::string what = std::string("the turn about ") + kAxis[j];
-    l.turns[static_cast<std::size_t>(j)] = find(o.turns[static_cast<std::size_t>(j)], what.c_str());
+    l.turns[static_cast<std::size_t>(j)] =
+        find(o.declared.turns[static_cast<std::size_t>(j)], what.c_str());
   }
   return l;
 }
@@ -109,9 +111,10 @@ Located locate(const std::vector<PartStatistics>& parts, const SixFaceOptions& o
 void check_faces(const Located& l, const SixFaceOptions& o) {
   for (int k = 0; k < 6; ++k) {
     const PartStatistics& p = *l.faces[static_cast<std::size_t>(k)];
-    if (p.duration < o.min_rest)
+    if (p.duration < o.declared.min_rest)
       throw SixFaceError("six-face: face '" + p.label + "' lasts " + fmt("%.2f", p.duration) +
-                         " s, shorter than the minimum rest of " + fmt("%.2f", o.min_rest) + " s");
+                         " s, shorter than the minimum rest of " +
+                         fmt("%.2f", o.declared.min_rest) + " s");
     const Eigen::Vector3d f = p.mean_f;
     if (!(f.norm() > 0.0) || f.normalized().dot(face_up(k)) < std::cos(30.0 * units::deg)) {
       Eigen::Index axis = 0;
@@ -285,8 +288,8 @@ GyroFit fit_gyro(const Located& l, AccelFit& acc, const SixFaceOptions& o) {
   for (int j = 0; j < 3; ++j) {
     const PartStatistics& p = *l.turns[static_cast<std::size_t>(j)];
     double var_s = 0.0, var_e = 0.0;
-    const Eigen::Vector3d u_s = edge_direction(p.readings, o.turn_edge, true, acc, var_s);
-    const Eigen::Vector3d u_e = edge_direction(p.readings, o.turn_edge, false, acc, var_e);
+    const Eigen::Vector3d u_s = edge_direction(p.readings, o.declared.turn_edge, true, acc, var_s);
+    const Eigen::Vector3d u_e = edge_direction(p.readings, o.declared.turn_edge, false, acc, var_e);
     const Eigen::Vector3d a = turn_axis(p.readings, acc, b0);
     fit.axes[static_cast<std::size_t>(j)] = a;
     // The axis' derivatives with respect to A and b (central differences).
@@ -306,18 +309,18 @@ GyroFit fit_gyro(const Located& l, AccelFit& acc, const SixFaceOptions& o) {
     }
     // Body rates summed over the turn: G (theta a + the net tilt u_e x u_s) + b_g T, linearized
     // about the accelerometers' solution (A0, b0) and G ~ I in the axis' term.
-    const Eigen::Vector3d rotation_b = o.turn_angle * a + u_e.cross(u_s);
+    const Eigen::Vector3d rotation_b = o.declared.turn_angle * a + u_e.cross(u_s);
     Eigen::Matrix<double, 3, Eigen::Dynamic> H = Eigen::MatrixXd::Zero(3, kJoint);
     for (int r = 0; r < 3; ++r) H.block<1, 3>(r, kG + 3 * r) = rotation_b.transpose();
-    H.block<3, 12>(0, 0) = o.turn_angle * J;
+    H.block<3, 12>(0, 0) = o.declared.turn_angle * J;
     H.block<3, 3>(0, kBg) = p.duration * Eigen::Matrix3d::Identity();
     Eigen::Matrix<double, 12, 1> x_acc;
     for (int r = 0; r < 3; ++r) x_acc.segment<3>(3 * r) = acc.A.row(r).transpose();
     x_acc.segment<3>(9) = acc.b;
-    const Eigen::Vector3d y = p.integral_dtheta + o.turn_angle * J * x_acc;
+    const Eigen::Vector3d y = p.integral_dtheta + o.declared.turn_angle * J * x_acc;
     const double dt = p.duration / static_cast<double>(std::max<std::size_t>(1, p.count));
     Eigen::Matrix3d R = (pooled * static_cast<double>(p.count) * dt * dt).asDiagonal();
-    R += std::pow(o.turn_accuracy, 2) * a * a.transpose();
+    R += std::pow(o.declared.turn_accuracy, 2) * a * a.transpose();
     R += (var_s + var_e) * (Eigen::Matrix3d::Identity() - a * a.transpose());
     R += std::pow(omega * p.duration, 2) / 3.0 * Eigen::Matrix3d::Identity();
     lp.add_block(H, y, R);
@@ -348,11 +351,11 @@ void check_turns(const Located& l, const SixFaceOptions& o) {
                          std::to_string(p.readings.size()) +
                          " readings kept (the accumulator keeps the turns' readings)");
     const double about = p.integral_dtheta(j);
-    if (std::abs(about - o.turn_angle) > o.turn_tolerance)
+    if (std::abs(about - o.declared.turn_angle) > o.turn_tolerance)
       throw SixFaceError("six-face: turn '" + p.label + "' integrates to " +
                          fmt("%.1f", about / units::deg) + " deg about " + kAxis[j] +
                          " (with the nominal scaling), declared " +
-                         fmt("%.1f", o.turn_angle / units::deg) + " deg (tolerance " +
+                         fmt("%.1f", o.declared.turn_angle / units::deg) + " deg (tolerance " +
                          fmt("%.1f", o.turn_tolerance / units::deg) +
                          " deg): a different turn, the other direction, or a wrong rate?");
     Eigen::Index axis = 0;
@@ -443,11 +446,11 @@ std::vector<SixFaceCoefficient> coefficients_of(const AccelFit& a, const GyroFit
 
 SixFaceResult six_face_calibrate(const std::vector<PartStatistics>& parts,
                                  const SixFaceOptions& o) {
-  if (!(o.face_accuracy > 0.0 && o.face_accuracy < 20.0 * units::deg))
+  if (!(o.declared.face_accuracy > 0.0 && o.declared.face_accuracy < 20.0 * units::deg))
     throw SixFaceError("six-face: the face accuracy must be within 0 and 20 deg");
-  if (!(o.turn_accuracy > 0.0 && o.turn_accuracy < 45.0 * units::deg))
+  if (!(o.declared.turn_accuracy > 0.0 && o.declared.turn_accuracy < 45.0 * units::deg))
     throw SixFaceError("six-face: the turn accuracy must be within 0 and 45 deg");
-  if (!(std::abs(o.turn_angle) > 10.0 * units::deg))
+  if (!(std::abs(o.declared.turn_angle) > 10.0 * units::deg))
     throw SixFaceError("six-face: the declared turn angle must be at least 10 deg");
   SixFaceResult r;
   r.gravity = o.gravity > 0.0 ? o.gravity
@@ -458,7 +461,7 @@ SixFaceResult six_face_calibrate(const std::vector<PartStatistics>& parts,
   const Located l = locate(parts, o);
   check_faces(l, o);
   check_turns(l, o);
-  AccelFit acc = fit_accel(l, r.gravity, o.face_accuracy);
+  AccelFit acc = fit_accel(l, r.gravity, o.declared.face_accuracy);
   const GyroFit gyr = fit_gyro(l, acc, o);
   r.accel_chi2 = acc.chi2;
   r.accel_dof = 18 + 12 - 24;
@@ -493,12 +496,12 @@ SixFaceResult six_face_calibrate(const std::vector<PartStatistics>& parts,
       "accel.misalignment: relative to the box's faces only to the placement accuracy (sigma up "
       "to " +
           fmt("%.0f", mis / units::arcsec) + " arcsec from the faces' " +
-          fmt("%.2f", o.face_accuracy / units::deg) +
+          fmt("%.2f", o.declared.face_accuracy / units::deg) +
           " deg): a face's tilt and the misalignment it reads are one unknown",
       "gyro.scale: no better than the turns' total angle (" +
-          fmt("%.2f", o.turn_accuracy / units::deg) + " deg of " +
-          fmt("%.0f", o.turn_angle / units::deg) +
-          " deg: " + fmt("%.3f", 100.0 * o.turn_accuracy / std::abs(o.turn_angle)) +
+          fmt("%.2f", o.declared.turn_accuracy / units::deg) + " deg of " +
+          fmt("%.0f", o.declared.turn_angle / units::deg) + " deg: " +
+          fmt("%.3f", 100.0 * o.declared.turn_accuracy / std::abs(o.declared.turn_angle)) +
           " %), which no gravity reference sees",
       "gyro.bias: the Earth rate not modelled is noise of " +
           fmt("%.4f", r.earth_rate_bound / units::deg_per_s) + " deg/s per axis (" +

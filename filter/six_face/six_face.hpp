@@ -43,6 +43,7 @@
 #include "models/earth.hpp"
 #include "models/imu_error_model.hpp"
 #include "models/units.hpp"
+#include "rig/ferraris.hpp"
 #include "rig/handheld.hpp"
 #include "rig/imu_sample.hpp"
 
@@ -89,22 +90,12 @@ class PartAccumulator {
 };
 
 struct SixFaceOptions {
-  /// Labels of the faces with +x, -x, +y, -y, +z, -z up (imucal's names by default), and of the
-  /// turns about x, y, z (the turned axis up).
-  std::array<std::string, 6> faces = {"x_p", "x_a", "y_p", "y_a", "z_p", "z_a"};
-  std::array<std::string, 3> turns = {"x_rot", "y_rot", "z_rot"};
-  double turn_angle = 2.0 * 3.14159265358979323846;  // rad, right-handed about the up axis
-  double turn_accuracy = 1.0 * units::deg;           // rad, 1-sigma of each turn's total angle
-  double face_accuracy = 2.0 * units::deg;           // rad, 1-sigma of each placement tilt
-  double min_rest = 1.0;                             // s: shortest face
-  double gravity = 0.0;                              // m/s^2; 0: normal gravity at `site`
-  std::optional<Site> site;  // the Earth rate's vertical part; without: noise
+  FerrarisDeclaration declared;  // labels and the hand's accuracies
+  double gravity = 0.0;          // m/s^2; 0: normal gravity at `site`
+  std::optional<Site> site;      // the Earth rate's vertical part; without: noise
   /// A turn whose integrated angle (with the nominal scaling) is farther than this from the
   /// declared one is not the declared turn (wrong axis, direction or rate).
   double turn_tolerance = 30.0 * units::deg;
-  /// s at each end of a turn's part whose mean specific force gives the gravity direction
-  /// before and after the turn (the part starts and ends at rest).
-  double turn_edge = 0.2;
   /// 1-sigma of each triad's in-run bias (Gauss-Markov bias instability, from the sensor profile
   /// when one is given): a session of minutes is shorter than its correlation time, so it is a
   /// common offset of every rest that the readings' own scatter does not show; it adds to the

@@ -26,17 +26,22 @@ void read_custom_format(const IniFile& ini, const std::string& base_dir, double 
   f.native = false;
   f.delimiter = read_delimiter(ini);
   f.header_lines = read_header_lines(ini);
-  f.time_scale = unit_of(ini, "log.time_unit", "s", QuantityKind::Time);
+  // A sample counter as the time column: time_unit = samples (each count one 1/rate).
+  const bool counter = ini.has("log.time_unit") && ini.get_string("log.time_unit") == "samples";
+  if (counter && !(rate_hz > 0.0))
+    throw ConfigError(ini.where("log.time_unit") +
+                      "'samples' needs the sample rate ([session] rate)");
+  f.time_scale = counter ? 1.0 / rate_hz : unit_of(ini, "log.time_unit", "s", QuantityKind::Time);
   if (split) {
     read_split_format(ini, base_dir, f);
   } else {
     if (!segmented) f.file = path_in(base_dir, ini.get_string("log.file"));
     for (const auto& c : tokens_of(ini.get_string("log.columns"))) {
-      static const std::vector<std::string> known = {"t",  "gx", "gy",    "gz",    "ax",
-                                                     "ay", "az", "outer", "inner", "-"};
+      static const std::vector<std::string> known = {"t",  "gx",    "gy",    "gz",    "ax", "ay",
+                                                     "az", "outer", "inner", "label", "-"};
       if (std::find(known.begin(), known.end(), c) == known.end())
         throw ConfigError(ini.where("log.columns") + "unknown column '" + c +
-                          "' (known: t gx gy gz ax ay az outer inner, - to skip)");
+                          "' (known: t gx gy gz ax ay az outer inner label, - to skip)");
       if (c != "-" && std::count(f.columns.begin(), f.columns.end(), c))
         throw ConfigError(ini.where("log.columns") + "column '" + c + "' given twice");
       f.columns.push_back(c);
@@ -67,7 +72,7 @@ bool LogReader::read_record() {
   // number may be cut short and still read as a number).
   if (f_.native && !nl)
     fail("truncated line: the last line has no line end (the file was cut while being written?)");
-  split_fields(text_, nl, f_.columns.size(), fields_);
+  split_fields(text_, nl, f_.columns.size(), fields_, &text_cols_);
   return true;
 }
 

@@ -89,14 +89,16 @@ struct LogFormat {
   std::string file;  // path of the data file (split and segmented logs: a
                      // description naming their files, for messages)
   Kind kind = Kind::Delimited;
-  bool native = true;                // the sinscal CSV (the header is checked)
-  char delimiter = ',';              // ' ' means any run of spaces or tabs
-  int header_lines = 1;              // lines skipped before the data (after them, '#' lines too)
-  std::vector<std::string> columns;  // t gx gy gz ax ay az [outer inner], "-" to skip
-  double table_scale = 0.0;          // rad per table-angle unit (outer/inner columns)
-  double time_scale = 1.0;           // s per time unit
-  double rate_hz = 0.0;              // nominal rate; needed when there is no time column
-  double max_gap = 1.5;              // a step in time above max_gap / rate_hz is a gap (error)
+  bool native = true;    // the sinscal CSV (the header is checked)
+  char delimiter = ',';  // ' ' means any run of spaces or tabs
+  int header_lines = 1;  // lines skipped before the data (after them, '#' lines too)
+  /// t gx gy gz ax ay az [outer inner] [label], "-" to skip (any text); `label`: a text column
+  /// whose value labels each sample (ImuSample::label, LogReader::labels()).
+  std::vector<std::string> columns;
+  double table_scale = 0.0;  // rad per table-angle unit (outer/inner columns)
+  double time_scale = 1.0;   // s per time unit
+  double rate_hz = 0.0;      // nominal rate; needed when there is no time column
+  double max_gap = 1.5;      // a step in time above max_gap / rate_hz is a gap (error)
   TriadColumns gyro, accel;
 
   /// A log split over two files sharing a time column (imu_tk style): both set. Each file's
@@ -151,6 +153,11 @@ class LogReader : public SampleSource {
   std::size_t line() const { return segment_ ? segment_->line() : loc_->line; }
   /// Samples read so far.
   std::size_t count() const { return count_; }
+  /// The distinct texts of the label column in the order first seen (ImuSample::label indexes
+  /// them); empty without a label column.
+  const std::vector<std::string>& labels() const { return labels_; }
+  /// Most distinct labels a log may have (more: not a label column).
+  static constexpr std::size_t kMaxLabels = 10000;
   /// Skip bad samples (BadSampleError) instead of throwing: each is passed to `on_skip` and the
   /// reading goes on. The motion of a skipped interval is bridged by holding the next good
   /// sample's rate over it (its increments are scaled to the whole interval since the last good
@@ -177,8 +184,10 @@ class LogReader : public SampleSource {
   bool read_data_line(Input& input, std::string& line, bool& had_newline);
   void skip_header(Input& input);
   /// Splits a delimited line into numbers (exactly `expected` of them).
+  /// Fields flagged in `text_cols` (the record's skipped and label columns) are not read as
+  /// numbers.
   void split_fields(const std::string& line, bool had_newline, std::size_t expected,
-                    std::vector<double>& out);
+                    std::vector<double>& out, const std::vector<char>* text_cols = nullptr);
   /// The next record's fields in the layout of f_.columns; false at the end.
   bool read_record();
   bool read_split_record();
@@ -196,7 +205,10 @@ class LogReader : public SampleSource {
   std::size_t count_ = 0;
   int col_t_ = -1;
   std::array<int, 3> col_g_{-1, -1, -1}, col_a_{-1, -1, -1};
-  int col_outer_ = -1, col_inner_ = -1;
+  int col_outer_ = -1, col_inner_ = -1, col_label_ = -1;
+  std::vector<char> text_cols_;  // per column of the record: not a number ("-", label)
+  std::string label_text_;       // the label field of the current record
+  std::vector<std::string> labels_;
   double t_prev_ = 0.0;
   std::vector<double> fields_, acc_, gyr_;  // a record; a split log's two lines
   std::string text_, text2_;

@@ -1,6 +1,7 @@
 // The reader every format shares: files and streams read line by line with a bounded line length,
 // header lines, delimited numbers, and the sample made of a record (time, gaps, units, axes,
 // saturation, skipped bad samples); each format's record comes from its own file.
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -44,6 +45,8 @@ void LogReader::start() {
     if (c.size() == 2 && c[0] == 'a') col_a_[static_cast<std::size_t>(c[1] - 'x')] = i;
     if (c == "outer") col_outer_ = i;
     if (c == "inner") col_inner_ = i;
+    if (c == "label") col_label_ = i;
+    text_cols_.push_back(!f_.native && (c == "-" || c == "label") ? 1 : 0);
   }
   for (std::size_t i = 0; i < 3; ++i)
     if (col_g_[i] < 0 || col_a_[i] < 0)
@@ -135,7 +138,7 @@ bool LogReader::next(ImuSample& s) {
 }
 
 void LogReader::split_fields(const std::string& line, bool had_newline, std::size_t expected,
-                             std::vector<double>& out) {
+                             std::vector<double>& out, const std::vector<char>* text_cols) {
   out.clear();
   std::size_t pos = 0;
   const bool ws = f_.delimiter == ' ';
@@ -149,6 +152,12 @@ void LogReader::split_fields(const std::string& line, bool had_newline, std::siz
     std::size_t b = pos, e = end;
     while (b < e && (line[b] == ' ' || line[b] == '\t')) ++b;
     while (e > b && (line[e - 1] == ' ' || line[e - 1] == '\t')) --e;
+    if (text_cols && out.size() < text_cols->size() && (*text_cols)[out.size()]) {
+      if (static_cast<int>(out.size()) == col_label_) label_text_.assign(line, b, e - b);
+      out.push_back(0.0);
+      pos = end + 1;
+      continue;
+    }
     if (b < e && line[b] == '+') ++b;
     double v = 0.0;
     const auto r = std::from_chars(line.data() + b, line.data() + e, v);
@@ -244,6 +253,18 @@ bool LogReader::make_sample(ImuSample& s) {
   s.dtheta_b = triad(f_.gyro, col_g_, "gyro", f_.split() ? &second_ : loc_);
   s.dv_b = triad(f_.accel, col_a_, "accel", f_.split() ? &main_ : loc_);
   s.has_table = col_outer_ >= 0;
+  s.label = -1;
+  if (col_label_ >= 0) {
+    const auto it = std::find(labels_.begin(), labels_.end(), label_text_);
+    if (it == labels_.end()) {
+      if (labels_.size() >= kMaxLabels)
+        fail("more than " + std::to_string(kMaxLabels) +
+             " different labels in the label column: not a label column (wrong column?)");
+      labels_.push_back(label_text_);
+    }
+    s.label =
+        static_cast<int>(std::find(labels_.begin(), labels_.end(), label_text_) - labels_.begin());
+  }
   if (s.has_table) {
     s.table_outer = fields_[static_cast<std::size_t>(col_outer_)] * f_.table_scale;
     s.table_inner = fields_[static_cast<std::size_t>(col_inner_)] * f_.table_scale;
