@@ -75,23 +75,13 @@ void add_options(po::options_description& d, CalibrateOptions& o) {
 void check_method_options(const po::variables_map& vm, const CalibrateOptions& o) {
   static const std::vector<std::string> closed_form_only = {"stage1", "model", "channels",
                                                             "arw",    "vrw",   "min-dwell"};
-  static const std::vector<std::string> kf_only = {"stream",
-                                                   "monitor",
-                                                   "monitor-interval",
-                                                   "attitude",
-                                                   "no-position",
-                                                   "no-zero-velocity",
-                                                   "terms",
-                                                   "prior-scale",
-                                                   "lever-arm-reference",
-                                                   "no-motion-zero-velocity",
-                                                   "no-table-angles",
-                                                   "passes",
-                                                   "static-from",
-                                                   "static-window",
-                                                   "static-min",
-                                                   "static-rate-threshold",
-                                                   "on-bad-sample"};
+  // clang-format off
+  static const std::vector<std::string> kf_only = {
+      "stream", "monitor", "monitor-interval", "attitude", "no-position", "no-zero-velocity",
+      "terms", "prior-scale", "lever-arm-reference", "no-motion-zero-velocity", "no-table-angles",
+      "passes", "static-from", "static-window", "static-min", "static-rate-threshold",
+      "on-bad-sample"};
+  // clang-format on
   check_table_free_options(vm, o, {closed_form_only, kf_only, {"table-sigma"}});
   if (o.method == Method::TableFree || o.method == Method::SixFace) return;
   const bool kf = o.method == Method::Kf;
