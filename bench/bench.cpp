@@ -202,6 +202,7 @@ double bench_six_face(const std::string& src) {
     while (sim.next(x)) samples.push_back(x);
   }
   std::vector<std::string> labels;
+  labels.reserve(samples.size());
   for (const auto& x : samples) labels.push_back(session.label_at(x.t - 0.5 * x.dt));
   cpu = 1e300;
   for (int pass = 0; pass < 5; ++pass) {

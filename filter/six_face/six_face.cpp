@@ -145,7 +145,7 @@ AccelFit fit_accel(const Located& l, double g, double sigma_p) {
     for (int k = 0; k < 6; ++k) {
       const PartStatistics& p = *l.faces[static_cast<std::size_t>(k)];
       const auto T = face_across(k);
-      const Eigen::Vector2d dk = fit.d.segment<2>(2 * k);
+      const Eigen::Vector2d dk = fit.d.segment<2>(2 * static_cast<Eigen::Index>(k));
       const Eigen::Vector3d raw = face_up(k) + T * dk;
       const Eigen::Vector3d v = raw.normalized();
       // Second order: the tilt's unknown part shortens the mean up direction by E|dd|^2 / 2
@@ -157,13 +157,13 @@ AccelFit fit_accel(const Located& l, double g, double sigma_p) {
         spread = 0.5 * (Pk * Pk).trace();
       }
       Eigen::Matrix<double, 3, Eigen::Dynamic> H = Eigen::MatrixXd::Zero(3, 24);
-      for (int r = 0; r < 3; ++r) H.block<1, 3>(r, 3 * r) = g * shrink * v.transpose();
+      for (Eigen::Index r = 0; r < 3; ++r) H.block<1, 3>(r, 3 * r) = g * shrink * v.transpose();
       H.block<3, 3>(0, 9) = Eigen::Matrix3d::Identity();
       const Eigen::Matrix3d dv = (Eigen::Matrix3d::Identity() - v * v.transpose()) / raw.norm();
       H.block<3, 2>(0, 12 + 2 * k) = g * fit.A * dv * T;
       // Linearized about (A, d): y - (model at the point) + H x_point = H x.
       Eigen::VectorXd x0 = Eigen::VectorXd::Zero(24);
-      for (int r = 0; r < 3; ++r) x0.segment<3>(3 * r) = fit.A.row(r).transpose();
+      for (Eigen::Index r = 0; r < 3; ++r) x0.segment<3>(3 * r) = fit.A.row(r).transpose();
       x0.segment<3>(9) = fit.b;
       x0.segment<12>(12) = fit.d;
       const Eigen::Vector3d model = g * shrink * fit.A * v + fit.b;
@@ -182,7 +182,7 @@ AccelFit fit_accel(const Located& l, double g, double sigma_p) {
     Eigen::VectorXd x;
     lp.solve(x, fit.P, fit.chi2);
     fit.problem = lp;
-    for (int r = 0; r < 3; ++r) fit.A.row(r) = x.segment<3>(3 * r).transpose();
+    for (Eigen::Index r = 0; r < 3; ++r) fit.A.row(r) = x.segment<3>(3 * r).transpose();
     fit.b = x.segment<3>(9);
     fit.d = x.segment<12>(12);
   }
@@ -248,6 +248,50 @@ Eigen::RowVectorXd padded(const Eigen::RowVectorXd& row) {
   return out;
 }
 
+// One turn's equations (the body rates summed over it), linearized in A and b; returns its axis.
+Eigen::Vector3d add_turn(LinearProblem& lp, const PartStatistics& p, const AccelFit& acc,
+                         const Eigen::Vector3d& b0, const Eigen::Vector3d& pooled,
+                         const SixFaceOptions& o) {
+  const double omega = Earth::wgs84().omega_ie_n(0.0).norm();
+  double var_s = 0.0, var_e = 0.0;
+  const Eigen::Vector3d u_s = edge_direction(p.readings, o.declared.turn_edge, true, acc, var_s);
+  const Eigen::Vector3d u_e = edge_direction(p.readings, o.declared.turn_edge, false, acc, var_e);
+  Eigen::Vector3d a = turn_axis(p.readings, acc, b0);
+  // The axis' derivatives with respect to A and b (central differences).
+  Eigen::Matrix<double, 3, 12> J;
+  for (int q = 0; q < 12; ++q) {
+    AccelFit plus = acc, minus = acc;
+    const double h = 1e-6;
+    if (q < 9) {
+      plus.A(q / 3, q % 3) += h;
+      minus.A(q / 3, q % 3) -= h;
+    } else {
+      plus.b(q - 9) += h * 10.0;
+      minus.b(q - 9) -= h * 10.0;
+    }
+    J.col(q) = (turn_axis(p.readings, plus, b0) - turn_axis(p.readings, minus, b0)) /
+               (q < 9 ? 2.0 * h : 20.0 * h);
+  }
+  // Body rates summed over the turn: G (theta a + the net tilt u_e x u_s) + b_g T, linearized
+  // about the accelerometers' solution (A0, b0) and G ~ I in the axis' term.
+  const Eigen::Vector3d rotation_b = o.declared.turn_angle * a + u_e.cross(u_s);
+  Eigen::Matrix<double, 3, Eigen::Dynamic> H = Eigen::MatrixXd::Zero(3, kJoint);
+  for (Eigen::Index r = 0; r < 3; ++r) H.block<1, 3>(r, kG + 3 * r) = rotation_b.transpose();
+  H.block<3, 12>(0, 0) = o.declared.turn_angle * J;
+  H.block<3, 3>(0, kBg) = p.duration * Eigen::Matrix3d::Identity();
+  Eigen::Matrix<double, 12, 1> x_acc;
+  for (Eigen::Index r = 0; r < 3; ++r) x_acc.segment<3>(3 * r) = acc.A.row(r).transpose();
+  x_acc.segment<3>(9) = acc.b;
+  const Eigen::Vector3d y = p.integral_dtheta + o.declared.turn_angle * J * x_acc;
+  const double dt = p.duration / static_cast<double>(std::max<std::size_t>(1, p.count));
+  Eigen::Matrix3d R = (pooled * static_cast<double>(p.count) * dt * dt).asDiagonal();
+  R += std::pow(o.declared.turn_accuracy, 2) * a * a.transpose();
+  R += (var_s + var_e) * (Eigen::Matrix3d::Identity() - a * a.transpose());
+  R += std::pow(omega * p.duration, 2) / 3.0 * Eigen::Matrix3d::Identity();
+  lp.add_block(H, y, R);
+  return a;
+}
+
 GyroFit fit_gyro(const Located& l, AccelFit& acc, const SixFaceOptions& o) {
   GyroFit fit;
   const Eigen::Matrix3d A_inv = acc.A.inverse();
@@ -285,55 +329,18 @@ GyroFit fit_gyro(const Located& l, AccelFit& acc, const SixFaceOptions& o) {
     }
     lp.add_block(H, y, R);
   }
-  for (int j = 0; j < 3; ++j) {
-    const PartStatistics& p = *l.turns[static_cast<std::size_t>(j)];
-    double var_s = 0.0, var_e = 0.0;
-    const Eigen::Vector3d u_s = edge_direction(p.readings, o.declared.turn_edge, true, acc, var_s);
-    const Eigen::Vector3d u_e = edge_direction(p.readings, o.declared.turn_edge, false, acc, var_e);
-    const Eigen::Vector3d a = turn_axis(p.readings, acc, b0);
-    fit.axes[static_cast<std::size_t>(j)] = a;
-    // The axis' derivatives with respect to A and b (central differences).
-    Eigen::Matrix<double, 3, 12> J;
-    for (int q = 0; q < 12; ++q) {
-      AccelFit plus = acc, minus = acc;
-      const double h = 1e-6;
-      if (q < 9) {
-        plus.A(q / 3, q % 3) += h;
-        minus.A(q / 3, q % 3) -= h;
-      } else {
-        plus.b(q - 9) += h * 10.0;
-        minus.b(q - 9) -= h * 10.0;
-      }
-      J.col(q) = (turn_axis(p.readings, plus, b0) - turn_axis(p.readings, minus, b0)) /
-                 (q < 9 ? 2.0 * h : 20.0 * h);
-    }
-    // Body rates summed over the turn: G (theta a + the net tilt u_e x u_s) + b_g T, linearized
-    // about the accelerometers' solution (A0, b0) and G ~ I in the axis' term.
-    const Eigen::Vector3d rotation_b = o.declared.turn_angle * a + u_e.cross(u_s);
-    Eigen::Matrix<double, 3, Eigen::Dynamic> H = Eigen::MatrixXd::Zero(3, kJoint);
-    for (int r = 0; r < 3; ++r) H.block<1, 3>(r, kG + 3 * r) = rotation_b.transpose();
-    H.block<3, 12>(0, 0) = o.declared.turn_angle * J;
-    H.block<3, 3>(0, kBg) = p.duration * Eigen::Matrix3d::Identity();
-    Eigen::Matrix<double, 12, 1> x_acc;
-    for (int r = 0; r < 3; ++r) x_acc.segment<3>(3 * r) = acc.A.row(r).transpose();
-    x_acc.segment<3>(9) = acc.b;
-    const Eigen::Vector3d y = p.integral_dtheta + o.declared.turn_angle * J * x_acc;
-    const double dt = p.duration / static_cast<double>(std::max<std::size_t>(1, p.count));
-    Eigen::Matrix3d R = (pooled * static_cast<double>(p.count) * dt * dt).asDiagonal();
-    R += std::pow(o.declared.turn_accuracy, 2) * a * a.transpose();
-    R += (var_s + var_e) * (Eigen::Matrix3d::Identity() - a * a.transpose());
-    R += std::pow(omega * p.duration, 2) / 3.0 * Eigen::Matrix3d::Identity();
-    lp.add_block(H, y, R);
-  }
+  for (int j = 0; j < 3; ++j)
+    fit.axes[static_cast<std::size_t>(j)] =
+        add_turn(lp, *l.turns[static_cast<std::size_t>(j)], acc, b0, pooled, o);
   Eigen::VectorXd x;
   Eigen::MatrixXd P;
   lp.solve(x, P, fit.chi2);
-  for (int r = 0; r < 3; ++r) fit.G.row(r) = x.segment<3>(kG + 3 * r).transpose();
+  for (Eigen::Index r = 0; r < 3; ++r) fit.G.row(r) = x.segment<3>(kG + 3 * r).transpose();
   fit.b = x.segment<3>(kBg);
   fit.P = P.block<12, 12>(kG, kG);
   fit.P.block<3, 3>(9, 9) += std::pow(o.gyro_bias_instability, 2) * Eigen::Matrix3d::Identity();
   // The accelerometers as the joint fit has them (the gyros add next to nothing about them).
-  for (int r = 0; r < 3; ++r) acc.A.row(r) = x.segment<3>(3 * r).transpose();
+  for (Eigen::Index r = 0; r < 3; ++r) acc.A.row(r) = x.segment<3>(3 * r).transpose();
   acc.b = x.segment<3>(9);
   acc.d = x.segment<12>(12);
   acc.P = P.topLeftCorner(24, 24);
@@ -478,7 +485,7 @@ SixFaceResult six_face_calibrate(const std::vector<PartStatistics>& parts,
     SixFaceFace f;
     f.label = p.label;
     f.duration = p.duration;
-    f.tilt = acc.d.segment<2>(2 * k);
+    f.tilt = acc.d.segment<2>(2 * static_cast<Eigen::Index>(k));
     f.tilt_sigma = acc.P.block<2, 2>(12 + 2 * k, 12 + 2 * k).diagonal().cwiseSqrt();
     f.gravity_error = (A_inv * (p.mean_f - acc.b)).norm() - r.gravity;
     r.faces.push_back(f);
