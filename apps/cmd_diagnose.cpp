@@ -158,6 +158,7 @@ int cmd_diagnose(const std::vector<std::string>& args) {
   if (!vm) return 0;
   if (!(o.alpha > 0.0 && o.alpha < 0.5)) throw UsageError("--alpha must be in (0, 0.5)");
   const Session any = Session::load(session_path, Session::PlanNeed::Optional);
+  if (any.six_face) return diagnose_six_face_session(any, out_dir, o.alpha);
   if (!any.has_plan) {
     if (given(*vm, "table-sigma") || vm->count("force") || vm->count("no-kalman") ||
         given(*vm, "min-dwell") || vm->count("prefer") || given(*vm, "passes"))

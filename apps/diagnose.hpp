@@ -24,4 +24,8 @@ struct HandheldDiagnoseOptions {
 /// poses are too few for, throws (exit 2) after the files are written.
 int diagnose_handheld_session(const Session& session, const HandheldDiagnoseOptions& o);
 
+/// A six-face session ([six_face]): the gyro g-sensitivity test on its rests
+/// (apps/diagnose_six_face.cpp); DIR/diagnosis.json when `out_dir` is given.
+int diagnose_six_face_session(const Session& session, const std::string& out_dir, double alpha);
+
 }  // namespace sinscal::cli

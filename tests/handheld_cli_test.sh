@@ -179,5 +179,12 @@ ok = all(abs(r['accel']['sensitivity.' + a] / ref['K_a'][i][i] - 1) < 1e-3 and
          for i, a in enumerate('xyz'))
 sys.exit(not ok)"
 
+# diagnose on the six-face session: the g-sensitivity test on the rests, its verdict as a person
+# reads it, and the file.
+"$bin" diagnose --session "$src/config/measured/imucal-ferraris/session.ini" --out "$work/sf-diag" > "$work/sf-diag.txt"
+check "six-face diagnose exits 0" test $? -eq 0
+check "... states the g-sensitivity verdict with its detection limit" grep -qE '^Wald statistic [0-9.]+ on 9 dof, p = [0-9.e-]+: not detected at alpha 0.01: below the detection limit of [0-9.]+ deg/h/g per term' "$work/sf-diag.txt"
+check "... writes K with sigmas" python3 -c "import json,sys; g=json.load(open('$work/sf-diag/diagnosis.json'))['g_sensitivity']; sys.exit(not (len(g['K']) == 3 and all(s > 0 for row in g['K_sigma'] for s in row) and g['detected'] is False))"
+
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0

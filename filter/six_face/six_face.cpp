@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -197,6 +198,8 @@ struct GyroFit {
   std::array<Eigen::Vector3d, 3> axes{};
   double earth_bound = 0.0;
   double chi2 = 0.0;
+  Eigen::Matrix3d K = Eigen::Matrix3d::Zero();  // g-sensitivity (when estimated)
+  Eigen::Matrix<double, 9, 9> P_K = Eigen::Matrix<double, 9, 9>::Zero();
 };
 
 // The calibrated specific-force direction averaged over `seconds` at the start (or end) of a
@@ -240,10 +243,11 @@ Eigen::Vector3d turn_axis(const std::vector<ImuReading>& r, const AccelFit& acc,
 // [A (9), b (3), d (12), G (9), b_g (3)]. The turns' axes come from the calibrated
 // accelerometers, so the gyro misalignments relative to the box carry the accelerometers' frame
 // uncertainty (the faces' placement): each turn's equation is linearized in A and b too.
-constexpr int kG = 24, kBg = 33, kJoint = 36;
+// With the g-sensitivity, 9 more: K row-major at kK.
+constexpr int kG = 24, kBg = 33, kJoint = 36, kK = 36;
 
-Eigen::RowVectorXd padded(const Eigen::RowVectorXd& row) {
-  Eigen::RowVectorXd out = Eigen::RowVectorXd::Zero(kJoint);
+Eigen::RowVectorXd padded(const Eigen::RowVectorXd& row, int n) {
+  Eigen::RowVectorXd out = Eigen::RowVectorXd::Zero(n);
   out.head(row.size()) = row;
   return out;
 }
@@ -275,8 +279,12 @@ Eigen::Vector3d add_turn(LinearProblem& lp, const PartStatistics& p, const Accel
   // Body rates summed over the turn: G (theta a + the net tilt u_e x u_s) + b_g T, linearized
   // about the accelerometers' solution (A0, b0) and G ~ I in the axis' term.
   const Eigen::Vector3d rotation_b = o.declared.turn_angle * a + u_e.cross(u_s);
-  Eigen::Matrix<double, 3, Eigen::Dynamic> H = Eigen::MatrixXd::Zero(3, kJoint);
+  Eigen::Matrix<double, 3, Eigen::Dynamic> H = Eigen::MatrixXd::Zero(3, lp.n);
   for (Eigen::Index r = 0; r < 3; ++r) H.block<1, 3>(r, kG + 3 * r) = rotation_b.transpose();
+  if (lp.n > kJoint) {  // K times the turn's summed specific force
+    const Eigen::Vector3d f_sum = acc.A.inverse() * (p.mean_f - acc.b) * p.duration;
+    for (Eigen::Index r = 0; r < 3; ++r) H.block<1, 3>(r, kK + 3 * r) = f_sum.transpose();
+  }
   H.block<3, 12>(0, 0) = o.declared.turn_angle * J;
   H.block<3, 3>(0, kBg) = p.duration * Eigen::Matrix3d::Identity();
   Eigen::Matrix<double, 12, 1> x_acc;
@@ -305,15 +313,19 @@ GyroFit fit_gyro(const Located& l, AccelFit& acc, const SixFaceOptions& o) {
     b0 += p->mean_rate / 6.0;
   }
   pooled /= std::max(1.0, n_all);
-  LinearProblem lp(kJoint);
+  LinearProblem lp(o.g_sensitivity ? kJoint + 9 : kJoint);
   for (std::size_t i = 0; i < acc.problem.rows.size(); ++i) {
-    lp.rows.push_back(padded(acc.problem.rows[i]));
+    lp.rows.push_back(padded(acc.problem.rows[i], lp.n));
     lp.z.push_back(acc.problem.z[i]);
   }
   for (const auto* p : l.faces) {
     const Eigen::Vector3d up = (A_inv * (p->mean_f - acc.b)).normalized();
-    Eigen::Matrix<double, 3, Eigen::Dynamic> H = Eigen::MatrixXd::Zero(3, kJoint);
+    Eigen::Matrix<double, 3, Eigen::Dynamic> H = Eigen::MatrixXd::Zero(3, lp.n);
     H.block<3, 3>(0, kBg) = Eigen::Matrix3d::Identity();
+    if (lp.n > kJoint) {  // K times the rest's specific force
+      const Eigen::Vector3d f = A_inv * (p->mean_f - acc.b);
+      for (Eigen::Index r = 0; r < 3; ++r) H.block<1, 3>(r, kK + 3 * r) = f.transpose();
+    }
     Eigen::Vector3d y = p->mean_rate;
     Eigen::Matrix3d R = (p->var_rate / static_cast<double>(std::max<std::size_t>(1, p->count)))
                             .cwiseMax(1e-20)
@@ -338,6 +350,10 @@ GyroFit fit_gyro(const Located& l, AccelFit& acc, const SixFaceOptions& o) {
   for (Eigen::Index r = 0; r < 3; ++r) fit.G.row(r) = x.segment<3>(kG + 3 * r).transpose();
   fit.b = x.segment<3>(kBg);
   fit.P = P.block<12, 12>(kG, kG);
+  if (lp.n > kJoint) {
+    for (Eigen::Index r = 0; r < 3; ++r) fit.K.row(r) = x.segment<3>(kK + 3 * r).transpose();
+    fit.P_K = P.block<9, 9>(kK, kK);
+  }
   fit.P.block<3, 3>(9, 9) += std::pow(o.gyro_bias_instability, 2) * Eigen::Matrix3d::Identity();
   // The accelerometers as the joint fit has them (the gyros add next to nothing about them).
   for (Eigen::Index r = 0; r < 3; ++r) acc.A.row(r) = x.segment<3>(3 * r).transpose();
@@ -424,13 +440,20 @@ void PartAccumulator::push(const ImuSample& s, const std::string& label) {
 namespace {
 
 // The 24 base coefficients from the two fits, catalog order.
-std::vector<SixFaceCoefficient> coefficients_of(const AccelFit& a, const GyroFit& g) {
+std::vector<SixFaceCoefficient> coefficients_of(const AccelFit& a, const GyroFit& g,
+                                                bool g_sensitivity) {
   std::vector<SixFaceCoefficient> out;
   for (const auto& info : coefficient_catalog()) {
     const bool gyro = info.family.rfind("gyro.", 0) == 0;
     const std::string kind = info.family.substr(info.family.find('.') + 1);
-    if (kind != "bias" && kind != "scale" && kind != "misalignment") continue;
+    if (info.name.size() <= info.family.size()) continue;  // a family of one (time_delay)
     const std::string comp = info.name.substr(info.family.size() + 1);
+    if (g_sensitivity && info.family == "gyro.g_sensitivity") {
+      const int i = comp[0] - 'x', j = comp[1] - 'x';
+      out.push_back({info.name, g.K(i, j), std::sqrt(std::max(0.0, g.P_K(3 * i + j, 3 * i + j)))});
+      continue;
+    }
+    if (kind != "bias" && kind != "scale" && kind != "misalignment") continue;
     const Eigen::Matrix3d& M = gyro ? g.G : a.A;
     const Eigen::MatrixXd& P = gyro ? g.P : a.P;
     int index = 0;
@@ -447,6 +470,24 @@ std::vector<SixFaceCoefficient> coefficients_of(const AccelFit& a, const GyroFit
     out.push_back({info.name, value, std::sqrt(std::max(0.0, P(index, index)))});
   }
   return out;
+}
+
+// K against zero by its covariance (Wald, 9 dof).
+GSensitivityTest g_sensitivity_test(const GyroFit& g, double alpha) {
+  GSensitivityTest t;
+  t.alpha = alpha;
+  t.K = g.K;
+  Eigen::Matrix<double, 9, 1> k;
+  for (int i = 0; i < 9; ++i) {
+    k(i) = g.K(i / 3, i % 3);
+    t.K_sigma(i / 3, i % 3) = std::sqrt(std::max(0.0, g.P_K(i, i)));
+  }
+  t.statistic = k.dot(g.P_K.ldlt().solve(k));
+  const boost::math::chi_squared chi2(t.dof);
+  t.p_value = boost::math::cdf(boost::math::complement(chi2, t.statistic));
+  t.detected = t.p_value < t.alpha;
+  t.detection_limit = std::sqrt(boost::math::quantile(chi2, 1.0 - t.alpha)) * t.K_sigma.maxCoeff();
+  return t;
 }
 
 }  // namespace
@@ -473,7 +514,8 @@ SixFaceResult six_face_calibrate(const std::vector<PartStatistics>& parts,
   r.accel_chi2 = acc.chi2;
   r.accel_dof = 18 + 12 - 24;
   r.earth_rate_bound = gyr.earth_bound;
-  r.coefficients = coefficients_of(acc, gyr);
+  r.coefficients = coefficients_of(acc, gyr, o.g_sensitivity);
+  if (o.g_sensitivity) r.g_test = g_sensitivity_test(gyr, o.alpha);
   for (const auto& c : r.coefficients) {
     const auto& cat = coefficient_catalog();
     for (std::size_t i = 0; i < cat.size(); ++i)

@@ -101,6 +101,27 @@ struct SixFaceOptions {
   /// common offset of every rest that the readings' own scatter does not show; it adds to the
   /// biases' variance (rad/s, m/s^2).
   double gyro_bias_instability = 0.0, accel_bias_instability = 0.0;
+  /// Estimate the gyro g-sensitivity K too (gyro.g_sensitivity, 9 terms: w_meas = G w + b + K f):
+  /// the rests' gyro means against their six specific-force directions, and each turn's mean
+  /// specific force. Off: K is taken as zero (the base model).
+  bool g_sensitivity = false;
+  double alpha = 0.01;  // the g-sensitivity test's significance level
+};
+
+/// The test of the gyro g-sensitivity on the rests (SixFaceOptions::g_sensitivity): K's estimate
+/// against zero by its covariance, a Wald statistic on 9 degrees of freedom.
+struct GSensitivityTest {
+  Eigen::Matrix3d K = Eigen::Matrix3d::Zero();        // rad/s per m/s^2
+  Eigen::Matrix3d K_sigma = Eigen::Matrix3d::Zero();  // rad/s per m/s^2
+  double statistic = 0.0;                             // K^T P^-1 K
+  int dof = 9;
+  double p_value = 1.0;
+  double alpha = 0.01;
+  bool detected = false;  // p_value < alpha
+  /// rad/s per m/s^2: the largest component K can have unseen: sqrt(chi2_9(1 - alpha)) times the
+  /// largest component sigma (a K of that size along its worst direction just reaches the
+  /// threshold).
+  double detection_limit = 0.0;
 };
 
 struct SixFaceCoefficient {
@@ -125,7 +146,7 @@ struct SixFaceTurn {
 
 struct SixFaceResult {
   ImuErrorModel model;                           // base terms, SI, the faces' frame
-  std::vector<SixFaceCoefficient> coefficients;  // 24 base terms, catalog order
+  std::vector<SixFaceCoefficient> coefficients;  // 24 base terms (33 with K), catalog order
   std::vector<SixFaceFace> faces;
   std::vector<SixFaceTurn> turns;
   double gravity = 0.0;     // m/s^2 used
@@ -134,6 +155,8 @@ struct SixFaceResult {
   double earth_rate_bound = 0.0;  // rad/s: the Earth rate not modelled (noise), per axis
   /// What the procedure cannot determine, one sentence each.
   std::vector<std::string> undetermined;
+  /// With SixFaceOptions::g_sensitivity: the test (its K also in `coefficients` and `model`).
+  std::optional<GSensitivityTest> g_test;
 };
 
 /// The calibration from the parts (the nine declared labels must all be present; other labels
