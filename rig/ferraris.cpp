@@ -41,6 +41,35 @@ struct Builder {
     segments.push_back(s);
     t = s.t1;
   }
+  // A rest with the hand's tremor: back-and-forth rotations of `amplitude` (1-sigma angle) about
+  // random body axes, each out and back in `period` s, so that the attitude returns after each.
+  template <class Rng>
+  void tremor_rest(double duration, double amplitude, double period, Rng& rng) {
+    if (!(amplitude > 0.0)) {
+      rest(duration);
+      return;
+    }
+    std::normal_distribution<double> normal(0.0, 1.0);
+    const auto cycles = static_cast<int>(std::floor(duration / period));
+    for (int c = 0; c < cycles; ++c) {
+      const Eigen::Vector3d u(normal(rng), normal(rng), normal(rng));
+      const double angle = amplitude * normal(rng);
+      const double half = 0.5 * period;
+      for (const double sign : {1.0, -1.0}) {
+        MotionSegment s;
+        s.t0 = t;
+        s.t1 = t + half;
+        s.C_b_n_start = C;
+        s.axis_b = u.normalized();
+        s.beta = TrapezoidProfile::by_duration(sign * angle, half,
+                                               8.0 * std::abs(angle) / (half * half) + 1e-12);
+        segments.push_back(s);
+        t = s.t1;
+        C = s.C_b_n_end();
+      }
+    }
+    if (duration > cycles * period) rest(duration - cycles * period);
+  }
   void move_to(const Eigen::Matrix3d& target, double duration) {
     const Eigen::Vector3d r = rotvec_from_dcm(target * C.transpose());
     MotionSegment s;
@@ -132,7 +161,7 @@ FerrarisSession ferraris_session(const Site& site, const FerrarisOptions& o, std
   for (int k = 0; k < 6; ++k) {
     b.move_to(attitude_with_up(tilted(k / 2, k % 2 ? -1.0 : 1.0), heading(rng)), o.move);
     parts.push_back({kFaces[k], b.t, b.t + o.rest});
-    b.rest(o.rest);
+    b.tremor_rest(o.rest, o.tremor, o.tremor_period, rng);
   }
   const Eigen::Vector3d up_n(0.0, 0.0, -1.0);
   for (int j = 0; j < 3; ++j) {

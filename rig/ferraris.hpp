@@ -1,8 +1,9 @@
 // Simulated six-face and known-turn sessions (Ferraris et al. 1995, filter/six_face/six_face.hpp)
 // for the tests: a hand puts the unit on each of its six faces in turn (each face tilted by a
-// random placement error, at a random heading), then turns it by hand through a full turn about
-// each body axis with that axis up (the total angle off by a random error, the rate uneven: the
-// turn's axis wobbles in the body), with rests between. Every part is labelled with imucal's names.
+// random placement error, at a random heading, held with a slight tremor), then turns it by hand
+// through a full turn about each body axis with that axis up (the total angle off by a random
+// error, the rate uneven: the turn's axis wobbles in the body), with rests between. Every part is
+// labelled with imucal's names.
 #pragma once
 
 #include <array>
@@ -46,6 +47,12 @@ struct FerrarisOptions {
   double turn_angle_error = 1.0 * units::deg;  // rad, 1-sigma of the angle the hand really turns
   double wobble = 3.0 * units::deg;            // rad: the turn's axis leans this far in the body
   double label_margin = 0.5;  // s of the rests before and after a turn inside its label
+  /// The hand's tremor on the faces: back-and-forth turns of this 1-sigma angle about random
+  /// axes, one every `tremor_period` s (0, the default: the faces rest still). With 0.02 deg the
+  /// six-face sigmas are off (README: the tremor is not white noise), so the Monte Carlo runs
+  /// without it.
+  double tremor = 0.0;
+  double tremor_period = 0.2;  // s
 };
 
 /// A labelled part of a simulated session.

@@ -740,6 +740,10 @@ sfnew six-face-accuracy-zero; add_line "$d/session.ini" "face_accuracy = 0 deg"
 fixed 2 "session.ini:$L: 'six_face.face_accuracy'|must be within" sf
 sfnew six-face-out-is-input; 
 fixed 1 "--out session.ini is the session: an output never replaces an input" S calibrate --method six-face --session session.ini --out session.ini
+sfnew six-face-diagnose-no-label-column; set_key "$d/session.ini" columns "- - ax ay az gx gy gz"
+fixed 2 "annotated_session.csv:2: a six-face log needs a label column" S diagnose --session session.ini --out out/diag
+sfnew six-face-diagnose-turn-other-direction; set_key "$d/session.ini" turn_angle "-360 deg"
+fixed 2 "turn 'x_rot' integrates to 367.|declared -360.0 deg" S diagnose --session session.ini --out out/diag
 sfnew six-face-table-option; 
 fixed 1 "--table-sigma is an option of the table methods (closed-form, kf), not of --method six-face" sf --table-sigma 3
 
