@@ -18,27 +18,10 @@ int diagnose_six_face_session(const Session& session, const std::string& out_dir
     auto inputs = session_inputs(session);
     refuse_overwrite(inputs, {{"--out", out_dir + "/diagnosis.json"}});
   }
-  SixFaceOptions o;
-  o.declared = *session.six_face;
-  o.gravity = session.gravity;
-  if (session.has_site) o.site = session.site;
-  if (!session.sensor_file.empty()) {
-    const SensorProfile profile = SensorProfile::load(session.sensor_file);
-    o.gyro_bias_instability = profile.noise.gyro.bias_instability;
-    o.accel_bias_instability = profile.noise.accel.bias_instability;
-  }
+  SixFaceOptions o = six_face_options(session);
   o.g_sensitivity = true;
   o.alpha = alpha;
-  LogReader reader(session.log);
-  PartAccumulator parts({o.declared.turns.begin(), o.declared.turns.end()});
-  ImuSample s;
-  while (reader.next(s)) {
-    if (s.label < 0)
-      throw LogError(session.log.file, reader.line(),
-                     "a six-face log needs a label column (columns = ... label ...)");
-    parts.push(s, reader.labels()[static_cast<std::size_t>(s.label)]);
-  }
-  const SixFaceResult r = six_face_calibrate(parts.parts(), o);
+  const SixFaceResult r = six_face_calibrate(read_parts(session), o);
   const GSensitivityTest& t = *r.g_test;
   const CoefficientFamily& info = coefficient_family_info("gyro.g_sensitivity");
   const double per = info.si_per_unit();

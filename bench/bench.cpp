@@ -174,14 +174,7 @@ double bench_six_face(const std::string& src) {
   double cpu = 1e300;
   for (int pass = 0; pass < 5; ++pass) {
     const std::clock_t c0 = std::clock();
-    LogReader reader(s.log);
-    PartAccumulator parts({s.six_face->turns.begin(), s.six_face->turns.end()});
-    ImuSample x;
-    while (reader.next(x)) parts.push(x, reader.labels()[static_cast<std::size_t>(x.label)]);
-    SixFaceOptions o;
-    o.declared = *s.six_face;
-    o.gravity = s.gravity;
-    sink += six_face_calibrate(parts.parts(), o).accel_chi2;
+    sink += six_face_calibrate(read_parts(s), six_face_options(s)).accel_chi2;
     cpu = std::min(cpu, static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC);
   }
   std::printf("six-face: imucal's session (9414 readings, 46 s), read and calibrated: %.4f s CPU\n",

@@ -118,14 +118,7 @@ TEST_CASE("Six-face: imucal's recording against its stored calibration", "[six_f
   const Session s = Session::load(test::source_path("config/measured/imucal-ferraris/session.ini"),
                                   Session::PlanNeed::Optional);
   REQUIRE(s.six_face);
-  LogReader reader(s.log);
-  PartAccumulator parts({s.six_face->turns.begin(), s.six_face->turns.end()});
-  ImuSample x;
-  while (reader.next(x)) parts.push(x, reader.labels()[static_cast<std::size_t>(x.label)]);
-  SixFaceOptions o;
-  o.declared = *s.six_face;
-  o.gravity = s.gravity;
-  const SixFaceResult r = six_face_calibrate(parts.parts(), o);
+  const SixFaceResult r = six_face_calibrate(read_parts(s), six_face_options(s));
   const nlohmann::json ref =
       nlohmann::json::parse(std::ifstream(test::source_path("tests/data/imucal/example_cal.json")));
   const Eigen::Matrix3d A = r.model.accel.linear(), G = r.model.gyro.linear();

@@ -492,6 +492,38 @@ GSensitivityTest g_sensitivity_test(const GyroFit& g, double alpha) {
 
 }  // namespace
 
+std::vector<PartStatistics> read_parts(const Session& session) {
+  const FerrarisDeclaration& d = session.six_face ? *session.six_face : FerrarisDeclaration{};
+  LogReader reader(session.log);
+  PartAccumulator parts({d.turns.begin(), d.turns.end()});
+  ImuSample s;
+  while (reader.next(s)) {
+    if (s.label < 0)
+      throw LogError(session.log.file, reader.line(),
+                     "a six-face log needs a label column (columns = ... label ...): the part "
+                     "each sample belongs to");
+    try {
+      parts.push(s, reader.labels()[static_cast<std::size_t>(s.label)]);
+    } catch (const SixFaceError& e) {
+      throw LogError(session.log.file, reader.line(), e.what());
+    }
+  }
+  return parts.parts();
+}
+
+SixFaceOptions six_face_options(const Session& session) {
+  SixFaceOptions o;
+  if (session.six_face) o.declared = *session.six_face;
+  o.gravity = session.gravity;
+  if (session.has_site) o.site = session.site;
+  if (!session.sensor_file.empty()) {
+    const SensorProfile profile = SensorProfile::load(session.sensor_file);
+    o.gyro_bias_instability = profile.noise.gyro.bias_instability;
+    o.accel_bias_instability = profile.noise.accel.bias_instability;
+  }
+  return o;
+}
+
 SixFaceResult six_face_calibrate(const std::vector<PartStatistics>& parts,
                                  const SixFaceOptions& o) {
   if (!(o.declared.face_accuracy > 0.0 && o.declared.face_accuracy < 20.0 * units::deg))

@@ -46,6 +46,7 @@
 #include "rig/ferraris.hpp"
 #include "rig/handheld.hpp"
 #include "rig/imu_sample.hpp"
+#include "rig/session.hpp"
 
 namespace sinscal {
 
@@ -158,6 +159,13 @@ struct SixFaceResult {
   /// With SixFaceOptions::g_sensitivity: the test (its K also in `coefficients` and `model`).
   std::optional<GSensitivityTest> g_test;
 };
+
+/// A six-face session's parts, read from its log's label column (the turns' readings kept).
+/// Throws LogError naming the file and line: no label column, a part that comes back.
+std::vector<PartStatistics> read_parts(const Session& session);
+/// The options a session gives: its declaration, gravity, site, and its profile's bias
+/// instabilities (when it names a sensor profile).
+SixFaceOptions six_face_options(const Session& session);
 
 /// The calibration from the parts (the nine declared labels must all be present; other labels
 /// are ignored). Throws SixFaceError naming the part and the cause: a missing or repeated part,
