@@ -41,8 +41,10 @@ struct Builder {
     segments.push_back(s);
     t = s.t1;
   }
-  // A rest with the hand's tremor: back-and-forth rotations of `amplitude` (1-sigma angle) about
-  // random body axes, each out and back in `period` s, so that the attitude returns after each.
+  // A rest with the hand's tremor: every half `period` s the unit turns from its present small
+  // offset (about the rest's attitude) to a new one drawn afresh (each component 1-sigma
+  // `amplitude`), so the offset is stationary and the rest ends where the tremor left it, as a
+  // hand's does (not back at its start: the rest's mean rate carries the net turn).
   template <class Rng>
   void tremor_rest(double duration, double amplitude, double period, Rng& rng) {
     if (!(amplitude > 0.0)) {
@@ -50,25 +52,28 @@ struct Builder {
       return;
     }
     std::normal_distribution<double> normal(0.0, 1.0);
-    const auto cycles = static_cast<int>(std::floor(duration / period));
-    for (int c = 0; c < cycles; ++c) {
-      const Eigen::Vector3d u(normal(rng), normal(rng), normal(rng));
-      const double angle = amplitude * normal(rng);
-      const double half = 0.5 * period;
-      for (const double sign : {1.0, -1.0}) {
-        MotionSegment s;
-        s.t0 = t;
-        s.t1 = t + half;
-        s.C_b_n_start = C;
-        s.axis_b = u.normalized();
-        s.beta = TrapezoidProfile::by_duration(sign * angle, half,
-                                               8.0 * std::abs(angle) / (half * half) + 1e-12);
-        segments.push_back(s);
-        t = s.t1;
-        C = s.C_b_n_end();
+    const double half = 0.5 * period;
+    const auto steps = static_cast<int>(std::floor(duration / half));
+    const Eigen::Matrix3d C0 = C;
+    for (int c = 0; c < steps; ++c) {
+      const Eigen::Vector3d target(amplitude * normal(rng), amplitude * normal(rng),
+                                   amplitude * normal(rng));
+      // Body-axis rotation from the present attitude to C0 exp(target) (C_b_n: body to nav).
+      const Eigen::Vector3d r = rotvec_from_dcm(C.transpose() * C0 * dcm_from_rotvec(target));
+      MotionSegment s;
+      s.t0 = t;
+      s.t1 = t + half;
+      s.C_b_n_start = C;
+      if (r.norm() > 0.0) {
+        s.axis_b = r.normalized();
+        s.beta =
+            TrapezoidProfile::by_duration(r.norm(), half, 8.0 * r.norm() / (half * half) + 1e-12);
       }
+      segments.push_back(s);
+      t = s.t1;
+      C = s.C_b_n_end();
     }
-    if (duration > cycles * period) rest(duration - cycles * period);
+    if (duration > steps * half) rest(duration - steps * half);
   }
   void move_to(const Eigen::Matrix3d& target, double duration) {
     const Eigen::Vector3d r = rotvec_from_dcm(target * C.transpose());

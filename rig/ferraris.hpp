@@ -47,10 +47,9 @@ struct FerrarisOptions {
   double turn_angle_error = 1.0 * units::deg;  // rad, 1-sigma of the angle the hand really turns
   double wobble = 3.0 * units::deg;            // rad: the turn's axis leans this far in the body
   double label_margin = 0.5;  // s of the rests before and after a turn inside its label
-  /// The hand's tremor on the faces: back-and-forth turns of this 1-sigma angle about random
-  /// axes, one every `tremor_period` s (0, the default: the faces rest still). With 0.02 deg the
-  /// six-face sigmas are off (README: the tremor is not white noise), so the Monte Carlo runs
-  /// without it.
+  /// The hand's tremor on the faces: every half `tremor_period` s a new small attitude offset
+  /// (each component 1-sigma `tremor`, rad) reached by a short turn, so a rest ends off its start
+  /// (0, the default: the faces rest still).
   double tremor = 0.0;
   double tremor_period = 0.2;  // s
 };
