@@ -96,7 +96,7 @@ struct Builder {
 
 FerrarisDeclaration read_ferraris_declaration(const IniFile& ini) {
   ini.check_keys("six_face", {"faces", "turns", "turn_angle", "turn_accuracy", "face_accuracy",
-                              "min_rest", "turn_edge"});
+                              "min_rest", "turn_edge", "rest_correlation"});
   FerrarisDeclaration d;
   auto labels = [&](const char* key, std::size_t n, auto& out) {
     const std::string k = std::string("six_face.") + key;
@@ -137,6 +137,7 @@ FerrarisDeclaration read_ferraris_declaration(const IniFile& ini) {
   };
   d.min_rest = seconds("min_rest", d.min_rest);
   d.turn_edge = seconds("turn_edge", d.turn_edge);
+  d.rest_correlation = seconds("rest_correlation", d.rest_correlation);
   return d;
 }
 
@@ -151,6 +152,8 @@ FerrarisSession ferraris_session(const Site& site, const FerrarisOptions& o, std
         o.label_margin >= 0.0 && o.face_tilt >= 0.0 && o.turn_angle_error >= 0.0))
     throw std::invalid_argument("ferraris_session: durations and errors must be positive");
   std::mt19937_64 rng(seed);
+  // The tremor from its own stream: the session's placements and turns do not depend on it.
+  std::mt19937_64 tremor_rng(seed ^ 0x7265'6d6f'7274ULL);
   std::normal_distribution<double> normal(0.0, 1.0);
   std::uniform_real_distribution<double> heading(-M_PI, M_PI);
   auto tilted = [&](int axis, double sign) {
@@ -166,7 +169,7 @@ FerrarisSession ferraris_session(const Site& site, const FerrarisOptions& o, std
   for (int k = 0; k < 6; ++k) {
     b.move_to(attitude_with_up(tilted(k / 2, k % 2 ? -1.0 : 1.0), heading(rng)), o.move);
     parts.push_back({kFaces[k], b.t, b.t + o.rest});
-    b.tremor_rest(o.rest, o.tremor, o.tremor_period, rng);
+    b.tremor_rest(o.rest, o.tremor, o.tremor_period, tremor_rng);
   }
   const Eigen::Vector3d up_n(0.0, 0.0, -1.0);
   for (int j = 0; j < 3; ++j) {

@@ -31,6 +31,10 @@ struct FerrarisDeclaration {
   /// s at each end of a turn's part whose mean specific force gives the gravity direction
   /// before and after it (a turn's part starts and ends at rest).
   double turn_edge = 0.2;
+  /// s: the longest period of the hand's tremor or sway on the faces. A rest's noise is judged
+  /// from the scatter of its means over blocks at least this long (shorter ones show the tremor's
+  /// back-and-forth, not how the rest's mean scatters).
+  double rest_correlation = 0.25;
 };
 
 class IniFile;
@@ -49,8 +53,8 @@ struct FerrarisOptions {
   double label_margin = 0.5;  // s of the rests before and after a turn inside its label
   /// The hand's tremor on the faces: every half `tremor_period` s a new small attitude offset
   /// (each component 1-sigma `tremor`, rad) reached by a short turn, so a rest ends off its start
-  /// (0, the default: the faces rest still).
-  double tremor = 0.0;
+  /// (0: the faces rest still).
+  double tremor = 0.02 * units::deg;
   double tremor_period = 0.2;  // s
 };
 

@@ -139,7 +139,42 @@ struct AccelFit {
   LinearProblem problem{24};  // the last pass's (the joint fit extends it with the gyros)
 };
 
-AccelFit fit_accel(const Located& l, double g, double sigma_p) {
+// Each face's variance of its means, rate [0..2] and f [3..5] (BlockScatter), from the faces'
+// scatters pooled (one sensor, one hand): the gyros' over all six faces; each accelerometer's
+// over the two faces where its axis is vertical, and apart over the four where it is horizontal
+// (a hand's tremor tilts it there, gravity's projection on it changing to first order).
+std::array<BlockScatter::Vector6d, 6> rest_noise(const Located& l, const SixFaceOptions& o,
+                                                 Eigen::Vector3d& white_rate) {
+  std::vector<const BlockScatter*> all;
+  double duration = 0.0, count = 0.0;
+  for (const auto* p : l.faces) {
+    all.push_back(&p->scatter);
+    duration += p->duration;
+    count += static_cast<double>(p->count);
+  }
+  const double dt = duration / std::max(1.0, count), tau_min = o.declared.rest_correlation;
+  const BlockScatter::Noise gyro = BlockScatter::fit(all, dt, tau_min);
+  white_rate = gyro.white.head<3>();
+  std::array<BlockScatter::Vector6d, 6> out{};
+  for (std::size_t k = 0; k < 6; ++k)
+    out[k].head<3>() = gyro.var_mean(std::max(l.faces[k]->duration, dt)).head<3>();
+  for (Eigen::Index c = 0; c < 3; ++c) {
+    std::vector<const BlockScatter*> vertical, horizontal;
+    for (std::size_t k = 0; k < 6; ++k)
+      (static_cast<Eigen::Index>(k / 2) == c ? vertical : horizontal).push_back(all[k]);
+    const auto v = BlockScatter::fit(vertical, dt, tau_min);
+    const auto h = BlockScatter::fit(horizontal, dt, tau_min);
+    for (std::size_t k = 0; k < 6; ++k) {
+      const BlockScatter::Noise& n = static_cast<Eigen::Index>(k / 2) == c ? v : h;
+      out[k](c + 3) = n.var_mean(std::max(l.faces[k]->duration, dt))(c + 3);
+    }
+  }
+  return out;
+}
+
+AccelFit fit_accel(const Located& l, double g, const SixFaceOptions& o,
+                   const std::array<BlockScatter::Vector6d, 6>& noise) {
+  const double sigma_p = o.declared.face_accuracy;
   AccelFit fit;
   for (int pass = 0; pass < 2; ++pass) {
     LinearProblem lp(24);
@@ -169,9 +204,7 @@ AccelFit fit_accel(const Located& l, double g, double sigma_p) {
       x0.segment<12>(12) = fit.d;
       const Eigen::Vector3d model = g * shrink * fit.A * v + fit.b;
       const Eigen::Vector3d y = p.mean_f - model + H * x0;
-      Eigen::Matrix3d R = (p.var_f / static_cast<double>(std::max<std::size_t>(1, p.count)))
-                              .cwiseMax(1e-14)
-                              .asDiagonal();
+      Eigen::Matrix3d R = noise[static_cast<std::size_t>(k)].tail<3>().cwiseMax(1e-14).asDiagonal();
       R += g * g * spread * v * v.transpose();
       lp.add_block(H, y, R);
     }
@@ -291,8 +324,7 @@ Eigen::Vector3d add_turn(LinearProblem& lp, const PartStatistics& p, const Accel
   for (Eigen::Index r = 0; r < 3; ++r) x_acc.segment<3>(3 * r) = acc.A.row(r).transpose();
   x_acc.segment<3>(9) = acc.b;
   const Eigen::Vector3d y = p.integral_dtheta + o.declared.turn_angle * J * x_acc;
-  const double dt = p.duration / static_cast<double>(std::max<std::size_t>(1, p.count));
-  Eigen::Matrix3d R = (pooled * static_cast<double>(p.count) * dt * dt).asDiagonal();
+  Eigen::Matrix3d R = (pooled * p.duration).asDiagonal();  // white: W per s, summed over the turn
   R += std::pow(o.declared.turn_accuracy, 2) * a * a.transpose();
   R += (var_s + var_e) * (Eigen::Matrix3d::Identity() - a * a.transpose());
   R += std::pow(omega * p.duration, 2) / 3.0 * Eigen::Matrix3d::Identity();
@@ -306,19 +338,14 @@ GyroFit fit_gyro(const Located& l, AccelFit& acc, const SixFaceOptions& o) {
   const double omega = Earth::wgs84().omega_ie_n(0.0).norm();
   const double lat = o.site ? o.site->lat_rad : 0.0;
   Eigen::Vector3d pooled = Eigen::Vector3d::Zero(), b0 = Eigen::Vector3d::Zero();
-  double n_all = 0.0;
-  for (const auto* p : l.faces) {
-    pooled += p->var_rate * static_cast<double>(p->count);
-    n_all += static_cast<double>(p->count);
-    b0 += p->mean_rate / 6.0;
-  }
-  pooled /= std::max(1.0, n_all);
+  const auto noise = rest_noise(l, o, pooled);  // pooled: the white gyro noise W, (rad/s)^2 s
+  for (const auto* p : l.faces) b0 += p->mean_rate / 6.0;
   LinearProblem lp(o.g_sensitivity ? kJoint + 9 : kJoint);
   for (std::size_t i = 0; i < acc.problem.rows.size(); ++i) {
     lp.rows.push_back(padded(acc.problem.rows[i], lp.n));
     lp.z.push_back(acc.problem.z[i]);
   }
-  for (const auto* p : l.faces) {
+  for (const auto* const& p : l.faces) {
     const Eigen::Vector3d up = (A_inv * (p->mean_f - acc.b)).normalized();
     Eigen::Matrix<double, 3, Eigen::Dynamic> H = Eigen::MatrixXd::Zero(3, lp.n);
     H.block<3, 3>(0, kBg) = Eigen::Matrix3d::Identity();
@@ -327,9 +354,8 @@ GyroFit fit_gyro(const Located& l, AccelFit& acc, const SixFaceOptions& o) {
       for (Eigen::Index r = 0; r < 3; ++r) H.block<1, 3>(r, kK + 3 * r) = f.transpose();
     }
     Eigen::Vector3d y = p->mean_rate;
-    Eigen::Matrix3d R = (p->var_rate / static_cast<double>(std::max<std::size_t>(1, p->count)))
-                            .cwiseMax(1e-20)
-                            .asDiagonal();
+    const auto k = static_cast<std::size_t>(&p - l.faces.data());
+    Eigen::Matrix3d R = noise[k].head<3>().cwiseMax(1e-20).asDiagonal();
     if (o.site) {
       y -= omega * std::sin(lat) * up;  // the vertical part (G ~ I: second order)
       const double h2 = std::pow(omega * std::cos(lat), 2) / 2.0;
@@ -392,6 +418,137 @@ void check_turns(const Located& l, const SixFaceOptions& o) {
 
 }  // namespace
 
+void BlockScatter::push_level(std::size_t k, const Vector6d& x) {
+  if (k == 0) {
+    ++count_;
+    sum_ += x;
+    sum2_ += x.cwiseProduct(x);
+  }
+  if (levels_.size() <= k) levels_.emplace_back();
+  Level& l = levels_[k];
+  if (l.has_last) {
+    l.sum_d2 += (x - l.last).cwiseProduct(x - l.last);
+    ++l.diffs;
+  }
+  l.last = x;
+  l.has_last = true;
+  if (!l.has_pending) {
+    l.pending = x;
+    l.has_pending = true;
+    return;
+  }
+  l.has_pending = false;
+  push_level(k + 1, 0.5 * (l.pending + x));  // levels_ may grow: `l` is not used after this
+}
+
+namespace {
+
+// W / tau + B / tau^2 fitted to Allan variances y (weights: differences / model^2, twice), each
+// term non-negative; returns (W, B).
+Eigen::Vector2d fit_white_and_wander(const std::vector<double>& tau, const std::vector<double>& y,
+                                     const std::vector<double>& m) {
+  // An Allan variance from m differences scatters with variance 2 y^2 / m: weights m / model^2,
+  // the model from the white-only (or wander-only) form pooled over the lengths to begin with
+  // (weights from the observed values would favour the low ones). form 0: both terms, 1: W
+  // alone, 2: B alone; returns (W, B, chi2).
+  double m_all = 0.0, w0 = 0.0, b0 = 0.0;
+  for (std::size_t i = 0; i < tau.size(); ++i) {
+    m_all += m[i];
+    w0 += m[i] * y[i] * tau[i];
+    b0 += m[i] * y[i] * tau[i] * tau[i];
+  }
+  auto fit = [&](int form) {
+    Eigen::Vector3d x(form == 2 ? 0.0 : w0 / m_all, form == 2 ? b0 / m_all : 0.0, 0.0);
+    for (int pass = 0; pass < 3; ++pass) {
+      Eigen::Matrix2d N = Eigen::Matrix2d::Zero();
+      Eigen::Vector2d r = Eigen::Vector2d::Zero();
+      for (std::size_t i = 0; i < tau.size(); ++i) {
+        const double model = x(0) / tau[i] + x(1) / (tau[i] * tau[i]);
+        const Eigen::Vector2d h(form == 2 ? 0.0 : 1.0 / tau[i],
+                                form == 1 ? 0.0 : 1.0 / (tau[i] * tau[i]));
+        const double w = m[i] / std::max(model * model, 1e-300);
+        N += w * h * h.transpose();
+        r += w * h * y[i];
+      }
+      if (form == 1) N(1, 1) = 1.0;
+      if (form == 2) N(0, 0) = 1.0;
+      const Eigen::Vector2d next = N.ldlt().solve(r);
+      // A negative term would make the weights meaningless: keep the model positive.
+      if (next(0) / tau.front() + next(1) / (tau.front() * tau.front()) <= 0.0) break;
+      x.head<2>() = next;
+    }
+    x(2) = 0.0;
+    for (std::size_t i = 0; i < tau.size(); ++i) {
+      const double model = std::max(x(0) / tau[i] + x(1) / (tau[i] * tau[i]), 1e-300);
+      x(2) += m[i] * std::pow(y[i] - model, 2) / (2.0 * model * model);
+    }
+    return x;
+  };
+  // White noise unless the other term is needed: the chi2 must drop by the 99 % point of chi2 on
+  // 1 dof (6.63).
+  const Eigen::Vector3d white = fit(1);
+  if (tau.size() < 3) return white.head<2>().cwiseMax(0.0);
+  const Eigen::Vector3d both = fit(0), wander = fit(2);
+  if (both(0) >= 0.0 && both(1) >= 0.0 && white(2) - both(2) > 6.63) return both.head<2>();
+  if (white(2) - wander(2) > 6.63) return wander.head<2>().cwiseMax(0.0);
+  return white.head<2>().cwiseMax(0.0);
+}
+
+}  // namespace
+
+BlockScatter::Vector6d BlockScatter::Noise::var_mean(double T) const {
+  return white / T + 2.0 / 3.0 * wander / (T * T);
+}
+
+BlockScatter::Noise BlockScatter::fit(const std::vector<const BlockScatter*>& parts, double dt,
+                                      double tau_min) {
+  Noise out;
+  std::size_t count = 0, depth = 0;
+  Vector6d sum = Vector6d::Zero(), sum2 = Vector6d::Zero();
+  for (const auto* p : parts) {
+    count += p->count_;
+    sum += p->sum_;
+    sum2 += p->sum2_;
+    depth = std::max(depth, p->levels_.size());
+  }
+  if (count < 8) {  // the readings' variance, as white noise
+    const double n = static_cast<double>(count);
+    if (count > 1) out.white = (sum2 - sum.cwiseProduct(sum) / n) / (n - 1.0) * dt;
+    return out;
+  }
+  // Each block length's differences, pooled over the parts.
+  std::vector<Vector6d> d2(depth, Vector6d::Zero());
+  std::vector<std::size_t> diffs(depth, 0);
+  for (const auto* p : parts)
+    for (std::size_t k = 0; k < p->levels_.size(); ++k) {
+      d2[k] += p->levels_[k].sum_d2;
+      diffs[k] += p->levels_[k].diffs;
+    }
+  // The lengths to fit: tau >= tau_min with at least 3 differences in all (the longest ones
+  // separate the two terms); fewer than three such lengths, the longest two or three with at
+  // least 3 differences.
+  std::vector<std::size_t> use;
+  for (std::size_t k = 0; k < depth; ++k)
+    if (diffs[k] >= 3 && std::ldexp(dt, static_cast<int>(k)) >= tau_min) use.push_back(k);
+  if (use.size() < 3) {
+    use.clear();
+    for (std::size_t k = depth; k-- > 0 && use.size() < 3;)
+      if (diffs[k] >= 3) use.push_back(k);
+  }
+  for (Eigen::Index c = 0; c < 6; ++c) {
+    std::vector<double> tau, y, m;
+    for (const std::size_t k : use) {
+      tau.push_back(std::ldexp(dt, static_cast<int>(k)));
+      y.push_back(d2[k](c) / (2.0 * static_cast<double>(diffs[k])));
+      m.push_back(static_cast<double>(diffs[k]));
+    }
+    const Eigen::Vector2d wb = fit_white_and_wander(tau, y, m);
+    out.white(c) = wb(0);
+    out.wander(c) = wb(1);
+  }
+  return out;
+}
+
 void PartAccumulator::close() {
   if (parts_.empty() || current_.empty()) return;
   PartStatistics& p = parts_.back();
@@ -431,6 +588,9 @@ void PartAccumulator::push(const ImuSample& s, const std::string& label) {
   m2_rate_ += dw.cwiseProduct(w - p.mean_rate);
   m2_f_ += df.cwiseProduct(f - p.mean_f);
   p.integral_dtheta += s.dtheta_b;
+  BlockScatter::Vector6d x;
+  x << w, f;
+  p.scatter.push(x);
   if (keeping_) p.readings.push_back({s.t, f, w});
   p.duration += s.dt;
   p.t_end = s.t;
@@ -541,7 +701,8 @@ SixFaceResult six_face_calibrate(const std::vector<PartStatistics>& parts,
   const Located l = locate(parts, o);
   check_faces(l, o);
   check_turns(l, o);
-  AccelFit acc = fit_accel(l, r.gravity, o.declared.face_accuracy);
+  Eigen::Vector3d white_rate;
+  AccelFit acc = fit_accel(l, r.gravity, o, rest_noise(l, o, white_rate));
   const GyroFit gyr = fit_gyro(l, acc, o);
   r.accel_chi2 = acc.chi2;
   r.accel_dof = 18 + 12 - 24;

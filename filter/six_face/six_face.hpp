@@ -29,8 +29,10 @@
 // horizontal part (unknown heading) is noise of (Omega cos lat)^2 / 2 per horizontal axis; without
 // a site the whole of it is noise (Omega^2 / 3 per axis): a bound stated in the sigmas, which a
 // MEMS gyro's bias far exceeds.
-// Noise: each part's per-reading variance from its own readings (white noise: a mean over n
-// readings has variance / n); a turn's sum has the rests' pooled per-reading variance times n.
+// Noise: the variance of each rest's mean from its own readings' scatter over blocks of at least
+// `rest_correlation` s (BlockScatter: white noise, and the tremor of a hand, whose back-and-forth
+// averages out faster and whose tilt slower than white noise); a turn's sum has the rests' white
+// gyro noise over its length.
 #pragma once
 
 #include <Eigen/Core>
@@ -55,6 +57,44 @@ class SixFaceError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// The scatter of a part's readings over blocks of 1, 2, 4, ... readings (constant memory: the
+/// successive differences of the block means at each length), from which the variance of the
+/// part's mean follows when its noise is not white: a hand's tremor turns the unit back and forth
+/// (the gyros' mean over a rest carries only the net turn between its ends, far less than white
+/// noise of the same scatter would give) and tilts it (the accelerometers' readings are correlated
+/// over the tremor's period, so their mean scatters more than white noise of the same scatter).
+class BlockScatter {
+ public:
+  using Vector6d = Eigen::Matrix<double, 6, 1>;
+  /// One reading: [rate (3), specific force (3)].
+  void push(const Vector6d& x) { push_level(0, x); }
+  /// The white part W (variance of a mean over 1 s) and the wander's B of each component.
+  struct Noise {
+    Vector6d white = Vector6d::Zero(), wander = Vector6d::Zero();
+    /// The variance of the mean over T s: W / T + (2/3) B / T^2.
+    Vector6d var_mean(double T) const;
+  };
+  /// W and B of the parts' readings (the same sensor and hand: their scatters pooled at each
+  /// block length; readings dt s apart): the Allan variance at each block length tau >= tau_min s
+  /// (at least 8 blocks in all) fitted per component as W / tau + B / tau^2 (white noise; a wander
+  /// that averages out, for which a mean over T has variance (2/3) B / T^2, from the ends' turn),
+  /// each term non-negative. Parts too short for two such lengths use their longest two of at
+  /// least 4 blocks; fewer than 8 readings, the readings' variance as white.
+  static Noise fit(const std::vector<const BlockScatter*>& parts, double dt, double tau_min);
+  std::size_t count() const { return count_; }
+
+ private:
+  struct Level {
+    Vector6d pending = Vector6d::Zero(), last = Vector6d::Zero(), sum_d2 = Vector6d::Zero();
+    bool has_pending = false, has_last = false;
+    std::size_t diffs = 0;
+  };
+  std::vector<Level> levels_;
+  std::size_t count_ = 0;
+  Vector6d sum_ = Vector6d::Zero(), sum2_ = Vector6d::Zero();
+  void push_level(std::size_t k, const Vector6d& x);
+};
+
 /// The statistics of one labelled part of a log (constant memory: accumulated sample by sample).
 struct PartStatistics {
   std::string label;
@@ -66,6 +106,7 @@ struct PartStatistics {
   Eigen::Vector3d var_rate = Eigen::Vector3d::Zero();         // (rad/s)^2 per reading
   Eigen::Vector3d var_f = Eigen::Vector3d::Zero();            // (m/s^2)^2 per reading
   Eigen::Vector3d integral_dtheta = Eigen::Vector3d::Zero();  // rad, sum of the increments
+  BlockScatter scatter;  // of [rate, f], for the variance of the means (see BlockScatter)
   /// The readings (rates, SI), kept for the parts whose label the accumulator was told to keep
   /// (the turns: a few seconds each), empty otherwise.
   std::vector<ImuReading> readings;
