@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 
 #include "models/units.hpp"
 #include "rig/io/log_keys.hpp"
@@ -28,6 +29,9 @@ LogReader::LogReader(std::istream& in, const LogFormat& format) : f_(format) {
 }
 
 void LogReader::open(Input& input, const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw LogError(path, 0, "is a directory, not a log file (name the file in it)");
   input.owned = std::make_unique<std::ifstream>(path);
   input.in = input.owned.get();
   input.name = path;
