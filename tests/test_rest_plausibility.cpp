@@ -147,6 +147,31 @@ TEST_CASE("Rest gate: wrong units, swapped triads and one signal are named", "[p
     CHECK_FALSE(named(report, "gravity magnitude").passed);
     CHECK_THAT(report.failures(), Catch::Contains("swapped"));
   }
+  SECTION("the triads swapped in counts of other scales: told by the rests' directions") {
+    // Five poses: gravity turns in the body, the biases stay; swapped, each triad read with the
+    // other's scale (as two files of raw counts given the wrong way round).
+    const Eigen::Vector3d ups[] = {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {0, 1, 0}, {0.6, 0, 0.8}};
+    std::vector<RestStatistics> rests;
+    for (const auto& u : ups) {
+      auto r = rest(kG * u, w, kAccelNoise, kGyroNoise);
+      for (auto& x : r) {
+        const Eigen::Vector3d a = x.accel;
+        x.accel = 12.0 * x.gyro;
+        x.gyro = a / 12.0;
+      }
+      rests.push_back(rest_statistics(r, 0, r.size() - 1, "pose"));
+    }
+    const PlausibilityReport report = check_rests(rests, kG, l, "acc.txt");
+    CHECK_FALSE(named(report, "gravity magnitude").passed);
+    CHECK_THAT(report.failures(), Catch::Contains("swapped: the gyros' mean turns"));
+    // The same poses the right way round pass.
+    std::vector<RestStatistics> right;
+    for (const auto& u : ups) {
+      const auto r = rest(kG * u, w, kAccelNoise, kGyroNoise);
+      right.push_back(rest_statistics(r, 0, r.size() - 1, "pose"));
+    }
+    CHECK(check_rests(right, kG, l, "acc.txt").passed());
+  }
   SECTION("one signal in both triads; a strong but imperfect correlation is not") {
     auto r = rest(f, w, kAccelNoise, kGyroNoise);
     auto same = r;

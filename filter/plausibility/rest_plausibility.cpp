@@ -14,17 +14,18 @@ namespace sinscal {
 
 namespace {
 
-// Generic MEMS bounds (no sensor profile), the widest of common consumer data sheets: a gyro's
-// zero-rate offset up to 25 deg/s per axis (MPU-6050: 20, L3GD20 at 2000 deg/s: 25), an
-// accelerometer's zero-g offset up to 150 mg per axis and its sensitivity 3 % off (MPU-6050:
-// 80 mg on z, 3 %). Noise densities from a tactical MEMS to a hand's tremor on a consumer part:
-// gyro 0.02 to 20 deg/sqrt(h), accelerometer 10 to 5000 ug/sqrt(Hz).
+// Generic bounds (no sensor profile): the widest of common consumer MEMS data sheets for the
+// errors, a gyro's zero-rate offset up to 25 deg/s per axis (MPU-6050: 20, L3GD20 at 2000 deg/s:
+// 25), an accelerometer's zero-g offset up to 150 mg per axis and its sensitivity 3 % off
+// (MPU-6050: 80 mg on z, 3 %). Noise densities from below a navigation-grade unit's (FOG 0.001
+// deg/sqrt(h), 10 ug/sqrt(Hz)) to a hand's tremor on a consumer part: gyro 1e-4 to 20
+// deg/sqrt(h), accelerometer 0.5 to 5000 ug/sqrt(Hz).
 constexpr double kGenericGyroBias = 25.0 * units::deg_per_s;
 constexpr double kGenericAccelBias = 0.150 * units::g0;
 constexpr double kGenericAccelScale = 0.03;
-constexpr double kGenericGyroNoiseLo = 0.02 * units::deg_per_sqrt_h;
+constexpr double kGenericGyroNoiseLo = 1e-4 * units::deg_per_sqrt_h;
 constexpr double kGenericGyroNoiseHi = 20.0 * units::deg_per_sqrt_h;
-constexpr double kGenericAccelNoiseLo = 10.0 * units::ug_per_sqrt_hz;
+constexpr double kGenericAccelNoiseLo = 0.5 * units::ug_per_sqrt_hz;
 constexpr double kGenericAccelNoiseHi = 5000.0 * units::ug_per_sqrt_hz;
 // A profile's noise: a unit half as noisy as its data sheet's typical density is not credible;
 // ten times noisier is a hand's tremor or a vibrating bench, not yet a wrong unit.
@@ -32,6 +33,11 @@ constexpr double kProfileNoiseBelow = 2.0;
 constexpr double kProfileNoiseAbove = 10.0;
 // Noise sigmas of a rest's mean added to the bounds.
 constexpr double kMeanSigmas = 5.0;
+// Swapped triads: the gyros' rest means turn by more than this between rests, their sizes within
+// this ratio, while the accelerometers' turn by less than this.
+constexpr double kTurnedRests = 30.0 * units::deg;
+constexpr double kSteadySize = 1.5;
+constexpr double kSteadyDirection = 10.0 * units::deg;
 
 std::string number(double v, int precision = 4) {
   std::ostringstream s;
@@ -57,7 +63,12 @@ bool density_ok(double d, double lo, double hi) { return d >= lo && d <= hi; }
 // The unit factor (measured over true) that brings a triad's rest rate or specific force and its
 // noise into their bounds, named; empty when none does.
 std::string rescuing_factor(bool gyro, double dt, const std::function<bool(double)>& passes) {
-  for (const auto& f : unit_factors(gyro, dt))
+  // The smallest correction that does.
+  std::vector<UnitFactor> factors = unit_factors(gyro, dt);
+  std::stable_sort(factors.begin(), factors.end(), [](const UnitFactor& a, const UnitFactor& b) {
+    return std::abs(std::log(a.value)) < std::abs(std::log(b.value));
+  });
+  for (const auto& f : factors)
     if (passes(f.value)) return f.cause;
   return "";
 }
@@ -65,7 +76,40 @@ std::string rescuing_factor(bool gyro, double dt, const std::function<bool(doubl
 struct RestContext {
   double g, Omega;
   const RestLimits& l;
+  std::string swapped;  // not empty: the rests show the triads swapped (why)
 };
+
+// Largest angle between the first rest's mean and another's; their magnitudes' max / min.
+void spread(const std::vector<Eigen::Vector3d>& v, double& angle, double& ratio) {
+  angle = 0.0;
+  double lo = v.front().norm(), hi = lo;
+  for (const auto& x : v) {
+    angle = std::max(angle, std::atan2(v.front().cross(x).norm(), v.front().dot(x)));
+    lo = std::min(lo, x.norm());
+    hi = std::max(hi, x.norm());
+  }
+  ratio = lo > 0.0 ? hi / lo : 0.0;
+}
+
+// At rest the accelerometers' mean turns with the pose and keeps its size (gravity), the gyros'
+// stays put (the biases). The other way round, whatever the units, the triads are swapped.
+std::string swapped_triads(const std::vector<RestStatistics>& rests) {
+  if (rests.size() < 3) return "";
+  std::vector<Eigen::Vector3d> f, w;
+  for (const auto& r : rests) {
+    f.push_back(r.f_b);
+    w.push_back(r.omega_ib_b);
+  }
+  double fa = 0.0, fr = 0.0, wa = 0.0, wr = 0.0;
+  spread(f, fa, fr);
+  spread(w, wa, wr);
+  if (!(wa > kTurnedRests && wr < kSteadySize && fa < kSteadyDirection)) return "";
+  return "the gyro and accelerometer columns (or files) swapped: the gyros' mean turns by up to " +
+         number(wa / units::deg, 3) +
+         " deg from rest to rest at a steady size, as gravity does, "
+         "while the accelerometers' stays within " +
+         number(fa / units::deg, 2) + " deg";
+}
 
 double rate_bound(const RestContext& c, const RestStatistics& r) {
   return c.l.gyro_bias + c.Omega + kMeanSigmas * r.gyro_density.norm() / std::sqrt(r.seconds);
@@ -81,14 +125,19 @@ bool gyro_passes(const RestContext& c, const RestStatistics& r, double k) {
          density_ok(r.gyro_density.maxCoeff() / k, c.l.gyro_noise_lo, c.l.gyro_noise_hi);
 }
 
+// A unit is named for the accelerometers when it brings |f| this close to g (relative): the
+// bounds are wider than the factors' spacing (a 16 g scale for a 2 g one is 8, not g0 = 9.8).
+constexpr double kNamedUnit = 0.15;
+
 bool accel_passes(const RestContext& c, const RestStatistics& r, double k) {
-  return std::abs(r.f_b.norm() / k - c.g) <= force_bound(c, r) &&
+  return std::abs(std::log(r.f_b.norm() / k / c.g)) <= kNamedUnit &&
          density_ok(r.accel_density.maxCoeff() / k, c.l.accel_noise_lo, c.l.accel_noise_hi);
 }
 
 // The likely cause of a triad that fails: the two triads swapped, accelerometer data as the
 // gyros', a unit, or the bounds.
 std::string rest_cause(const RestContext& c, const RestStatistics& r, bool gyro) {
+  if (!c.swapped.empty()) return c.swapped;
   const bool gyros_read_gravity = std::abs(r.omega_ib_b.norm() - c.g) <= force_bound(c, r);
   const bool accels_read_a_rate = r.f_b.norm() <= rate_bound(c, r);
   if (gyros_read_gravity && accels_read_a_rate)
@@ -132,10 +181,18 @@ PlausibilityCheck check_noise(const RestContext& c, const std::vector<RestStatis
       number(c.l.gyro_noise_hi / units::deg_per_sqrt_h, 3) + " deg/sqrt(h), accelerometer " +
       number(c.l.accel_noise_lo / units::ug_per_sqrt_hz, 3) + " to " +
       number(c.l.accel_noise_hi / units::ug_per_sqrt_hz, 3) + " ug/sqrt(Hz)";
-  if (!gyro_ok || !accel_ok)
-    detail +=
-        ": outside it; the densities scale with the square root of the sample interval, "
-        "so a wrong rate (without a time column) or a wrong unit puts them there";
+  if (!gyro_ok || !accel_ok) {
+    const bool gyro = !gyro_ok;
+    const double d = gyro ? dg : da;
+    const std::string unit = rescuing_factor(gyro, rg.dt, [&](double k) {
+      return gyro ? density_ok(d / k, c.l.gyro_noise_lo, c.l.gyro_noise_hi)
+                  : density_ok(d / k, c.l.accel_noise_lo, c.l.accel_noise_hi);
+    });
+    detail += ": the " + std::string(gyro ? "gyros'" : "accelerometers'") +
+              " outside it; the densities scale with the square root of the sample interval, so "
+              "a wrong rate (without a time column) puts them there, or a wrong unit" +
+              (unit.empty() ? "" : " (" + unit + ")");
+  }
   return {"noise", gyro_ok && accel_ok, detail};
 }
 
@@ -195,7 +252,7 @@ RestStatistics rest_statistics(const std::vector<ImuReading>& r, std::size_t fir
 
 PlausibilityReport check_rests(const std::vector<RestStatistics>& rests, double g,
                                const RestLimits& l, const std::string& input) {
-  const RestContext c{g, Earth::wgs84().rate(), l};
+  const RestContext c{g, Earth::wgs84().rate(), l, swapped_triads(rests)};
   Findings magnitude, rate;
   for (const auto& r : rests) {
     const std::string where = input + ": " + r.where;
