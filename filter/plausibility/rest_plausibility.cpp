@@ -145,7 +145,7 @@ std::string rest_cause(const RestContext& c, const RestStatistics& r, bool gyro)
   if (gyro && gyros_read_gravity)
     return "the gyros read gravity: accelerometer data given as the gyros' (the same file, or the "
            "accelerometer columns named twice)";
-  const std::string unit = rescuing_factor(
+  std::string unit = rescuing_factor(
       gyro, r.dt, [&](double k) { return gyro ? gyro_passes(c, r, k) : accel_passes(c, r, k); });
   if (!unit.empty()) return unit;
   return "a wrong unit, scale or column, or a sensor that is not of the kind of the bounds (" +
