@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "apps/cli.hpp"
+#include "filter/plausibility/plausibility.hpp"
 #include "report/batch.hpp"
 
 namespace sinscal::cli {
@@ -54,6 +55,9 @@ SessionSummary calibrate_table_free_session(const CalibrateOptions& o,
 SessionSummary calibrate_six_face_session(const CalibrateOptions& o,
                                           const std::string& session_path,
                                           const std::string& out_path, bool verbose);
+
+/// The gate's report as the result's "plausibility" section (nothing when no check ran).
+void record_gate(nlohmann::ordered_json& sections, const PlausibilityReport& report);
 
 /// One session by the options' method: the result file, the monitor file (kf, may be empty);
 /// `verbose`: tables and verdicts on standard output (a single session); `live`: the live table

@@ -60,14 +60,6 @@ PlausibilityReport plausibility_gate(const CalibrateOptions& o, const Session& s
   return report;
 }
 
-void record_gate(nlohmann::ordered_json& sections, const PlausibilityReport& report) {
-  if (report.checks.empty()) return;
-  nlohmann::ordered_json checks = nlohmann::ordered_json::array();
-  for (const auto& c : report.checks)
-    checks.push_back({{"check", c.name}, {"passed", c.passed}, {"detail", c.detail}});
-  sections["plausibility"] = {{"passed", report.passed()}, {"checks", checks}};
-}
-
 SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
                             const std::string& out_path, const std::string& monitor_path,
                             bool verbose, bool live) {
@@ -178,6 +170,14 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
 }
 
 }  // namespace
+
+void record_gate(nlohmann::ordered_json& sections, const PlausibilityReport& report) {
+  if (report.checks.empty()) return;
+  nlohmann::ordered_json checks = nlohmann::ordered_json::array();
+  for (const auto& c : report.checks)
+    checks.push_back({{"check", c.name}, {"passed", c.passed}, {"detail", c.detail}});
+  sections["plausibility"] = {{"passed", report.passed()}, {"checks", checks}};
+}
 
 SessionSummary calibrate_session(const CalibrateOptions& o, const std::string& session_path,
                                  const std::string& out_path, const std::string& monitor_path,

@@ -4,8 +4,12 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 
 #include "apps/calibrate.hpp"
+#include "filter/plausibility/rest_plausibility.hpp"
+#include "models/earth.hpp"
+#include "models/units.hpp"
 #include "report/six_face_result.hpp"
 
 namespace sinscal::cli {
@@ -29,11 +33,27 @@ SessionSummary calibrate_six_face_session(const CalibrateOptions& o,
     readings += p.count;
     duration += p.duration;
   }
+  // The plausibility gate on the faces before the fit, then on its chi2/dof (exit 2 unless
+  // --force, which records it).
+  std::optional<SensorProfile> profile;
+  if (!session.sensor_file.empty()) profile = SensorProfile::load(session.sensor_file);
+  const RestLimits limits = RestLimits::from_profile(profile ? &*profile : nullptr);
+  const double g = so.gravity > 0.0 ? so.gravity
+                   : so.site ? Earth::wgs84().gravity_n(so.site->lat_rad, so.site->h_m).norm()
+                             : units::g0;
+  PlausibilityReport gate =
+      check_six_face(session.log, parts, so.declared, g, limits, session.log.file);
+  enforce(gate, o.force);
   const SixFaceResult r = six_face_calibrate(parts, so);
+  gate.checks.push_back(check_fit(r.accel_dof > 0 ? r.accel_chi2 / r.accel_dof : 0.0, limits,
+                                  session.log.file, "the six-face accelerometer fit"));
+  enforce(gate, o.force);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const ResultCoefficients coefficients = result_coefficients(r);
-  write_result_json(out_path, coefficients, result_sections(r, so, session.log));
+  auto sections = result_sections(r, so, session.log);
+  record_gate(sections, gate);
+  write_result_json(out_path, coefficients, sections);
   const ResultCoefficients truth = load_truth(session);
   SessionSummary row{session.path, session.name,
                      out_path,     "ok",

@@ -2,9 +2,12 @@
 // (filter/table_free/handheld_run.hpp), its options, result file and summary.
 #include <chrono>
 #include <cstdio>
+#include <optional>
 
 #include "apps/calibrate.hpp"
 #include "apps/print.hpp"
+#include "filter/plausibility/rest_plausibility.hpp"
+#include "models/earth.hpp"
 #include "report/table_free_result.hpp"
 
 namespace sinscal::cli {
@@ -81,10 +84,27 @@ SessionSummary calibrate_table_free_session(const CalibrateOptions& o,
   ro.detector.min_duration = o.min_pose;
   ro.detector.use_gyro = !o.pose_accel_only;
   ro.calibration.edge_trim = o.edge_trim;
+  // The plausibility gate on the poses before the fit (filter/plausibility/rest_plausibility.hpp),
+  // then on the fit's chi2/dof: a failure stops (exit 2) unless --force, which records it.
+  std::optional<SensorProfile> profile;
+  if (!session.sensor_file.empty()) profile = SensorProfile::load(session.sensor_file);
+  const RestLimits limits = RestLimits::from_profile(profile ? &*profile : nullptr);
+  PlausibilityReport gate;
+  ro.before_fit = [&](const HandheldRecord&, const TableFreeRun& r) {
+    const double g = r.options.gravity > 0.0
+                         ? r.options.gravity
+                         : Earth::wgs84().gravity_n(r.site.lat_rad, r.site.h_m).norm();
+    gate = check_handheld(session.log, r.readings, r.detection.poses, g, limits, r.log);
+    enforce(gate, o.force);
+  };
   const auto t0 = std::chrono::steady_clock::now();
   TableFreeRun run = run_table_free(session, ro);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  gate.checks.push_back(
+      check_fit(run.result.chi2_per_dof, limits, run.log, "the table-free fit's residuals"));
+  if (!gate.checks.back().passed) run.result.converged = false;
+  enforce(gate, o.force);
   // A validation record that cannot be used still leaves the calibration written.
   std::string validation_error;
   for (const auto& v : validations) try {
@@ -94,7 +114,9 @@ SessionSummary calibrate_table_free_session(const CalibrateOptions& o,
       break;
     }
   const ResultCoefficients coefficients = result_coefficients(run);
-  write_result_json(out_path, coefficients, result_sections(run));
+  auto sections = result_sections(run);
+  record_gate(sections, gate);
+  write_result_json(out_path, coefficients, sections);
   if (!validation_error.empty()) throw std::runtime_error(validation_error);
   const ResultCoefficients truth = load_truth(session, true);
   SessionSummary row{session.path, session.name,

@@ -3,14 +3,48 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include "apps/cli.hpp"
 #include "apps/commands.hpp"
 #include "apps/print.hpp"
+#include "filter/plausibility/rest_plausibility.hpp"
+#include "models/earth.hpp"
 #include "report/allan_output.hpp"
 #include "report/output.hpp"
 
 namespace sinscal::cli {
+
+namespace {
+
+// The plausibility gate on the stretch analysed (filter/plausibility/rest_plausibility.hpp): the
+// record's length at the declared rate and the noise it implies are stated; a failure stops
+// (exit 2) unless --force, whose failed checks go in the fragment's header.
+void allan_gate(const Session& session, bool force, AllanRunOptions& o, PlausibilityReport& gate) {
+  std::optional<SensorProfile> profile;
+  if (!session.sensor_file.empty()) profile = SensorProfile::load(session.sensor_file);
+  const RestLimits limits = RestLimits::from_profile(profile ? &*profile : nullptr);
+  const double g = session.gravity > 0.0 ? session.gravity
+                   : session.has_site
+                       ? Earth::wgs84().gravity_n(session.site.lat_rad, session.site.h_m).norm()
+                       : units::g0;
+  o.before_analysis = [&session, force, limits, g, &gate](const HandheldRecord& rec,
+                                                          const std::vector<ImuReading>& part) {
+    std::printf("%s\n", record_statement(session.log, rec.samples.size(),
+                                         rec.samples.back().t - rec.samples.front().t)
+                            .c_str());
+    gate = check_rests({rest_statistics(part, 0, part.size() - 1, "the stretch analysed")}, g,
+                       limits, rec.file);
+    gate.checks.push_back(check_same_files(session.log));
+    if (gate.checks.back().passed)
+      gate.checks.back() = check_same_signal(rec.readings, limits, rec.file);
+    for (const auto& c : gate.checks)
+      if (c.name == "noise") std::printf("%s\n\n", c.detail.c_str());
+    enforce(gate, force);
+  };
+}
+
+}  // namespace
 
 int cmd_allan(const std::vector<std::string>& args) {
   po::options_description d("sinscal allan options");
@@ -33,6 +67,8 @@ int cmd_allan(const std::vector<std::string>& args) {
       ("min-pose", po::value(&o.detector.min_duration)->default_value(2.0),
        "shortest static pose the detector takes [s]")
       ("pose-accel-only", "the accelerometers alone find the poses")
+      ("force", "run even when the plausibility gate fails (gravity and rate at rest, noise "
+       "band, one signal in both triads); the failed checks go in the fragment's header")
       ("points-per-decade", po::value(&o.allan.points_per_decade)->default_value(0),
        "cluster times per decade (0: octaves, 1, 2, 4, ... samples)");
   // clang-format on
@@ -67,6 +103,8 @@ int cmd_allan(const std::vector<std::string>& args) {
                                              {"profile-fragment.ini", fragment},
                                              {"allan.png", png},
                                              {"allan.gp", script}});
+  PlausibilityReport gate;
+  allan_gate(session, vm->count("force") > 0, o, gate);
   const AllanRun run = run_allan(session, o);
   if (!run.warning.empty()) std::cerr << "sinscal allan: warning: " << run.warning << "\n";
   std::filesystem::create_directories(out_dir);
@@ -75,8 +113,11 @@ int cmd_allan(const std::vector<std::string>& args) {
       run.pose > 0 ? "pose " + std::to_string(run.pose) : std::string("the whole record");
   write_atomically(fragment, [&](std::ostream& out) {
     out << "# sinscal allan --session " << session.path << ": " << what << ", t = " << run.t_start
-        << " to " << run.t_end << " s\n"
-        << run.analysis.profile_fragment();
+        << " to " << run.t_end << " s\n";
+    for (const auto& c : gate.checks)
+      if (!c.passed)
+        out << "# plausibility gate failed (--force): " << c.name << ": " << c.detail << "\n";
+    out << run.analysis.profile_fragment();
   });
   print_allan(run);
   plot_allan(run.analysis, session.name + " (" + what + ")", png, script);

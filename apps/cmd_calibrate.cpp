@@ -21,8 +21,8 @@ void add_options(po::options_description& d, CalibrateOptions& o) {
       ("method", po::value(&o.method)->default_value(Method::ClosedForm, "closed-form"),
        "closed-form | kf (error-state Kalman filter) | table-free (hand-held session, no table) | "
        "six-face (faces and known turns, labelled)")
-      ("force", "run even when the plausibility gate fails (static gravity and Earth rate, gravity "
-       "direction against the plan, saturation, stage-1 fit); the failed checks go in the result")
+      ("force", "run even when the plausibility gate fails (docs/formats.md: dwells against gravity, "
+       "Earth rate and plan, saturation, fits; rests without a table); the result records it")
       ("table-sigma", po::value(&o.table_sigma)->default_value(2.5),
        "table attitude error per orientation and axis, 1-sigma [arcsec]")
       ("stage1", po::value(&o.stage1)->default_value(Stage1Method::Fit, "fit"),

@@ -18,6 +18,27 @@ namespace sinscal::cli {
 namespace {
 constexpr double kMaxRateHz = 100000.0;       // a log beyond this is not an IMU's
 constexpr double kMaxInstallationDeg = 10.0;  // base level and mounting errors simulated, deg
+// The marker of a session directory simulate wrote: the files it wrote, one per line.
+constexpr const char* kSimulationMarker = ".sinscal-simulation";
+
+// --out: a new or empty directory, or an earlier simulation (replaced whole); anything else is
+// refused unless --force (which writes into it, keeping its other files). Returns whether to
+// merge into it.
+bool check_out_dir(const std::string& out_dir, bool force) {
+  std::vector<std::string> foreign;
+  const DirectoryState state = directory_state(out_dir, kSimulationMarker, foreign);
+  if (state != DirectoryState::Foreign) return false;
+  if (force) return true;
+  std::string names;
+  for (std::size_t i = 0; i < foreign.size() && i < 3; ++i)
+    names += (i > 0 ? ", " : "") + foreign[i];
+  if (foreign.size() > 3) names += " and " + std::to_string(foreign.size() - 3) + " more";
+  throw UsageError("--out " + out_dir +
+                   ": not empty and not an earlier simulate output (it holds " + names +
+                   "): simulate writes a new or empty directory, or replaces an earlier "
+                   "simulation whole (its results would not match the new data); --force writes "
+                   "into it anyway, keeping its other files");
+}
 
 // "a,b[,c]" (deg) as `count` angles in rad; a usage error naming the option otherwise.
 std::vector<double> angles_deg(const std::string& option, const std::string& text, int count) {
@@ -90,6 +111,8 @@ int cmd_simulate(const std::vector<std::string>& args) {
       ("no-noise", "no sensor noise (coefficients still drawn)")
       ("table-angles", "log the table's outer and inner axis angles (plans of table moves)")
       ("perfect", "no sensor errors at all (zero coefficients, no noise)")
+      ("force", "write into a non-empty --out directory that is not an earlier simulation "
+       "(its other files kept)")
       ("table-angle-sigma", po::value(&angle_sigma_arcsec)->default_value(0.0),
        "table angle error per commanded angle, 1-sigma [arcsec]")
       ("table-non-orthogonality", po::value(&non_orth_arcsec)->default_value(0.0),
@@ -134,8 +157,12 @@ int cmd_simulate(const std::vector<std::string>& args) {
   for (const char* f : {"imu.csv", "session.ini", "plan.ini", "sensor.ini", "truth.json"})
     outputs.emplace_back("output", out_dir + "/" + f);
   refuse_overwrite({{"plan", spec.plan_path}, {"sensor profile", spec.data_sensor_path}}, outputs);
+  const bool merge = check_out_dir(out_dir, vm->count("force") > 0);
   const auto t0 = std::chrono::steady_clock::now();
-  const SimulatedSession sim = simulate_session(out_dir, spec);
+  SimulatedSession sim;
+  write_directory_whole(
+      out_dir, kSimulationMarker,
+      [&](const std::string& dir) { sim = simulate_session(dir, spec); }, merge);
   print_simulation(sim, spec, out_dir,
                    std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   return 0;

@@ -24,4 +24,27 @@ void write_atomically(const std::string& path, const std::function<void(std::ost
 void check_outputs(const std::vector<std::pair<std::string, std::string>>& inputs,
                    const std::vector<std::pair<std::string, std::string>>& outputs);
 
+/// A directory an earlier run wrote holds a marker file listing the files it wrote.
+enum class DirectoryState {
+  Absent,         // no such path
+  Empty,          // an empty directory
+  EarlierOutput,  // the marker, and nothing the marker does not list
+  Foreign,        // anything else (a file, or a directory with other entries)
+};
+
+/// `dir`'s state against `marker` (a file name); `foreign` receives the names of its entries the
+/// marker does not list (all of them without a marker).
+DirectoryState directory_state(const std::string& dir, const std::string& marker,
+                               std::vector<std::string>& foreign);
+
+/// Writes a directory whole, never half: `build` fills a new temporary sibling of `dir` (its path
+/// given), `marker` is written there listing its files, then it takes `dir`'s place: renamed to
+/// it when `dir` is absent or an empty directory, exchanged with it in one step (Linux
+/// renameat2) when `dir` is an earlier output (the old one then removed), or, with `merge` (a
+/// foreign directory the user told to write into), its files renamed into `dir` one by one, the
+/// other entries of `dir` kept. On any failure the temporary is removed and `dir` left as it
+/// was. Throws std::runtime_error naming the path; whatever `build` throws propagates.
+void write_directory_whole(const std::string& dir, const std::string& marker,
+                           const std::function<void(const std::string&)>& build, bool merge);
+
 }  // namespace sinscal

@@ -747,6 +747,117 @@ fixed 2 "turn 'x_rot' integrates to 367.|declared -360.0 deg" S diagnose --sessi
 sfnew six-face-table-option; 
 fixed 1 "--table-sigma is an option of the table methods (closed-form, kf), not of --method six-face" sf --table-sigma 3
 
+# --- issue 21: the plausibility gate without a table (filter/plausibility/rest_plausibility.hpp),
+# simulate's output directory, and the messages the probe found weak. The real recordings of
+# ../shared/data through the sessions of config/measured (their paths made absolute).
+data=$src/../shared/data
+# meas NAME MEASURED: the measured session in $d.
+meas() {
+  new "$1"
+  sed -e "s|\.\./\.\./\.\./\.\./shared|$src/../shared|" -e "s|^sensor = \.\./\.\./sensors|sensor = $src/config/sensors|" \
+    "$src/config/measured/$2/session.ini" > "$d/session.ini"
+}
+meas handheld-mpu-control mpu6050-calibration
+control 0 "" tf --pose-accel-only
+meas handheld-xsens-control xsens-mti-handheld
+control 0 "" tf
+meas allan-mpu-control mpu6050-long-static
+POST='grep -q "449.29 s at the declared 100 Hz (no time column" out/stdout'
+control 0 "" al
+# The three that exited 0 with numbers nobody should trust.
+meas handheld-mpu-gyro-rad-per-s mpu6050-calibration; set_key "$d/session.ini" gyro_unit "rad/s"
+fixed 2 "plausibility gate|rate at rest|example_data_calibration.csv: pose 1|values in deg declared as rad" tf --pose-accel-only
+meas handheld-xsens-accel-file-as-gyro-file xsens-mti-handheld; set_key "$d/session.ini" gyro_file "$data/xsens-mti-handheld/xsens_acc.txt"
+fixed 2 "same signal|xsens_acc.txt: given as both accel_file and gyro_file" tf
+meas allan-rate-1000-hz-without-time mpu6050-long-static; set_key "$d/session.ini" rate "1000 Hz"
+POST='grep -q "44.929 s at the declared 1000 Hz (no time column" out/stdout && ! test -e out/allan'
+fixed 2 "noise|sample interval 0.001 s|outside it|without a time column" al
+# The same signal in another file; --force runs, records the failed checks, and a fit thousands
+# of times off its noise model is not "converged".
+meas handheld-xsens-accel-copy-as-gyro-file xsens-mti-handheld; cp "$data/xsens-mti-handheld/xsens_acc.txt" "$d/copy.txt"
+set_key "$d/session.ini" gyro_file copy.txt
+fixed 2 "same signal|gyro x and accelerometer x are one signal|same file given for both triads" tf
+meas handheld-xsens-accel-file-twice-forced xsens-mti-handheld; set_key "$d/session.ini" gyro_file "$data/xsens-mti-handheld/xsens_acc.txt"
+POST='grep -A1 "\"check\": \"fit\"" out/result.json | grep -q false && grep -q "\"converged\": false" out/result.json && grep -q "NOT converged" out/stdout'
+fixed 0 "" tf --force
+meas handheld-mpu-gyro-rad-per-s-forced mpu6050-calibration; set_key "$d/session.ini" gyro_unit "rad/s"
+POST='grep -q "\"plausibility\"" out/result.json && grep -A1 "\"check\": \"rate at rest\"" out/result.json | grep -q false'
+fixed 0 "" tf --pose-accel-only --force
+# Units, scales, offsets and columns of the hand-held sessions.
+meas handheld-mpu-accel-mg-as-g mpu6050-calibration; set_key "$d/session.ini" accel_unit "mg"
+fixed 2 "gravity magnitude|example_data_calibration.csv: pose|declared as mm/s" tf --pose-accel-only
+meas handheld-mpu-accel-g-as-m-per-s2 mpu6050-calibration; set_key "$d/session.ini" accel_unit "m/s^2"
+fixed 2 "gravity magnitude|values in g declared as m/s^2" tf --pose-accel-only
+meas handheld-mpu-gyro-deg-per-h mpu6050-calibration; set_key "$d/session.ini" gyro_unit "deg/h"
+fixed 2 "noise|sensor profile 'mpu6050'|outside it" tf --pose-accel-only
+meas handheld-mpu-accel-scale-16g mpu6050-calibration; set_key "$d/session.ini" accel_scale 0.00048828125
+fixed 2 "gravity magnitude|71.28 m/s^2|a wrong unit, scale or column" tf --pose-accel-only
+meas handheld-mpu-gyro-scale-2000dps mpu6050-calibration; set_key "$d/session.ini" gyro_scale 0.06103515625
+fixed 2 "noise|outside it" tf --pose-accel-only
+meas handheld-xsens-no-gyro-offset xsens-mti-handheld; awk '!/^gyro_offset/' "$d/session.ini" > "$d/s" && mv "$d/s" "$d/session.ini"
+fixed 2 "rate at rest|xsens_gyro.txt: pose 1" tf
+meas handheld-xsens-no-accel-offset xsens-mti-handheld; awk '!/^accel_offset/' "$d/session.ini" > "$d/s" && mv "$d/s" "$d/session.ini"
+fixed 2 "gravity magnitude|xsens_acc.txt" tf
+meas handheld-xsens-files-swapped xsens-mti-handheld
+set_key "$d/session.ini" accel_file "$data/xsens-mti-handheld/xsens_gyro.txt"; set_key "$d/session.ini" gyro_file "$data/xsens-mti-handheld/xsens_acc.txt"
+fixed 2 "gravity magnitude|xsens_gyro.txt + |swapped: the gyros' mean turns" tf
+meas handheld-mpu-columns-swapped mpu6050-calibration; set_key "$d/session.ini" columns "gx gy gz ax ay az"
+fixed 2 "example_data_calibration.csv|swapped" tf --pose-accel-only
+meas handheld-mpu-log-is-a-directory mpu6050-calibration; mkdir "$d/logdir"; set_key "$d/session.ini" file logdir
+fixed 2 "logdir:0: is a directory" tf --pose-accel-only
+meas allan-mpu-gyro-rad-per-s mpu6050-long-static; set_key "$d/session.ini" gyro_unit "rad/s"
+fixed 2 "rate at rest|example_data_tinit_calc.csv: the stretch analysed|values in deg declared as rad" al
+meas allan-rate-1000-hz-forced mpu6050-long-static; set_key "$d/session.ini" rate "1000 Hz"
+POST='grep -q "^# plausibility gate failed (--force): noise" out/allan/profile-fragment.ini'
+fixed 0 "" al --force
+meas allan-xsens-files-swapped xsens-mti-handheld
+set_key "$d/session.ini" accel_file "$data/xsens-mti-handheld/xsens_gyro.txt"; set_key "$d/session.ini" gyro_file "$data/xsens-mti-handheld/xsens_acc.txt"
+fixed 2 "gravity magnitude|the stretch analysed" al --pose 1
+new allan-three-samples; handheld; head -n 6 "$base/mini/imu.csv" > "$d/imu.csv"
+fixed 2 "imu.csv: the record is too short for an Allan deviation: 3 samples" al
+new allan-twenty-samples; handheld; head -n 23 "$base/mini/imu.csv" > "$d/imu.csv"
+fixed 2 "imu.csv: whether the record is static cannot be told|too short for the pose detector" al
+# Six-face: the gate on the faces before the fit.
+sfnew six-face-gyro-rad-per-s; set_key "$d/session.ini" gyro_unit "rad/s"
+fixed 2 "plausibility gate|noise|annotated_session.csv|face 'z_p'|the gyros' outside it|values in deg declared as rad" sf
+sfnew six-face-accel-mg-as-g; set_key "$d/session.ini" accel_unit "mg"
+fixed 2 "gravity magnitude|face 'x_p'|declared as mm/s" sf
+sfnew six-face-accel-scale-2g; set_key "$d/session.ini" accel_scale 0.00006103515625
+fixed 2 "gravity magnitude|face" sf
+sfnew six-face-columns-swapped; set_key "$d/session.ini" columns "label - gx gy gz ax ay az"
+fixed 2 "annotated_session.csv|swapped" sf
+sfnew six-face-gyro-columns-as-accel-too; set_key "$d/session.ini" columns "label - ax ay az - - -"
+fixed 2 "session.ini:$(lno "$d/session.ini" '^columns'): 'log.columns': column 'gx' missing" sf
+sfnew six-face-accel-mg-forced; set_key "$d/session.ini" accel_unit "mg"
+POST='grep -A1 "\"check\": \"gravity magnitude\"" out/result.json | grep -q false'
+fixed "0,2" "" sf --force
+# simulate --out: a new or empty directory, or an earlier simulation replaced whole; anything
+# else refused unless --force.
+simcase() { new "$1"; cp "$base/mini.ini" "$d/plan.ini"; cp "$fog" "$d/sensor.ini"; }
+simcase simulate-into-foreign-directory; mkdir -p "$d/out/sim"; echo notes > "$d/out/sim/notes.txt"
+POST='test -s out/sim/notes.txt && ! test -e out/sim/imu.csv'
+fixed 1 "--out out/sim: not empty and not an earlier simulate output (it holds notes.txt)|--force" sim
+simcase simulate-replaces-earlier-whole; (cd "$d" && sim > /dev/null) && cp "$d/out/sim/truth.json" "$d/out/old-truth.json"
+POST='test -s out/sim/.sinscal-simulation && ! cmp -s out/sim/truth.json out/old-truth.json && test -z "$(ls -d out/sim.sinscal-* 2> /dev/null)"'
+control 0 "" sim --seed 2
+simcase simulate-earlier-with-a-result; (cd "$d" && sim > /dev/null) && echo '{}' > "$d/out/sim/result.json"
+POST='test -s out/sim/result.json'
+fixed 1 "not empty and not an earlier simulate output (it holds result.json)" sim --seed 2
+simcase simulate-force-into-foreign-directory; mkdir -p "$d/out/sim"; echo notes > "$d/out/sim/notes.txt"
+POST='test -s out/sim/notes.txt && test -s out/sim/imu.csv && test -s out/sim/truth.json'
+fixed 0 "" sim --force
+simcase simulate-out-is-a-file; echo x > "$d/out/f"
+fixed 1 "--out out/f: not empty and not an earlier simulate output" S simulate --plan plan.ini --sensor sensor.ini --out out/f --rate 10
+# Samples out of order: a time ahead whose next line goes back is not a gap.
+new native-samples-out-of-order; mini
+awk 'NR == 20 { held = $0; next } NR == 21 { print; print held; next } { print }' "$base/mini/imu.csv" > "$d/imu.csv"
+fixed 2 "imu.csv:21: time goes backwards|samples out of order: line 20 jumps ahead" nav
+new split-samples-out-of-order; split
+for f in acc gyr; do awk 'NR == 30 { held = $0; next } NR == 31 { print; print held; next } { print }' "$base/$f.txt" > "$d/$f.txt"; done
+fixed 2 "acc.txt:31: time goes backwards|samples out of order" nav
+new native-log-is-a-directory; mini; rm "$d/imu.csv"; mkdir "$d/imu.csv"
+fixed 2 "imu.csv:0: is a directory, not a log file" nav
+
 # =============================================================================================
 # KNOWN: bad input still accepted or mishandled; the fix belongs to apps/, filter/ or the result
 # and compare code. Each line says the behaviour it needs.

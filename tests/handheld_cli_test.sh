@@ -72,7 +72,8 @@ check "allan with two selections is a usage error" test $? -eq 1
 # An output that is an input is refused.
 mkdir -p "$work/ow"
 cp "$data/mpu6050-handheld/imu_static_test.csv" "$work/ow/allan.csv"
-sed "s#^file = .*#file = allan.csv#" "$measured/mpu6050-static/session.ini" > "$work/ow/session.ini"
+sed -e "s#^file = .*#file = allan.csv#" -e "s#^sensor = .*#sensor = $src/config/sensors/mpu6050.ini#" \
+  "$measured/mpu6050-static/session.ini" > "$work/ow/session.ini"
 "$bin" allan --session "$work/ow/session.ini" --out "$work/ow" 2> "$work/ow.err"
 check "allan refuses to overwrite its input" test $? -eq 1
 check "allan names the input it will not overwrite" contains "$work/ow.err" "an output never replaces an input"

@@ -96,7 +96,10 @@ TEST_CASE("Log: each kind of bad line is an error naming file, line and cause", 
       {"nonnumeric", with(10, "0.1,abc,0,0,0,0,0"), "imu.csv:10: field 2 'abc' is not a number"},
       {"nan", with(10, "0.1,nan,0,0,0,0,0"), "imu.csv:10: field 2 is NaN"},
       {"backwards", with(10, "0.05,0,0,0,0,0,0"), "imu.csv:10: time goes backwards"},
-      {"gap", with(10, "0.5,0,0,0,0,0,0"), "imu.csv:10: gap in the data"},
+      // A time ahead at the end of the log is a gap; followed by the times before it, it is one
+      // sample out of order: time goes backwards on the next line.
+      {"gap", with(10, "0.5,0,0,0,0,0,0\n", true), "imu.csv:10: gap in the data"},
+      {"ahead", with(10, "0.5,0,0,0,0,0,0"), "imu.csv:11: time goes backwards"},
       {"columns", with(10, l10 + ",7"), "imu.csv:10: expected 7 fields, found 8"},
       {"header", with(3, "t,a,b"), "imu.csv:3: not a sinscal log"},
   };

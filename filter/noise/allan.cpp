@@ -222,9 +222,9 @@ AllanFit fit_with_dominant_edf(std::vector<AllanPoint>& pts, double N, bool fit_
 std::vector<AllanPoint> allan_deviation(const std::vector<double>& rates, double tau0,
                                         const AllanOptions& o, AllanFit* fit_out) {
   if (!(tau0 > 0.0)) throw AllanError("Allan deviation: the sample interval must be positive");
-  if (rates.size() < 16)
-    throw AllanError("Allan deviation: " + std::to_string(rates.size()) +
-                     " samples are too few (16 at least)");
+  if (rates.size() < kAllanMinSamples)
+    throw AllanError("Allan deviation: " + std::to_string(rates.size()) + " samples are too few (" +
+                     std::to_string(kAllanMinSamples) + " at least)");
   if (!(o.max_fraction > 0.0) || o.max_fraction > 0.5 || !(o.confidence > 0.0) ||
       !(o.confidence < 1.0) || o.points_per_decade < 0)
     throw AllanError("Allan deviation: options out of range");

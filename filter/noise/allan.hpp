@@ -85,6 +85,9 @@ struct AllanFit {
   double term_variance(AllanTerm term, double tau) const;
 };
 
+/// The fewest samples an Allan deviation takes.
+constexpr std::size_t kAllanMinSamples = 16;
+
 /// Allan deviation of one channel of rates sampled every tau0 seconds; the fit sets each point's
 /// noise type for its degrees of freedom (white noise where the model does not fit, e.g. a
 /// drift). Throws AllanError for fewer than 16 samples or a non-positive tau0.

@@ -36,29 +36,7 @@ double largest(const SensorProfile& p, const std::string& family) {
 
 // The likely cause of a magnitude `ratio` times what it should be: a unit mistaken for another.
 std::string unit_cause(double ratio, double dt, bool gyro) {
-  struct Factor {
-    double value;
-    const char* cause;
-  };
-  const Factor accel_factors[] = {
-      {1000.0, "values in mm/s (or mm/s^2) declared as m/s"},
-      {1e-3, "values in m/s declared as mm/s"},
-      {1.0 / units::g0, "values in g declared as m/s^2 (or m/s)"},
-      {units::g0, "values in m/s^2 declared as g"},
-  };
-  const Factor gyro_factors[] = {
-      {units::deg, "values in rad declared as deg"},
-      {1.0 / units::deg, "values in deg declared as rad"},
-      {3600.0, "values per hour declared per second"},
-      {1.0 / 3600.0, "values per second declared per hour"},
-  };
-  std::vector<Factor> factors(gyro ? std::begin(gyro_factors) : std::begin(accel_factors),
-                              gyro ? std::end(gyro_factors) : std::end(accel_factors));
-  if (dt > 0.0) {
-    factors.push_back({1.0 / dt, "rates declared as increments (or the wrong rate)"});
-    factors.push_back({dt, "increments declared as rates (or the wrong rate)"});
-  }
-  for (const auto& f : factors)
+  for (const auto& f : unit_factors(gyro, dt))
     if (std::abs(std::log(ratio / f.value)) < kFactorTolerance) return f.cause;
   if (ratio < 1e-3) return "no signal (a constant or zero channel?)";
   if (gyro && ratio > 20.0)
@@ -176,6 +154,25 @@ std::string dwell_name(const PlanDwell& d) {
 }
 
 }  // namespace
+
+std::vector<UnitFactor> unit_factors(bool gyro, double dt) {
+  std::vector<UnitFactor> factors;
+  if (gyro)
+    factors = {{units::deg, "values in rad declared as deg"},
+               {1.0 / units::deg, "values in deg declared as rad"},
+               {3600.0, "values per hour declared per second"},
+               {1.0 / 3600.0, "values per second declared per hour"}};
+  else
+    factors = {{1000.0, "values in mm/s (or mm/s^2) declared as m/s"},
+               {1e-3, "values in m/s declared as mm/s"},
+               {1.0 / units::g0, "values in g declared as m/s^2 (or m/s)"},
+               {units::g0, "values in m/s^2 declared as g"}};
+  if (dt > 0.0) {
+    factors.push_back({1.0 / dt, "rates declared as increments (or the wrong rate)"});
+    factors.push_back({dt, "increments declared as rates (or the wrong rate)"});
+  }
+  return factors;
+}
 
 PlausibilityLimits PlausibilityLimits::from_profile(const SensorProfile* p) {
   PlausibilityLimits l;

@@ -80,6 +80,15 @@ PlausibilityReport check_plausibility(LogReader& reader, const std::string& inpu
 PlausibilityReport check_plausibility(const Session& session, const PlausibilityLimits& limits,
                                       bool dwell_checks = true);
 
+/// A unit mistaken for another: the ratio it puts between a measured magnitude and the true one,
+/// and the cause to name. With a sample interval `dt` > 0 also rates taken as increments and
+/// back (or a wrong rate).
+struct UnitFactor {
+  double value;
+  std::string cause;
+};
+std::vector<UnitFactor> unit_factors(bool gyro, double dt);
+
 /// Throws PlausibilityError listing the failed checks unless the report passed or `force`.
 void enforce(const PlausibilityReport& report, bool force);
 

@@ -126,9 +126,14 @@ TableFreeRun run_table_free(const Session& s, const TableFreeRunOptions& o) {
   }
   run.poses = handheld_poses(rec, run.detection);
   run.readings = rec.raw() ? si_from_counts(detector_in, rec.nominal) : rec.readings;
-  run.result = rec.raw()
-                   ? calibrate_table_free_counts(detector_in, rec.nominal, run.options, o.detector)
-                   : calibrate_table_free(rec.readings, run.detection.poses, run.options);
+  if (o.before_fit) o.before_fit(rec, run);
+  try {
+    run.result =
+        rec.raw() ? calibrate_table_free_counts(detector_in, rec.nominal, run.options, o.detector)
+                  : calibrate_table_free(rec.readings, run.detection.poses, run.options);
+  } catch (const TableFreeError& e) {
+    throw TableFreeError(e.kind(), run.log + ": " + e.what());  // the message names the log
+  }
   return run;
 }
 
@@ -250,13 +255,20 @@ AllanRun run_allan(const Session& s, const AllanRunOptions& o) {
   out.selection = o.selection;
   const HandheldRecord rec = read_handheld_record(s.log);
   const double duration = rec.samples.back().t - rec.samples.front().t;
+  if (rec.samples.size() < kAllanMinSamples)
+    throw AllanError(out.log + ": the record is too short for an Allan deviation: " +
+                     std::to_string(rec.samples.size()) + " samples over " +
+                     std::to_string(duration) + " s (" + std::to_string(kAllanMinSamples) +
+                     " at least)");
   PoseDetection detection;
   bool detected = false;
+  std::string undetected;
   try {
     detection = detect_poses(rec.detector_readings(), o.detector);
     detected = true;
-  } catch (const PoseDetectorError&) {
+  } catch (const PoseDetectorError& e) {
     if (o.selection != AllanSelection::All) throw;
+    undetected = e.what();
   }
   out.poses_found = detected ? static_cast<int>(detection.poses.size()) : -1;
   // Static: one pose covers (nearly) the whole record. Several poses covering most of it are a
@@ -271,6 +283,9 @@ AllanRun run_allan(const Session& s, const AllanRunOptions& o) {
                     std::to_string(static_cast<int>(std::round(100.0 * out.static_fraction))) +
                     " % of it (" + std::to_string(std::max(out.poses_found, 0)) +
                     " poses found); --longest-pose or --pose N analyses one pose";
+      if (!detected)
+        out.warning = "whether the record is static cannot be told (" + undetected +
+                      "): it is too short for the pose detector";
       if (o.require_static) throw std::invalid_argument(out.log + ": " + out.warning);
     }
   } else {
@@ -309,6 +324,7 @@ AllanRun run_allan(const Session& s, const AllanRunOptions& o) {
       x.dt = tau0;
     }
   }
+  if (o.before_analysis) o.before_analysis(rec, readings_from_samples(part));
   out.analysis = analyse_allan(part, o.allan);
   return out;
 }

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -52,6 +53,8 @@ struct HandheldPose {
 std::vector<HandheldPose> handheld_poses(const HandheldRecord& record,
                                          const PoseDetection& detection);
 
+struct TableFreeRun;
+
 struct TableFreeRunOptions {
   /// Edge trim, shortest pose, iterations. Gravity and site are set from `gravity` and the
   /// session.
@@ -60,6 +63,9 @@ struct TableFreeRunOptions {
   /// m/s^2 given (command line); 0: the session's [site] gravity, else WGS-84 normal gravity at
   /// its site.
   double gravity = 0.0;
+  /// Called with the record and the run so far (poses found, readings, gravity) before the
+  /// calibration: a plausibility gate that throws stops it.
+  std::function<void(const HandheldRecord&, const TableFreeRun&)> before_fit;
 };
 
 /// One validation record corrected with a calibration (docs/formats.md, "validation").
@@ -137,6 +143,9 @@ struct AllanRunOptions {
   bool require_static = false;
   PoseDetectorOptions detector;
   AllanOptions allan;
+  /// Called with the record and the readings (rates, SI) of the stretch selected before the
+  /// analysis: a plausibility gate that throws stops it.
+  std::function<void(const HandheldRecord&, const std::vector<ImuReading>&)> before_analysis;
 };
 
 struct AllanRun {
@@ -153,9 +162,10 @@ struct AllanRun {
 };
 
 /// Allan deviation of a session's static record or one of its poses. Throws PoseDetectorError
-/// (no pose), std::invalid_argument (no such pose; a record that is not static with
-/// `require_static`), AllanError (too short). A log of rates is taken at its median sample
-/// interval (time-stamp jitter is the logger's, not the sensor's).
+/// (no pose), std::invalid_argument (no such pose; a record that is not static, or too short for
+/// the detector to tell, with `require_static`), AllanError (too short, naming the log). A log of
+/// rates is taken at its median sample interval (time-stamp jitter is the logger's, not the
+/// sensor's).
 AllanRun run_allan(const Session& session, const AllanRunOptions& options);
 
 }  // namespace sinscal

@@ -190,6 +190,9 @@ class LogReader : public SampleSource {
                     std::vector<double>& out, const std::vector<char>* text_cols = nullptr);
   /// The next record's fields in the layout of f_.columns; false at the end.
   bool read_record();
+  /// A gap at time `t` (message `gap`) or, when the next record's time is before `t`, samples out
+  /// of order: throws LogError naming the line.
+  [[noreturn]] void gap_or_disorder(double t, const std::string& gap);
   bool read_split_record();
   bool read_novatel_record();
   bool make_sample(ImuSample& s);

@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 
 #include "models/units.hpp"
 #include "rig/io/log_keys.hpp"
@@ -28,6 +29,9 @@ LogReader::LogReader(std::istream& in, const LogFormat& format) : f_(format) {
 }
 
 void LogReader::open(Input& input, const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw LogError(path, 0, "is a directory, not a log file (name the file in it)");
   input.owned = std::make_unique<std::ifstream>(path);
   input.in = input.owned.get();
   input.name = path;
@@ -78,6 +82,27 @@ void LogReader::bad_sample(const std::string& cause) const {
   BadSampleError e(loc_->name, loc_->line, cause);
   e.t_prev = t_prev_;
   throw e;
+}
+
+void LogReader::gap_or_disorder(double t, const std::string& gap) {
+  // Samples out of order look like a gap (a time ahead) whose next line goes back: the reading
+  // stops here either way, so the next record may be read to tell which.
+  const double t_prev = t_prev_;
+  const std::size_t line = loc_->line;
+  double t_next = t;
+  try {
+    if (col_t_ >= 0 && read_record())
+      t_next = fields_[static_cast<std::size_t>(col_t_)] * f_.time_scale;
+  } catch (const LogError&) {
+    t_next = t;  // the next line is bad in its own way: the gap is what this line shows
+  }
+  if (!(t_next < t)) throw LogError(loc_->name, line, gap);
+  char msg[300];
+  std::snprintf(msg, sizeof msg,
+                "time goes backwards: t = %.6f s after %.6f s at line %zu (samples out of order: "
+                "line %zu jumps ahead from %.6f s)",
+                t_next, t, loc_->line, line, t_prev);
+  fail(msg);
 }
 
 bool LogReader::read_line(Input& input, std::string& line, bool& had_newline) {
@@ -204,7 +229,7 @@ bool LogReader::make_sample(ImuSample& s) {
                     "gap in the data: %.6f s from t = %.6f s to %.6f s (about %.0f samples missing "
                     "at %g Hz)",
                     dt, t_prev_, t, dt / nominal_dt - 1.0, f_.rate_hz);
-      fail(msg);
+      gap_or_disorder(t, msg);
     }
     if (dt < 0.5 * nominal_dt) {
       std::snprintf(msg, sizeof msg,
