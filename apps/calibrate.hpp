@@ -38,13 +38,17 @@ struct CalibrateOptions {
   double edge_trim = 0.2;                    // s cut from each end of a pose
   bool pose_accel_only = false;              // the accelerometers alone find the poses
   std::vector<std::string> validate;         // validation sessions
+  /// The table-free options given on the command line (they override the session's
+  /// [table_free]); filled by check_table_free_options.
+  std::vector<std::string> table_free_given;
 };
 
 /// The table-free options (--gravity, --pose-window, ...) added to `d`.
 void add_table_free_options(po::options_description& d, CalibrateOptions& o);
 /// Options of the other methods refused in --method table-free and the table-free options in
-/// the others (UsageError naming the option); the table-free values checked.
-void check_table_free_options(const po::variables_map& vm, const CalibrateOptions& o,
+/// the others (UsageError naming the option); the table-free values checked and those given
+/// recorded in o.table_free_given.
+void check_table_free_options(const po::variables_map& vm, CalibrateOptions& o,
                               const std::vector<std::vector<std::string>>& table_methods_options);
 /// One hand-held session by the table-free method (a session without a plan is allowed).
 SessionSummary calibrate_table_free_session(const CalibrateOptions& o,

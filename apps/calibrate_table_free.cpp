@@ -1,5 +1,6 @@
 // sinscal calibrate --method table-free: a hand-held session's calibration without a table
 // (filter/table_free/handheld_run.hpp), its options, result file and summary.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <optional>
@@ -41,7 +42,7 @@ void add_table_free_options(po::options_description& d, CalibrateOptions& o) {
   // clang-format on
 }
 
-void check_table_free_options(const po::variables_map& vm, const CalibrateOptions& o,
+void check_table_free_options(const po::variables_map& vm, CalibrateOptions& o,
                               const std::vector<std::vector<std::string>>& table_methods_options) {
   if (o.method != Method::TableFree) {
     for (const auto& name : kTableFreeOnly)
@@ -56,6 +57,8 @@ void check_table_free_options(const po::variables_map& vm, const CalibrateOption
         throw UsageError("--" + name +
                          " is an option of the table methods (closed-form, kf), not of --method " +
                          name_of(o.method));
+  for (const auto& name : kTableFreeOnly)
+    if (given(vm, name)) o.table_free_given.push_back(name);
   if (given(vm, "gravity") && !(o.gravity >= 9.7 && o.gravity <= 9.9))
     throw UsageError("--gravity must be within 9.7 and 9.9 m/s^2 (the Earth's surface)");
   if (!(o.pose_window > 0.0 && o.pose_window <= 60.0))
@@ -78,12 +81,19 @@ SessionSummary calibrate_table_free_session(const CalibrateOptions& o,
     inputs.insert(inputs.end(), more.begin(), more.end());
   }
   refuse_overwrite(inputs, {{"--out", out_path}});
+  // The session's [table_free] where the command line does not give the option.
+  auto pick = [&](const char* name, const auto& from_session, auto from_line) {
+    const bool on_line = std::find(o.table_free_given.begin(), o.table_free_given.end(), name) !=
+                         o.table_free_given.end();
+    return !on_line && from_session ? *from_session : from_line;
+  };
+  const TableFreeSettings& st = session.table_free;
   TableFreeRunOptions ro;
   ro.gravity = o.gravity;
-  ro.detector.window = o.pose_window;
-  ro.detector.min_duration = o.min_pose;
-  ro.detector.use_gyro = !o.pose_accel_only;
-  ro.calibration.edge_trim = o.edge_trim;
+  ro.detector.window = pick("pose-window", st.pose_window, o.pose_window);
+  ro.detector.min_duration = pick("min-pose", st.min_pose, o.min_pose);
+  ro.detector.use_gyro = !pick("pose-accel-only", st.pose_accel_only, o.pose_accel_only);
+  ro.calibration.edge_trim = pick("edge-trim", st.edge_trim, o.edge_trim);
   // The plausibility gate on the poses before the fit (filter/plausibility/rest_plausibility.hpp),
   // then on the fit's chi2/dof: a failure stops (exit 2) unless --force, which records it.
   std::optional<SensorProfile> profile;

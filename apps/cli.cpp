@@ -139,6 +139,16 @@ std::string name_of(const ChannelSet& c) {
   return out;
 }
 
+void apply_table_free_settings(const TableFreeSettings& session, const po::variables_map& vm,
+                               PoseDetectorOptions& detector, double* edge_trim) {
+  auto on_line = [&](const char* name) { return vm.count(name) && !vm[name].defaulted(); };
+  if (session.pose_window && !on_line("pose-window")) detector.window = *session.pose_window;
+  if (session.min_pose && !on_line("min-pose")) detector.min_duration = *session.min_pose;
+  if (session.pose_accel_only && !on_line("pose-accel-only"))
+    detector.use_gyro = !*session.pose_accel_only;
+  if (edge_trim && session.edge_trim && !on_line("edge-trim")) *edge_trim = *session.edge_trim;
+}
+
 }  // namespace sinscal::cli
 
 namespace sinscal {

@@ -12,6 +12,7 @@
 
 #include "filter/closed_form/closed_form.hpp"
 #include "filter/kalman/kalman_calibrator.hpp"
+#include "filter/table_free/pose_detector.hpp"
 #include "rig/session.hpp"
 
 namespace sinscal::cli {
@@ -37,6 +38,10 @@ void refuse_overwrite(const std::vector<std::pair<std::string, std::string>>& in
                       const std::vector<std::pair<std::string, std::string>>& outputs);
 /// Every file a session reads (session.ini, plan, sensor profile, truth, the log's files).
 std::vector<std::pair<std::string, std::string>> session_inputs(const Session& session);
+/// The session's [table_free] options where the command line does not give them: --pose-window,
+/// --min-pose and --pose-accel-only into `detector`, --edge-trim into `edge_trim` (if not null).
+void apply_table_free_settings(const TableFreeSettings& session, const po::variables_map& vm,
+                               PoseDetectorOptions& detector, double* edge_trim);
 
 /// printf-style formatting of one number.
 std::string fmt(const char* format, double v);

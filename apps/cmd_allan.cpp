@@ -97,6 +97,7 @@ int cmd_allan(const std::vector<std::string>& args) {
   if (o.allan.points_per_decade < 0 || o.allan.points_per_decade > 100)
     throw UsageError("--points-per-decade must be 0 to 100");
   const Session session = Session::load(session_path, Session::PlanNeed::Optional);
+  apply_table_free_settings(session.table_free, *vm, o.detector, nullptr);
   const std::string csv = out_dir + "/allan.csv", fragment = out_dir + "/profile-fragment.ini",
                     png = out_dir + "/allan.png", script = out_dir + "/allan.gp";
   refuse_overwrite(session_inputs(session), {{"allan.csv", csv},

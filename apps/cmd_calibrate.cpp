@@ -72,7 +72,7 @@ void add_options(po::options_description& d, CalibrateOptions& o) {
 }
 
 // Options given that the chosen method does not use: refused by name.
-void check_method_options(const po::variables_map& vm, const CalibrateOptions& o) {
+void check_method_options(const po::variables_map& vm, CalibrateOptions& o) {
   static const std::vector<std::string> closed_form_only = {"stage1", "model", "channels",
                                                             "arw",    "vrw",   "min-dwell"};
   // clang-format off

@@ -175,6 +175,7 @@ int cmd_diagnose(const std::vector<std::string>& args) {
           "--pose-window must be in (0, 60] s, --min-pose in (0, 3600] s, --edge-trim in "
           "[0, 60] s");
     h.run.detector.use_gyro = vm->count("pose-accel-only") == 0;
+    apply_table_free_settings(any.table_free, *vm, h.run.detector, &h.run.calibration.edge_trim);
     h.out_dir = out_dir;
     h.alpha = o.alpha;
     h.plot = vm->count("no-plot") == 0;

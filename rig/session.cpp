@@ -48,7 +48,8 @@ Session Session::load(const std::string& path, PlanNeed plan_need) {
   const bool optional_plan = plan_need == PlanNeed::Optional;
   const IniFile ini(path);
   for (const auto& section : ini.sections())
-    if (section != "session" && section != "site" && section != "log" && section != "six_face") {
+    if (section != "session" && section != "site" && section != "log" && section != "six_face" &&
+        section != "table_free") {
       std::string where = path + ": ";
       for (const auto& key : ini.keys())
         if (key.compare(0, section.size() + 1, section + ".") == 0) {
@@ -56,13 +57,29 @@ Session Session::load(const std::string& path, PlanNeed plan_need) {
           break;
         }
       throw ConfigError(where + "unknown section [" + section +
-                        "] (known: session, site, log, six_face)");
+                        "] (known: session, site, log, six_face, table_free)");
     }
   ini.check_keys("session", {"name", "rate", "time_offset", "plan", "truth", "sensor"});
   ini.check_keys("site", {"latitude", "longitude", "height", "gravity"});
   Session s;
   if (std::find(ini.sections().begin(), ini.sections().end(), "six_face") != ini.sections().end())
     s.six_face = read_ferraris_declaration(ini);
+  ini.check_keys("table_free", {"pose_window", "min_pose", "edge_trim", "pose_accel_only"});
+  auto seconds = [&](const char* key, double lo, double hi) -> std::optional<double> {
+    const std::string k = std::string("table_free.") + key;
+    if (!ini.has(k)) return std::nullopt;
+    const double v = ini.get_quantity(k, QuantityKind::Time, "s");
+    if (!(v >= lo && v <= hi))
+      throw ConfigError(ini.where(k) +
+                        (lo == 0.0 ? "must be 0 to " : "must be above 0 and at most ") +
+                        std::to_string(static_cast<int>(hi)) + " s");
+    return v;
+  };
+  s.table_free.pose_window = seconds("pose_window", 1e-9, 60.0);
+  s.table_free.min_pose = seconds("min_pose", 1e-9, 3600.0);
+  s.table_free.edge_trim = seconds("edge_trim", 0.0, 60.0);
+  if (ini.has("table_free.pose_accel_only"))
+    s.table_free.pose_accel_only = ini.get_bool("table_free.pose_accel_only", false);
   s.path = path;
   s.dir = directory_of(path);
   s.name = ini.get_string("session.name", "session");

@@ -17,6 +17,13 @@
 
 namespace sinscal {
 
+/// [table_free]: the hand-held method's options a session carries (`calibrate --method
+/// table-free`, `diagnose` and `allan` on it); each given on the command line overrides it.
+struct TableFreeSettings {
+  std::optional<double> pose_window, min_pose, edge_trim;  // s
+  std::optional<bool> pose_accel_only;  // the accelerometers alone find the poses
+};
+
 struct Session {
   /// Whether a session must have a plan. Every table method needs one; a hand-held session
   /// (`calibrate --method table-free`, `allan`) finds its poses in the data and needs none.
@@ -38,6 +45,7 @@ struct Session {
   /// [six_face]: the session is a six-face and known-turn procedure (its parts labelled in the
   /// log's label column).
   std::optional<FerrarisDeclaration> six_face;
+  TableFreeSettings table_free;  // [table_free] (every key optional)
 
   /// Throws ConfigError naming the file, line and key. With PlanNeed::Required (the table
   /// methods) the plan and a site are required and [site] gravity is refused (they use the

@@ -759,6 +759,17 @@ meas() {
 }
 meas handheld-mpu-control mpu6050-calibration
 control 0 "" tf --pose-accel-only
+# The session's [table_free] (issue 20): its options checked like the command line's.
+meas handheld-mpu-session-options-control mpu6050-calibration
+control 0 "" tf
+meas table-free-session-pose-window-zero mpu6050-calibration; add_line "$d/session.ini" "pose_window = 0 s"
+fixed 2 "session.ini:$L: 'table_free.pose_window'|must be above 0 and at most 60 s" tf
+meas table-free-session-unknown-key mpu6050-calibration; add_line "$d/session.ini" "window = 1 s"
+fixed 2 "session.ini:$L: 'table_free.window'|unknown key" tf
+meas table-free-session-accel-only-not-bool mpu6050-calibration; set_key "$d/session.ini" pose_accel_only "maybe"
+fixed 2 "session.ini:$L: 'table_free.pose_accel_only'|expected true or false" tf
+meas table-free-session-edge-trim-negative mpu6050-calibration; add_line "$d/session.ini" "edge_trim = -1 s"
+fixed 2 "session.ini:$L: 'table_free.edge_trim'|must be 0 to 60 s" tf
 meas handheld-xsens-control xsens-mti-handheld
 control 0 "" tf
 meas allan-mpu-control mpu6050-long-static

@@ -86,6 +86,20 @@ check "the input is unchanged" cmp -s "$work/ow/allan.csv" "$data/mpu6050-handhe
 check "table-free on the MPU-6050 session exits 0" test $? -eq 0
 check "validation section written" contains "$work/mpu.json" '"gravity_error_rms_m_per_s2"'
 check "validation printed" contains "$work/mpu.txt" "Validation 'mpu6050-static'"
+# The session's [table_free] carries pose_accel_only: the session file alone gives the same.
+"$bin" calibrate --method table-free --session "$measured/mpu6050-calibration/session.ini" \
+  --out "$work/mpu-session.json" > /dev/null
+check "the MPU-6050 session calibrates with its session file alone" test $? -eq 0
+"$bin" compare "$work/mpu.json" "$work/mpu-session.json" --max-relative 1e-12 > /dev/null
+check "and gives the same coefficients as --pose-accel-only" test $? -eq 0
+# Without it, the error suggests the option: the accelerometers alone find the poses.
+sed -e '/^\[table_free\]/,$d' -e "s#^file = \.\./#file = $measured/mpu6050-calibration/../#" \
+  -e "s#^sensor = \.\./#sensor = $measured/mpu6050-calibration/../#" \
+  "$measured/mpu6050-calibration/session.ini" > "$work/mpu-nogyro.ini"
+"$bin" calibrate --method table-free --session "$work/mpu-nogyro.ini" --out "$work/mpu-ng.json" \
+  2> "$work/mpu-ng.err"
+check "without pose_accel_only the MPU-6050 session exits 2" test $? -eq 2
+check "the error suggests the accelerometers alone" contains "$work/mpu-ng.err" "pose_accel_only = true"
 
 # Bad input. Too few poses: the first 90 s of the Xsens files (the initial rest and 3 poses).
 mkdir -p "$work/few"

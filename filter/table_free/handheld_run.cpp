@@ -132,7 +132,21 @@ TableFreeRun run_table_free(const Session& s, const TableFreeRunOptions& o) {
         rec.raw() ? calibrate_table_free_counts(detector_in, rec.nominal, run.options, o.detector)
                   : calibrate_table_free(rec.readings, run.detection.poses, run.options);
   } catch (const TableFreeError& e) {
-    throw TableFreeError(e.kind(), run.log + ": " + e.what());  // the message names the log
+    std::string hint;
+    if (e.kind() == TableFreeError::Kind::TooFewPoses && o.detector.use_gyro) {
+      // The gyros may see a hand's tremor where the accelerometers see a pose.
+      PoseDetectorOptions accel_only = o.detector;
+      accel_only.use_gyro = false;
+      try {
+        const std::size_t n = detect_poses(detector_in, accel_only).poses.size();
+        if (n > run.detection.poses.size())
+          hint = "; the accelerometers alone find " + std::to_string(n) +
+                 " poses: the gyros move at rest (a unit held in the hand?): --pose-accel-only, "
+                 "or pose_accel_only = true in the session's [table_free]";
+      } catch (const PoseDetectorError&) {
+      }
+    }
+    throw TableFreeError(e.kind(), run.log + ": " + e.what() + hint);  // names the log
   }
   return run;
 }
