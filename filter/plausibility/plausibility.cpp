@@ -45,12 +45,7 @@ std::string unit_cause(double ratio, double dt, bool gyro) {
   return "a wrong unit or scale, or a sensor profile that does not match the unit";
 }
 
-std::string number(double v, int precision = 4) {
-  std::ostringstream s;
-  s.precision(precision);
-  s << v;
-  return s.str();
-}
+std::string number(double v, int precision = 4) { return plausibility_number(v, precision); }
 
 // Saturation: the first sample at the profile's range names its line.
 class SaturationWatch {
@@ -136,18 +131,7 @@ std::vector<DwellMean> read_means(LogReader& reader, const PlanTimeline& timelin
   return means;
 }
 
-// Each failing dwell's description; the check shows the first few and the count.
-struct Findings {
-  std::vector<std::string> lines;
-  void add(const std::string& s) { lines.push_back(s); }
-  PlausibilityCheck check(const std::string& name) const {
-    PlausibilityCheck c{name, lines.empty(), ""};
-    for (std::size_t i = 0; i < lines.size() && i < 3; ++i)
-      c.detail += (i > 0 ? "; " : "") + lines[i];
-    if (lines.size() > 3) c.detail += "; and " + std::to_string(lines.size() - 3) + " more dwells";
-    return c;
-  }
-};
+using Findings = PlausibilityFindings;  // each failing dwell's description
 
 std::string dwell_name(const PlanDwell& d) {
   return "dwell " + std::to_string(d.index) + (d.label.empty() ? "" : " (" + d.label + ")");
@@ -195,6 +179,21 @@ PlausibilityLimits PlausibilityLimits::from_profile(const SensorProfile* p) {
   l.accel_white = p->noise.accel.white;
   l.gyro_white = p->noise.gyro.white;
   return l;
+}
+
+std::string plausibility_number(double v, int precision) {
+  std::ostringstream s;
+  s.precision(precision);
+  s << v;
+  return s.str();
+}
+
+PlausibilityCheck PlausibilityFindings::check(const std::string& name) const {
+  PlausibilityCheck c{name, lines.empty(), ""};
+  for (std::size_t i = 0; i < lines.size() && i < 3; ++i)
+    c.detail += (i > 0 ? "; " : "") + lines[i];
+  if (lines.size() > 3) c.detail += "; and " + std::to_string(lines.size() - 3) + " more " + items;
+  return c;
 }
 
 bool PlausibilityReport::passed() const {

@@ -89,6 +89,18 @@ struct UnitFactor {
 };
 std::vector<UnitFactor> unit_factors(bool gyro, double dt);
 
+/// The failures of one check over several dwells or rests: the check shows the first three and
+/// the count of the others (`items`: "dwells", "rests").
+struct PlausibilityFindings {
+  std::vector<std::string> lines;
+  std::string items = "dwells";
+  void add(const std::string& s) { lines.push_back(s); }
+  PlausibilityCheck check(const std::string& name) const;
+};
+
+/// A figure in a gate's message: `precision` significant digits.
+std::string plausibility_number(double v, int precision = 4);
+
 /// Throws PlausibilityError listing the failed checks unless the report passed or `force`.
 void enforce(const PlausibilityReport& report, bool force);
 

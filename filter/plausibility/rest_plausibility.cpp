@@ -39,24 +39,7 @@ constexpr double kTurnedRests = 30.0 * units::deg;
 constexpr double kSteadySize = 1.5;
 constexpr double kSteadyDirection = 10.0 * units::deg;
 
-std::string number(double v, int precision = 4) {
-  std::ostringstream s;
-  s.precision(precision);
-  s << v;
-  return s.str();
-}
-
-// Findings of one check over the rests: the first three and the count.
-struct Findings {
-  std::vector<std::string> lines;
-  PlausibilityCheck check(const std::string& name) const {
-    PlausibilityCheck c{name, lines.empty(), ""};
-    for (std::size_t i = 0; i < lines.size() && i < 3; ++i)
-      c.detail += (i > 0 ? "; " : "") + lines[i];
-    if (lines.size() > 3) c.detail += "; and " + std::to_string(lines.size() - 3) + " more rests";
-    return c;
-  }
-};
+std::string number(double v, int precision = 4) { return plausibility_number(v, precision); }
 
 bool density_ok(double d, double lo, double hi) { return d >= lo && d <= hi; }
 
@@ -253,7 +236,7 @@ RestStatistics rest_statistics(const std::vector<ImuReading>& r, std::size_t fir
 PlausibilityReport check_rests(const std::vector<RestStatistics>& rests, double g,
                                const RestLimits& l, const std::string& input) {
   const RestContext c{g, Earth::wgs84().rate(), l, swapped_triads(rests)};
-  Findings magnitude, rate;
+  PlausibilityFindings magnitude{{}, "rests"}, rate{{}, "rests"};
   for (const auto& r : rests) {
     const std::string where = input + ": " + r.where;
     const double f = r.f_b.norm(), w = r.omega_ib_b.norm();
