@@ -4,7 +4,6 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
-#include <sstream>
 
 #include "models/earth.hpp"
 #include "models/sensor_profile.hpp"
