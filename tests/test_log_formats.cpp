@@ -765,17 +765,22 @@ TEST_CASE("Temperature: NaN, text, out of range, jumps are bad samples naming fi
              Catch::Contains("f.txt:7: field 8 (temperature) is infinite"));
   // Kelvin declared as C: the first line is out of range, and the message says what it is.
   CHECK_THAT(custom_error(dir, temperature_log(20, with(0, "", 298.15)), keys),
-             Catch::Contains("f.txt:1: temperature reads 298.15") &&
+             Catch::Contains("f.txt:1: temperature reads 298.15 C, outside") &&
                  Catch::Contains("outside -60 ... 130 C") &&
                  Catch::Contains("read as K it would be 25 C (temperature_unit = K?)"));
   // C declared as K: 25 K is -248 C; as C or F it would be in range.
   CHECK_THAT(custom_error(dir, temperature_log(20, with(0, "")), keys + "temperature_unit = K\n"),
-             Catch::Contains("f.txt:1: temperature reads 25,") &&
+             Catch::Contains("f.txt:1: temperature reads 25 (-248.15 C), outside") &&
                  Catch::Contains("read as C it would be 25 C"));
   // Beyond the range in any unit: a wrong column or scale.
   CHECK_THAT(custom_error(dir, temperature_log(20, with(3, "12345")), keys),
              Catch::Contains("f.txt:3: temperature reads 12345") &&
                  Catch::Contains("a wrong unit, scale or column?"));
+  // Raw counts (the MPU-6050's conversion): the count, then its temperature.
+  CHECK_THAT(custom_error(dir, temperature_log(20, with(0, "", 40000.0)),
+                          keys + "temperature_scale = 0.0029411764705882353\n" +
+                              "temperature_offset = -12420.2\n"),
+             Catch::Contains("f.txt:1: temperature reads 40000 (154.177 C), outside"));
   // The range's ends: -59.5 and 129.5 C are temperatures, -60.5 and 130.5 C are not.
   CHECK(custom_error(dir, temperature_log(20, with(0, "", -59.5)), keys) == "no error");
   CHECK(custom_error(dir, temperature_log(20, with(0, "", 129.5)), keys) == "no error");
@@ -1067,5 +1072,5 @@ TEST_CASE("Temperature: the native log round-trips them, and is unchanged withou
   test::write_file(dir + "/bad.csv", text);
   CHECK_THAT(
       read_error([&] { return LogReader(LogFormat::native_format(dir + "/bad.csv", 100.0)); }),
-      Catch::Contains("bad.csv:8: gyro temperature reads 250, 250 C, outside"));
+      Catch::Contains("bad.csv:8: gyro temperature reads 250 C, outside"));
 }

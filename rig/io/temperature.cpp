@@ -161,10 +161,14 @@ void LogReader::read_temperatures(ImuSample& s, double t) {
                   log_keys::format_number(std::round(alt * 100.0) / 100.0) +
                   " C (temperature_unit = " + TemperatureColumns::symbol(u) + "?)";
       }
+      // The field as it reads, then in deg C when that differs (another unit, raw counts).
+      char in_c[40] = "";
+      if (celsius[k] != raw) std::snprintf(in_c, sizeof in_c, " (%.6g C)", celsius[k]);
       char msg[200];
-      std::snprintf(msg, sizeof msg, "%s reads %s, %.6g C, outside %g ... %g C where sensors work",
-                    temperature_name(one, k), log_keys::format_number(raw).c_str(), celsius[k],
-                    LogFormat::kMinTemperature, LogFormat::kMaxTemperature);
+      std::snprintf(msg, sizeof msg, "%s reads %s%s, outside %g ... %g C where sensors work",
+                    temperature_name(one, k), log_keys::format_number(raw).c_str(),
+                    in_c[0] != 0 ? in_c : " C", LogFormat::kMinTemperature,
+                    LogFormat::kMaxTemperature);
       bad_sample(msg + (hint.empty() ? std::string(": a wrong unit, scale or column?") : hint));
     }
     // Against every earlier good sample of the file (TemperatureTrack): an upward jump from the
