@@ -12,6 +12,7 @@
 #include "models/units.hpp"
 #include "report/diagnosis_common.hpp"
 #include "report/handheld_diagnosis_report.hpp"
+#include "rig/io/log_io.hpp"
 
 namespace sinscal::cli {
 
@@ -97,6 +98,13 @@ void print(const HandheldDiagnosisInput& in, const HandheldDiagnosisFiles& files
               seconds);
 }
 
+// Whether the session's log has temperature columns (its first sample says).
+bool log_has_temperature(const Session& session) {
+  LogReader reader(session.log);
+  ImuSample s;
+  return reader.next(s) && s.has_temperature;
+}
+
 }  // namespace
 
 int diagnose_handheld_session(const Session& session, const HandheldDiagnoseOptions& o) {
@@ -134,9 +142,12 @@ int diagnose_handheld_session(const Session& session, const HandheldDiagnoseOpti
   if (temperature)
     throw std::runtime_error(
         (session.log.file.empty() ? session.path : session.log.file) +
-        ": the candidate 'temperature' needs a temperature column in the log, which has none "
-        "(the other candidates' findings are written to " +
-        written.json + ")");
+        (log_has_temperature(session)
+             ? ": the candidate 'temperature' is not tested yet (the log's temperature columns "
+               "are read; the thermal families are to come)"
+             : ": the candidate 'temperature' needs a temperature column in the log, which has "
+               "none") +
+        " (the other candidates' findings are written to " + written.json + ")");
   if (!d.refused.empty())
     throw std::runtime_error(d.refused.front() +
                              " (the other candidates' findings are written to " + written.json +

@@ -15,6 +15,11 @@ struct ImuSample {
   bool has_table = false;
   double table_outer = 0.0;  // rad
   double table_inner = 0.0;  // rad
+  /// The sensors' temperatures at t, when the log has them (deg C, docs/conventions.md "Units"):
+  /// one per triad, or one per unit (both equal).
+  bool has_temperature = false;
+  double accel_temperature_c = 0.0;  // deg C
+  double gyro_temperature_c = 0.0;   // deg C
   /// The sample's label (a text column of the log, e.g. a part of a six-face session): an index
   /// into LogReader::labels(); -1 when the log has no label column.
   int label = -1;

@@ -146,6 +146,9 @@ awk -F, 'BEGIN { pi = atan2(0, -1); print "time,ax,ay,az,gx,gy,gz" }
 # Split (imu_tk style): t x y z per triad, whitespace.
 awk -F, 'NR > 1 { print $1, $2, $3, $4 }' imu.txt > acc.txt
 awk -F, 'NR > 1 { print $1, $5, $6, $7 }' imu.txt > gyr.txt
+# With a temperature column (deg C, one per unit, drifting 1 mC per sample): custom and split.
+awk -F, -v OFS=, 'NR == 1 { print $0, "temp"; next } { print $0, 25 + NR * 0.001 }' imu.txt > imu_temp.txt
+awk '{ print $0, 25 + NR * 0.001 }' acc.txt > acc_temp.txt
 # One file per dwell: the samples of each dwell (times from navigate's output), native format.
 for k in 1 2 3; do
   read -r t0 t1 < <(awk -F, -v k="$k" '$1 == k { if (!n++) a = $2; b = $2 } END { print a, b }' mini/nav.csv)
@@ -181,6 +184,12 @@ novatel() {
     "[log]" "file = imu.asc" "format = novatel" "gyro_scale = 1e-9" "accel_scale = 0.001" \
     "accel_unit = mm/s" > "$d/session.ini"
 }
+custom_temp() {
+  custom; cp "$base/imu_temp.txt" "$d/imu.txt"; set_key "$d/session.ini" columns "t ax ay az gx gy gz temp"
+}
+split_temp() { split; cp "$base/acc_temp.txt" "$d/acc.txt"; add_line "$d/session.ini" "accel_columns = t x y z temp"; }
+# native_temp FILE: the native log FILE with both temperature columns (25 C).
+native_temp() { sed -i '3s/$/,temperature_accel [C],temperature_gyro [C]/; 4,$s/$/,25,25/' "$1"; }
 nav() { S navigate --session session.ini --out out/nav.csv; }
 cf() { S calibrate --method closed-form --session session.ini --out out/result.json "$@"; }
 kf() { S calibrate --method kf --session session.ini --out out/result.json "$@"; }
@@ -471,6 +480,41 @@ new segments-gyro-1e300; segments; set_field "$d/pos2.csv" 10 4 1e300
 fixed 2 "pos2.csv:10: gyro log axis z reads 1e+300" nav
 new segments-kf-jump; segments
 fixed 2 "the data jump from t =" kf
+
+# --- temperature columns (custom, split, one file per dwell) -----------------------------------
+new control-navigate-custom-temperature; custom_temp; control 0 "" nav
+new control-navigate-split-temperature; split_temp; control 0 "" nav
+new control-navigate-segments-temperature; segments; for k in 1 2 3; do native_temp "$d/pos$k.csv"; done
+control 0 "" nav
+new temp-nan; custom_temp; set_field "$d/imu.txt" 50 8 nan
+fixed 2 "imu.txt:50: field 8 (temperature) is NaN" nav
+new temp-text; custom_temp; set_field "$d/imu.txt" 50 8 warm
+fixed 2 "imu.txt:50: field 8 (temperature) 'warm' is not a number" nav
+new temp-kelvin-declared-celsius; custom_temp
+awk -F, -v OFS=, 'NR > 1 { $8 = $8 + 273.15 } { print }' "$base/imu_temp.txt" > "$d/imu.txt"
+fixed 2 "imu.txt:2: temperature reads 298.152|read as K it would be 25 C (temperature_unit = K?)" nav
+new temp-out-of-range; custom_temp; set_field "$d/imu.txt" 2 8 150
+fixed 2 "imu.txt:2: temperature reads 150|outside -60 ... 130 C" nav
+new temp-jump; custom_temp; set_field "$d/imu.txt" 60 8 35
+fixed 2 "imu.txt:60: temperature jumps to 35 C|(line 59)" nav
+new temp-column-missing; custom_temp; cp "$base/imu.txt" "$d/imu.txt"
+fixed 2 "imu.txt:2: expected 8 fields, found 7" nav
+new temp-key-without-column; custom; add_line "$d/session.ini" "temperature_unit = K"
+fixed 2 "session.ini:$L: 'log.temperature_unit'|a temperature key without a temperature column" nav
+new temp-unit-unknown; custom_temp; add_line "$d/session.ini" "temperature_unit = Celsius"
+fixed 2 "session.ini:$L: 'log.temperature_unit'|expected C, K or F" nav
+new temp-scale-zero; custom_temp; add_line "$d/session.ini" "temperature_scale = 0"
+fixed 2 "session.ini:$L: 'log.temperature_scale'|must not be zero" nav
+new temp-one-triad-only; custom_temp; set_key "$d/session.ini" columns "t ax ay az gx gy gz temp_a"
+fixed 2 "session.ini:$L: 'log.columns'|both per-triad temperature columns" nav
+new temp-native-key; mini; add_line "$d/session.ini" "temperature_unit = K"
+fixed 2 "session.ini:$L: 'log.temperature_unit': unknown key in [log]" nav
+new split-temp-nan; split_temp; awk 'NR == 30 { $5 = "nan" } { print }' "$base/acc_temp.txt" > "$d/acc.txt"
+fixed 2 "acc.txt:30: field 5 (temperature) is NaN" nav
+new split-temp-key-without-column; split; add_line "$d/session.ini" "temperature_offset = 273.15"
+fixed 2 "session.ini:$L: 'log.temperature_offset'|neither accel_columns nor gyro_columns names temp" nav
+new segments-temp-in-one-file; segments; native_temp "$d/pos2.csv"
+fixed 2 "pos2.csv:4: this file has temperature columns but|pos1.csv has none" nav
 
 # --- NovAtel ----------------------------------------------------------------------------------
 new novatel-crc-mismatch; novatel; sed -i '2s/,3000,/,3009,/' "$d/imu.asc"

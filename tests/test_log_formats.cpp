@@ -1,8 +1,10 @@
 // Log formats labs and tools produce: a log split over one file per triad (imu_tk), one file per
-// dwell of the plan, NovAtel RAWIMUSA / RAWIMUSXA ASCII logs; limits of the line reader.
+// dwell of the plan, NovAtel RAWIMUSA / RAWIMUSXA ASCII logs; limits of the line reader;
+// temperature columns in every format that has them, and their checks.
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 
 #include "filter/closed_form/closed_form.hpp"
@@ -610,4 +612,465 @@ TEST_CASE("Custom log: text columns skipped, a label column, a sample counter as
   LogReader r3(Session::load(dir + "/session3.ini", Session::PlanNeed::Optional).log);
   CHECK_THROWS_WITH(r3.next(x),
                     Catch::Matchers::Contains("log.csv:2: field 1 'x_p' is not a number"));
+}
+
+// --- Temperature columns (issue 19; docs/formats.md "Temperature columns") ---------------------
+
+namespace {
+
+std::string number_text(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+// A custom log of n samples at 100 Hz: t, gyro x, y, z (rad/s), accel x, y, z (m/s^2), then
+// `temps(k)` (the temperature fields of sample k, from 0, with their leading commas).
+template <class Temps>
+std::string temperature_log(int n, Temps temps) {
+  std::string out;
+  for (int k = 0; k < n; ++k)
+    out += number_text(0.01 * (k + 1)) + ",0.1,0,0,0,0,9.8" + temps(k) + "\n";
+  return out;
+}
+
+const char* kRateKeys = "format = custom\ngyro = rate\naccel = rate\n";
+
+// Reads a custom log `text` with [log] keys `keys` (file = f.txt added): the samples, or the
+// error's message in `error`.
+std::vector<ImuSample> read_custom(const std::string& dir, const std::string& text,
+                                   const std::string& keys, std::string* error = nullptr) {
+  test::write_file(dir + "/f.txt", text);
+  test::write_file(dir + "/s.ini", "[log]\nfile = f.txt\n" + keys);
+  try {
+    LogReader r(LogFormat::from_ini(IniFile(dir + "/s.ini"), dir, 100.0));
+    return read_all(r);
+  } catch (const std::exception& e) {
+    if (!error) throw;
+    *error = e.what();
+  }
+  return {};
+}
+
+std::string custom_error(const std::string& dir, const std::string& text, const std::string& keys) {
+  std::string error = "no error";
+  read_custom(dir, text, keys, &error);
+  return error;
+}
+
+}  // namespace
+
+TEST_CASE("Temperature: custom log, one column per unit or per triad, C, K, F and raw counts",
+          "[log][temperature]") {
+  const std::string dir = test::temp_dir("temp_custom");
+  // One per unit, deg C: both triads read it, exactly.
+  auto unit_c = [](int k) { return "," + number_text(20.0 + 0.01 * k); };
+  const auto s = read_custom(dir, temperature_log(50, unit_c),
+                             std::string(kRateKeys) + "columns = t gx gy gz ax ay az temp\n");
+  REQUIRE(s.size() == 50);
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    CAPTURE(k);
+    CHECK(s[k].has_temperature);
+    CHECK(s[k].accel_temperature_c == 20.0 + 0.01 * static_cast<double>(k));
+    CHECK(s[k].gyro_temperature_c == s[k].accel_temperature_c);
+    CHECK(s[k].dtheta_b.x() == Approx(0.001));  // the sensors' columns are where they were
+  }
+  // One per triad, in any column order; kelvin and Fahrenheit.
+  auto per_triad = [](double a, double g) {
+    return [a, g](int k) { return "," + number_text(a + 0.01 * k) + "," + number_text(g); };
+  };
+  const std::string triad_cols = "columns = t gx gy gz ax ay az temp_g temp_a\n";
+  auto check_triad = [](const std::vector<ImuSample>& v, double accel0, double gyro) {
+    REQUIRE(v.size() == 30);
+    for (std::size_t k = 0; k < v.size(); ++k) {
+      CHECK(v[k].accel_temperature_c == Approx(accel0 + 0.01 * static_cast<double>(k) * 5 / 9));
+      CHECK(v[k].gyro_temperature_c == Approx(gyro));
+    }
+  };
+  // temp_g first: 300.15 K = 27 C; temp_a from 298.15 K = 25 C.
+  const auto kelvin = read_custom(dir, temperature_log(30, per_triad(300.15, 298.15)),
+                                  std::string(kRateKeys) + triad_cols + "temperature_unit = K\n");
+  REQUIRE(kelvin.size() == 30);
+  CHECK(kelvin[0].accel_temperature_c == Approx(25.0));
+  CHECK(kelvin[29].gyro_temperature_c == Approx(27.0 + 0.29));
+  // Fahrenheit: temp_a 77 F = 25 C (steps of 0.01 F = 1/180 C), temp_g 98.6 F = 37 C.
+  check_triad(read_custom(dir, temperature_log(30, per_triad(98.6, 77.0)),
+                          std::string(kRateKeys) + "columns = t gx gy gz ax ay az temp_a temp_g\n" +
+                              "temperature_unit = F\n"),
+              37.0, 25.0);
+  // Raw counts, the MPU-6050's conversion: T = counts / 340 + 36.53 C.
+  const auto raw = read_custom(
+      dir, temperature_log(10, [](int k) { return "," + std::to_string(-3920 + 34 * k); }),
+      std::string(kRateKeys) + "columns = t gx gy gz ax ay az temp\n" +
+          "temperature_scale = 0.0029411764705882353\ntemperature_offset = -12420.2\n");
+  REQUIRE(raw.size() == 10);
+  CHECK(raw[0].accel_temperature_c == Approx(-3920.0 / 340.0 + 36.53));
+  CHECK(raw[9].gyro_temperature_c == Approx((-3920.0 + 306.0) / 340.0 + 36.53));
+  // Without a temperature column: no temperature.
+  const auto none = read_custom(dir, temperature_log(3, [](int) { return std::string(); }),
+                                std::string(kRateKeys) + "columns = t gx gy gz ax ay az\n");
+  REQUIRE(none.size() == 3);
+  CHECK_FALSE(none[0].has_temperature);
+}
+
+TEST_CASE("Temperature: the [log] keys and columns are checked, each error naming the line",
+          "[log][temperature]") {
+  const std::string dir = test::temp_dir("temp_config");
+  auto error_of = [&](const std::string& extra) {
+    test::write_file(dir + "/s.ini", "[log]\nfile = f.txt\n" + std::string(kRateKeys) + extra);
+    return config_error(dir + "/s.ini", dir);
+  };
+  const std::string cols = "columns = t gx gy gz ax ay az temp\n";
+  CHECK(error_of(cols + "temperature_unit = K\n") == "no error");
+  // A temperature key without a temperature column (line 6).
+  CHECK_THAT(error_of("columns = t gx gy gz ax ay az\ntemperature_unit = K\n"),
+             Catch::Contains("s.ini:7: 'log.temperature_unit'") &&
+                 Catch::Contains("a temperature key without a temperature column"));
+  CHECK_THAT(error_of("columns = t gx gy gz ax ay az\ntemperature_scale = 0.1\n"),
+             Catch::Contains("s.ini:7: 'log.temperature_scale'"));
+  CHECK_THAT(error_of(cols + "temperature_unit = celsius\n"),
+             Catch::Contains("s.ini:7") && Catch::Contains("expected C, K or F"));
+  CHECK_THAT(error_of(cols + "temperature_scale = 0\n"),
+             Catch::Contains("s.ini:7") && Catch::Contains("must not be zero"));
+  CHECK_THAT(error_of(cols + "temperature_scale = 1000\n"),
+             Catch::Contains("s.ini:7") && Catch::Contains("one count would be 1000 C"));
+  CHECK_THAT(error_of(cols + "temperature_offset = nan\n"),
+             Catch::Contains("s.ini:7") && Catch::Contains("not a finite number"));
+  CHECK_THAT(error_of("columns = t gx gy gz ax ay az temp_a\n"),
+             Catch::Contains("s.ini:6") && Catch::Contains("both per-triad temperature columns"));
+  CHECK_THAT(error_of("columns = t gx gy gz ax ay az temp temp_g\n"),
+             Catch::Contains("s.ini:6") && Catch::Contains("not both"));
+  CHECK_THAT(error_of("columns = t gx gy gz ax ay az temp temp\n"),
+             Catch::Contains("s.ini:6") && Catch::Contains("given twice"));
+  // The native format has no temperature keys (its header says).
+  test::write_file(dir + "/n.ini", "[log]\nfile = f.txt\ntemperature_unit = K\n");
+  CHECK_THAT(config_error(dir + "/n.ini", dir),
+             Catch::Contains("n.ini:3") && Catch::Contains("unknown key"));
+}
+
+TEST_CASE("Temperature: NaN, text, out of range, jumps are bad samples naming file and line",
+          "[log][temperature]") {
+  const std::string dir = test::temp_dir("temp_checks");
+  const std::string keys = std::string(kRateKeys) + "columns = t gx gy gz ax ay az temp\n";
+  auto with = [](int line, const std::string& value, double base = 25.0) {
+    return [line, value, base](int k) {
+      return "," + (k + 1 == line ? value : number_text(base + 0.001 * k));
+    };
+  };
+  CHECK_THAT(custom_error(dir, temperature_log(20, with(7, "nan")), keys),
+             Catch::Contains("f.txt:7: field 8 (temperature) is NaN"));
+  CHECK_THAT(custom_error(dir, temperature_log(20, with(7, "warm")), keys),
+             Catch::Contains("f.txt:7: field 8 (temperature) 'warm' is not a number"));
+  CHECK_THAT(custom_error(dir, temperature_log(20, with(7, "inf")), keys),
+             Catch::Contains("f.txt:7: field 8 (temperature) is infinite"));
+  // Kelvin declared as C: the first line is out of range, and the message says what it is.
+  CHECK_THAT(custom_error(dir, temperature_log(20, with(0, "", 298.15)), keys),
+             Catch::Contains("f.txt:1: temperature reads 298.15 C, outside") &&
+                 Catch::Contains("outside -60 ... 130 C") &&
+                 Catch::Contains("read as K it would be 25 C (temperature_unit = K?)"));
+  // C declared as K: 25 K is -248 C; as C or F it would be in range.
+  CHECK_THAT(custom_error(dir, temperature_log(20, with(0, "")), keys + "temperature_unit = K\n"),
+             Catch::Contains("f.txt:1: temperature reads 25 (-248.15 C), outside") &&
+                 Catch::Contains("read as C it would be 25 C"));
+  // Beyond the range in any unit: a wrong column or scale.
+  CHECK_THAT(custom_error(dir, temperature_log(20, with(3, "12345")), keys),
+             Catch::Contains("f.txt:3: temperature reads 12345") &&
+                 Catch::Contains("a wrong unit, scale or column?"));
+  // Raw counts (the MPU-6050's conversion): the count, then its temperature.
+  CHECK_THAT(custom_error(dir, temperature_log(20, with(0, "", 40000.0)),
+                          keys + "temperature_scale = 0.0029411764705882353\n" +
+                              "temperature_offset = -12420.2\n"),
+             Catch::Contains("f.txt:1: temperature reads 40000 (154.177 C), outside"));
+  // The range's ends: -59.5 and 129.5 C are temperatures, -60.5 and 130.5 C are not.
+  CHECK(custom_error(dir, temperature_log(20, with(0, "", -59.5)), keys) == "no error");
+  CHECK(custom_error(dir, temperature_log(20, with(0, "", 129.5)), keys) == "no error");
+  CHECK_THAT(custom_error(dir, temperature_log(20, with(0, "", -60.5)), keys),
+             Catch::Contains("f.txt:1: temperature reads -60.5"));
+  CHECK_THAT(custom_error(dir, temperature_log(20, with(0, "", 130.5)), keys),
+             Catch::Contains("f.txt:1: temperature reads 130.5"));
+  // A jump: 3 C in one sample of 0.01 s (bound 2 C + 5 C/s x 0.01 s = 2.05 C), up and down.
+  CHECK_THAT(custom_error(dir, temperature_log(20, with(12, "28.011")), keys),
+             Catch::Contains("f.txt:12: temperature jumps to 28.011 C") &&
+                 Catch::Contains("from 25.01 C at t = 0.110000 s (line 11)") &&
+                 Catch::Contains("beyond 2 C + 5 C/s x the time between them"));
+  CHECK_THAT(custom_error(dir, temperature_log(20, with(12, "22.9")), keys),
+             Catch::Contains("f.txt:12: temperature jumps to 22.9 C"));
+  // 2 C in one sample is within the bound (a quantized sensor's step).
+  CHECK(custom_error(dir, temperature_log(20, with(12, "27.01")), keys).find("jumps") ==
+        std::string::npos);
+  // A sustained ramp of 10 C/s (0.1 C per sample): within the step bound sample by sample, beyond
+  // the rate over 0.4 s (4 C against 2 C + 2 C).
+  CHECK_THAT(custom_error(
+                 dir, temperature_log(100, [](int k) { return "," + number_text(0.1 * k); }), keys),
+             Catch::Contains("f.txt:42: temperature jumps to 4.1 C") &&
+                 Catch::Contains("from 0 C at t = 0.010000 s (line 1)"));
+  // A chamber's fast ramp (1 C/s) is fine.
+  CHECK(custom_error(dir, temperature_log(300, [](int k) { return "," + number_text(0.01 * k); }),
+                     keys) == "no error");
+  // Per triad: the gyro's column names the gyro.
+  CHECK_THAT(custom_error(dir,
+                          temperature_log(
+                              20, [](int k) { return ",30," + std::string(k == 9 ? "40" : "31"); }),
+                          std::string(kRateKeys) + "columns = t gx gy gz ax ay az temp_a temp_g\n"),
+             Catch::Contains("f.txt:10: gyro temperature jumps to 40 C"));
+}
+
+TEST_CASE("Temperature: skipped bad samples, the jump check resumes against the last good one",
+          "[log][temperature]") {
+  const std::string dir = test::temp_dir("temp_skip");
+  test::write_file(dir + "/s.ini", "[log]\nfile = f.txt\n" + std::string(kRateKeys) +
+                                       "columns = t gx gy gz ax ay az temp\n");
+  auto read_skipping = [&](const std::string& text, std::vector<std::string>& skipped) {
+    test::write_file(dir + "/f.txt", text);
+    LogReader r(LogFormat::from_ini(IniFile(dir + "/s.ini"), dir, 100.0));
+    r.skip_bad_samples([&](const BadSampleError& e) { skipped.emplace_back(e.what()); });
+    return read_all(r);
+  };
+  // One glitch (60 C in a 25 C log): skipped, the next sample compared with the last good one.
+  std::vector<std::string> skipped;
+  auto s = read_skipping(
+      temperature_log(50, [](int k) { return std::string(k == 20 ? ",60" : ",25"); }), skipped);
+  CHECK(s.size() == 49);
+  REQUIRE(skipped.size() == 1);
+  CHECK_THAT(skipped[0], Catch::Contains("f.txt:21: temperature jumps to 60 C"));
+  // A lasting step of 10.02 C: skipped until the bound has grown to it, (10.02 - 2) / 5 = 1.604 s
+  // after the last good sample (t = 1 s): the first sample taken is at 2.61 s.
+  skipped.clear();
+  s = read_skipping(
+      temperature_log(400, [](int k) { return std::string(k >= 100 ? ",35.02" : ",25"); }),
+      skipped);
+  CHECK(skipped.size() == 160);
+  CHECK(s.size() == 240);
+  CHECK(s[100].accel_temperature_c == 35.02);
+  CHECK(s[100].t == Approx(2.61));
+}
+
+TEST_CASE("Temperature: a stuck sensor over more than 10 min is an error of the thermal check",
+          "[log][temperature]") {
+  const std::string dir = test::temp_dir("temp_stuck");
+  // 11 min at 10 Hz, exactly 23.5 C throughout.
+  std::string text;
+  for (int k = 1; k <= 6600; ++k) text += number_text(0.1 * k) + ",0,0,0,0,0,9.8,23.5,24\n";
+  test::write_file(dir + "/f.txt", text);
+  test::write_file(dir + "/s.ini", "[log]\nfile = f.txt\n" + std::string(kRateKeys) +
+                                       "columns = t gx gy gz ax ay az temp_a temp_g\n");
+  LogFormat f = LogFormat::from_ini(IniFile(dir + "/s.ini"), dir, 10.0);
+  LogReader r(f);
+  const auto s = read_all(r);  // the reader itself does not refuse it (a non-thermal use is fine)
+  REQUIRE(s.size() == 6600);
+  const TemperatureSummary& sum = r.temperature_summary();
+  CHECK(sum.samples == 6600);
+  CHECK(sum.accel_min_c == 23.5);
+  CHECK(sum.gyro_max_c == 24.0);
+  CHECK_THROWS_WITH(check_temperature_not_stuck(sum),
+                    Catch::Contains("f.txt:6600: the accelerometer temperature reads exactly "
+                                    "23.5 C over the whole log, 11.0 min") &&
+                        Catch::Contains("f.txt:1") && Catch::Contains("a stuck sensor"));
+  // Shorter than the span: passes (a short record may hold one quantized value).
+  CHECK_NOTHROW(check_temperature_not_stuck(sum, 700.0));
+  // One count of change in 11 min is not stuck; the gyro's column, still constant, is named.
+  text.replace(text.rfind(",23.5,"), 6, ",23.6,");
+  test::write_file(dir + "/f.txt", text);
+  LogReader r2(f);
+  read_all(r2);
+  CHECK_THROWS_WITH(check_temperature_not_stuck(r2.temperature_summary()),
+                    Catch::Contains("the gyro temperature reads exactly 24 C"));
+  // Both varying: not stuck.
+  std::string g;
+  for (int k = 1; k <= 6600; ++k)
+    g += number_text(0.1 * k) + ",0,0,0,0,0,9.8," + number_text(20.0 + 1e-3 * k) + "," +
+         number_text(24.0 + 1e-4 * k) + "\n";
+  test::write_file(dir + "/f.txt", g);
+  LogReader r3(f);
+  read_all(r3);
+  CHECK_NOTHROW(check_temperature_not_stuck(r3.temperature_summary()));
+  // A log without temperatures passes.
+  CHECK_NOTHROW(check_temperature_not_stuck(TemperatureSummary{}));
+}
+
+TEST_CASE("Temperature: split per-triad files, each triad's own or one file's for the unit",
+          "[log][temperature][split]") {
+  const std::string dir = test::temp_dir("temp_split");
+  // Row k (from 1): accelerometer 30 + 0.01 k C, gyro `gyro_temp(k)`.
+  auto write_files = [&](const std::function<std::string(int)>& gyro_temp) {
+    std::string a, g;
+    for (int k = 1; k <= 20; ++k) {
+      const std::string t = number_text(0.01 * k);
+      a += t + " 0 0 9.8 " + number_text(30.0 + 0.01 * k) + "\n";
+      g += t + " " + gyro_temp(k) + " 0.1 0 0\n";
+    }
+    test::write_file(dir + "/a.txt", a);
+    test::write_file(dir + "/g.txt", g);
+  };
+  auto gyro_31 = [](int k) { return number_text(31.0 - 0.01 * k); };
+  write_files(gyro_31);
+  const std::string files =
+      "[log]\naccel_file = a.txt\ngyro_file = g.txt\ndelimiter = whitespace\n" +
+      std::string(kRateKeys);
+  const std::string both = "accel_columns = t x y z temp\ngyro_columns = t temp x y z\n";
+  auto read_split = [&](const std::string& cols) {
+    test::write_file(dir + "/s.ini", files + cols);
+    LogReader r(LogFormat::from_ini(IniFile(dir + "/s.ini"), dir, 100.0));
+    return read_all(r);
+  };
+  auto s = read_split(both);
+  REQUIRE(s.size() == 20);
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    const int n = static_cast<int>(k) + 1;
+    CHECK(s[k].accel_temperature_c == 30.0 + 0.01 * n);
+    CHECK(s[k].gyro_temperature_c == 31.0 - 0.01 * n);
+    CHECK(s[k].dtheta_b.x() == Approx(0.001));
+    CHECK(s[k].dv_b.z() == Approx(0.098));
+  }
+  // Only the gyro file has one: the unit's temperature (the accelerometer file's column skipped).
+  s = read_split("accel_columns = t x y z -\ngyro_columns = t temp x y z\n");
+  REQUIRE(s.size() == 20);
+  CHECK(s[4].accel_temperature_c == s[4].gyro_temperature_c);
+  CHECK(s[4].gyro_temperature_c == Approx(31.0 - 0.05));
+  // Errors name the file the temperature is in.
+  auto split_error = [&] {
+    return read_error(
+        [&] { return LogReader(LogFormat::from_ini(IniFile(dir + "/s.ini"), dir, 100.0)); });
+  };
+  write_files([&](int k) { return k == 10 ? std::string("nan") : gyro_31(k); });
+  CHECK_THAT(split_error(), Catch::Contains("g.txt:10: field 2 (temperature) is NaN"));
+  write_files([&](int k) { return k == 10 ? std::string("39.9") : gyro_31(k); });
+  test::write_file(dir + "/s.ini", files + both);
+  CHECK_THAT(split_error(), Catch::Contains("g.txt:10: gyro temperature jumps to 39.9 C"));
+  // The temperature keys need a temp column in one of the files.
+  test::write_file(dir + "/s.ini", files + "temperature_unit = K\n");
+  CHECK_THAT(config_error(dir + "/s.ini", dir),
+             Catch::Contains("s.ini:8") &&
+                 Catch::Contains("neither accel_columns nor gyro_columns names temp"));
+  test::write_file(dir + "/s.ini", files + "accel_columns = t x y z warmth\n");
+  CHECK_THAT(config_error(dir + "/s.ini", dir), Catch::Contains("known: t x y z temp"));
+}
+
+TEST_CASE("Temperature: one file per dwell, custom and native; every file has them or none",
+          "[log][temperature][segments]") {
+  const std::string dir = test::temp_dir("temp_segments");
+  std::filesystem::copy_file(data_path("segments/plan.ini"), dir + "/plan.ini");
+  // Custom: pos<d>.csv with a temperature column 20 + d C (each file checked on its own).
+  for (int d = 1; d <= 3; ++d) {
+    std::ifstream in(data_path("segments/pos" + std::to_string(d) + ".csv"));
+    std::string out;
+    for (std::string l; std::getline(in, l);) out += l + "," + std::to_string(20 + d) + "\n";
+    test::write_file(dir + "/pos" + std::to_string(d) + ".csv", out);
+  }
+  test::write_file(dir + "/session.ini",
+                   "[session]\nrate = 100 Hz\nplan = plan.ini\n[log]\nformat = custom\n"
+                   "files = pos1.csv pos2.csv pos3.csv\ncolumns = t gx gy gz ax ay az temp\n"
+                   "gyro = rate\ngyro_unit = deg/s\naccel = rate\naccel_unit = g\n");
+  {
+    LogReader r(Session::load(dir + "/session.ini").log);
+    const auto s = read_all(r);
+    REQUIRE(s.size() == 24);
+    CHECK(s[0].accel_temperature_c == 21.0);
+    CHECK(s[8].gyro_temperature_c == 22.0);  // dwell 2's first sample
+    CHECK(s[23].accel_temperature_c == 23.0);
+    CHECK(r.temperature_summary().samples == 24);
+    CHECK(r.temperature_summary().accel_max_c == 23.0);
+  }
+  // Native: files written with temperatures; one without them is an error naming it.
+  const Session plain = Session::load(data_path("segments/session.ini"));
+  LogReader source(plain.log);
+  const auto samples = read_all(source);
+  auto write_native = [&](const std::string& name, std::size_t from, std::size_t to, bool temp) {
+    LogWriter w(dir + "/" + name, 100.0, false, temp);
+    for (std::size_t k = from; k < to; ++k) {
+      ImuSample s = samples[k];
+      s.has_temperature = temp;
+      s.accel_temperature_c = 40.0 + 0.125 * static_cast<double>(k);
+      s.gyro_temperature_c = -10.5;
+      w.write(s);
+    }
+    w.close();
+  };
+  write_native("n1.csv", 0, 8, true);
+  write_native("n2.csv", 8, 18, true);
+  write_native("n3.csv", 18, 24, true);
+  test::write_file(dir + "/native.ini",
+                   "[session]\nrate = 100 Hz\nplan = plan.ini\n[log]\nformat = sinscal\n"
+                   "files = n1.csv n2.csv n3.csv\n");
+  {
+    LogReader r(Session::load(dir + "/native.ini").log);
+    const auto s = read_all(r);
+    REQUIRE(s.size() == 24);
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      CHECK(s[k].accel_temperature_c == 40.0 + 0.125 * static_cast<double>(k));
+      CHECK(s[k].gyro_temperature_c == -10.5);
+      CHECK(s[k].dtheta_b == samples[k].dtheta_b);
+    }
+  }
+  write_native("n2.csv", 8, 18, false);
+  CHECK_THAT(read_error([&] { return LogReader(Session::load(dir + "/native.ini").log); }),
+             Catch::Contains("n2.csv:4: this file has no temperature columns but") &&
+                 Catch::Contains("n1.csv has them"));
+}
+
+TEST_CASE("Temperature: the native log round-trips them, and is unchanged without them",
+          "[log][temperature]") {
+  const std::string dir = test::temp_dir("temp_native");
+  std::vector<ImuSample> in;
+  for (int k = 1; k <= 200; ++k) {
+    ImuSample s;
+    s.t = 0.01 * k;
+    s.dt = 0.01;
+    s.dtheta_b = Vector3d(1e-7 * k, -3.3e-6 / k, 0.1 / 3.0);
+    s.dv_b = Vector3d(0.0981 / 7.0, -1e-5, 0.0980665);
+    s.has_table = true;
+    s.table_outer = 0.01 * k;
+    s.table_inner = -0.02 * k;
+    s.has_temperature = true;
+    s.accel_temperature_c = 21.0 + 1.0 / 3.0 + 1e-3 * k;
+    s.gyro_temperature_c = 22.0 - 1e-3 * k;
+    in.push_back(s);
+  }
+  for (const bool table : {false, true}) {
+    CAPTURE(table);
+    LogWriter w(dir + "/imu.csv", 100.0, table, true);
+    for (const auto& s : in) w.write(s);
+    w.close();
+    LogReader r(LogFormat::native_format(dir + "/imu.csv", 100.0));
+    const auto out = read_all(r);
+    REQUIRE(out.size() == in.size());
+    for (std::size_t k = 0; k < in.size(); ++k) {
+      CHECK(out[k].has_temperature);
+      CHECK(out[k].has_table == table);
+      CHECK(out[k].accel_temperature_c == in[k].accel_temperature_c);  // shortest exact text
+      CHECK(out[k].gyro_temperature_c == in[k].gyro_temperature_c);
+      CHECK(out[k].dv_b == in[k].dv_b);
+    }
+    std::ifstream text(dir + "/imu.csv");
+    std::string line;
+    for (int i = 0; i < 3; ++i) std::getline(text, line);
+    CHECK(line == std::string("t [s],dtheta_x [rad],dtheta_y [rad],dtheta_z [rad],dv_x [m/s],"
+                              "dv_y [m/s],dv_z [m/s]") +
+                      (table ? ",outer [deg],inner [deg]" : "") +
+                      ",temperature_accel [C],temperature_gyro [C]");
+  }
+  // Without the flag: the format of before, byte for byte, whatever the samples carry.
+  ImuSample plain = in[0];
+  plain.t = 0.5;
+  plain.dtheta_b = Vector3d(0.25, -0.125, 1.0);
+  plain.dv_b = Vector3d(2.0, 0.0, -0.5);
+  LogWriter w(dir + "/plain.csv", 100.0);
+  w.write(plain);
+  w.close();
+  CHECK(file_text(dir + "/plain.csv") ==
+        "# sinscal IMU log, format 1: increments over (t - dt, t], body axes\n# rate_hz = 100\n"
+        "t [s],dtheta_x [rad],dtheta_y [rad],dtheta_z [rad],dv_x [m/s],dv_y [m/s],dv_z [m/s]\n"
+        "0.5,0.25,-0.125,1,2,0,-0.5\n");
+  // A writer that declares them refuses a sample without them; a bad native value is checked.
+  LogWriter w2(dir + "/imu2.csv", 100.0, false, true);
+  CHECK_THROWS_AS(w2.write(ImuSample{}), std::invalid_argument);
+  std::string text = file_text(dir + "/imu.csv");
+  std::size_t line8 = 0;
+  for (int i = 0; i < 7; ++i) line8 = text.find('\n', line8) + 1;
+  const std::size_t last_comma = text.rfind(',', text.find('\n', line8));
+  text.replace(last_comma + 1, text.find('\n', line8) - last_comma - 1, "250");
+  test::write_file(dir + "/bad.csv", text);
+  CHECK_THAT(
+      read_error([&] { return LogReader(LogFormat::native_format(dir + "/bad.csv", 100.0)); }),
+      Catch::Contains("bad.csv:8: gyro temperature reads 250 C, outside"));
 }

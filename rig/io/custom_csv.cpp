@@ -17,6 +17,7 @@ void read_custom_format(const IniFile& ini, const std::string& base_dir, double 
               {"delimiter", "header_lines", "time_unit", "gyro", "gyro_unit", "gyro_scale",
                "gyro_offset", "gyro_axes", "gyro_saturation", "accel", "accel_unit", "accel_scale",
                "accel_offset", "accel_axes", "accel_saturation"});
+  keys.insert(keys.end(), kTemperatureKeys.begin(), kTemperatureKeys.end());
   if (split) {
     add_split_keys(ini, segmented, keys);
   } else {
@@ -37,11 +38,13 @@ void read_custom_format(const IniFile& ini, const std::string& base_dir, double 
   } else {
     if (!segmented) f.file = path_in(base_dir, ini.get_string("log.file"));
     for (const auto& c : tokens_of(ini.get_string("log.columns"))) {
-      static const std::vector<std::string> known = {"t",  "gx",    "gy",    "gz",    "ax", "ay",
-                                                     "az", "outer", "inner", "label", "-"};
+      static const std::vector<std::string> known = {"t",      "gx",     "gy",    "gz",    "ax",
+                                                     "ay",     "az",     "outer", "inner", "temp",
+                                                     "temp_a", "temp_g", "label", "-"};
       if (std::find(known.begin(), known.end(), c) == known.end())
         throw ConfigError(ini.where("log.columns") + "unknown column '" + c +
-                          "' (known: t gx gy gz ax ay az outer inner label, - to skip)");
+                          "' (known: t gx gy gz ax ay az outer inner temp temp_a temp_g label, - "
+                          "to skip)");
       if (c != "-" && std::count(f.columns.begin(), f.columns.end(), c))
         throw ConfigError(ini.where("log.columns") + "column '" + c + "' given twice");
       f.columns.push_back(c);
@@ -51,6 +54,17 @@ void read_custom_format(const IniFile& ini, const std::string& base_dir, double 
       throw ConfigError(ini.where("log.columns") +
                         "give both table-angle columns, outer and inner");
     if (outer) f.table_scale = unit_of(ini, "log.table_unit", "deg", QuantityKind::Angle);
+    // Temperature: one column for the unit (temp) or one per triad (temp_a and temp_g).
+    auto has = [&](const char* c) { return std::count(f.columns.begin(), f.columns.end(), c) > 0; };
+    if (has("temp") && (has("temp_a") || has("temp_g")))
+      throw ConfigError(ini.where("log.columns") +
+                        "give either temp (one temperature for the unit) or temp_a and temp_g "
+                        "(one per triad), not both");
+    if (has("temp_a") != has("temp_g"))
+      throw ConfigError(ini.where("log.columns") + "give both per-triad temperature columns, " +
+                        "temp_a and temp_g (or temp for one temperature for the unit)");
+    read_temperature_keys(ini, has("temp") || has("temp_a"),
+                          "'columns' names none (temp, or temp_a and temp_g)", f);
   }
   f.gyro = read_triad(ini, "gyro", true, rate_hz);
   f.accel = read_triad(ini, "accel", false, rate_hz);
@@ -72,7 +86,7 @@ bool LogReader::read_record() {
   // number may be cut short and still read as a number).
   if (f_.native && !nl)
     fail("truncated line: the last line has no line end (the file was cut while being written?)");
-  split_fields(text_, nl, f_.columns.size(), fields_, &text_cols_);
+  split_fields(text_, nl, f_.columns.size(), fields_, &text_cols_, f_.columns);
   return true;
 }
 

@@ -94,6 +94,15 @@ bool LogReader::next_segment_sample(ImuSample& s) {
       ++segment_count_;
       ++count_;
       s.t += segment_shift_;
+      // Every file with temperatures or none (a thermal model cannot start and stop).
+      if (segment_temperature_ < 0) segment_temperature_ = s.has_temperature ? 1 : 0;
+      if ((segment_temperature_ == 1) != s.has_temperature)
+        throw LogError(seg.file, segment_->line(),
+                       std::string("this file ") + (s.has_temperature ? "has" : "has no") +
+                           " temperature columns but " + f_.segments.front().file +
+                           (s.has_temperature ? " has none" : " has them") +
+                           ": give every dwell's file the same columns");
+      temperature_summary_.add(s, seg.file, segment_->line());
       if (s.t > seg.t_end + 0.5 / f_.rate_hz) {
         char msg[300];
         std::snprintf(msg, sizeof msg,

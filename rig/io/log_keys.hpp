@@ -16,6 +16,7 @@ namespace log_keys {
 /// The native log's column header, without and with the table angles (native.cpp).
 extern const char* const kNativeHeader;
 extern const char* const kNativeTableColumns;
+extern const char* const kNativeTemperatureColumns;
 /// The shortest text of `v` that reads back exactly.
 std::string format_number(double v);
 
@@ -29,6 +30,13 @@ double unit_of(const IniFile& ini, const std::string& key, const std::string& df
 /// the check of the scale.
 TriadColumns read_triad(const IniFile& ini, const std::string& name, bool gyro, double rate_hz,
                         bool fixed_increments = false);
+/// The temperature keys (`temperature_unit`, `_scale`, `_offset`) into `f.temperature`
+/// (temperature.cpp). Without a temperature column (`has_column` false) any of them is an error
+/// naming its line and saying `no_column` (where a column would be named).
+void read_temperature_keys(const IniFile& ini, bool has_column, const std::string& no_column,
+                           LogFormat& f);
+/// The [log] keys of the temperature columns.
+extern const std::vector<std::string> kTemperatureKeys;
 /// [log] header_lines: a whole number within 0 ... kMaxHeaderLines.
 int read_header_lines(const IniFile& ini);
 char read_delimiter(const IniFile& ini);

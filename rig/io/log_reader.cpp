@@ -50,11 +50,16 @@ void LogReader::start() {
     if (c == "outer") col_outer_ = i;
     if (c == "inner") col_inner_ = i;
     if (c == "label") col_label_ = i;
+    if (c == "temp") col_temp_ = {i, i};
+    if (c == "temp_a") col_temp_[0] = i;
+    if (c == "temp_g") col_temp_[1] = i;
     text_cols_.push_back(!f_.native && (c == "-" || c == "label") ? 1 : 0);
   }
   for (std::size_t i = 0; i < 3; ++i)
     if (col_g_[i] < 0 || col_a_[i] < 0)
       throw LogError(f_.file, 0, "the log format must name columns gx gy gz ax ay az");
+  if ((col_temp_[0] < 0) != (col_temp_[1] < 0))
+    throw LogError(f_.file, 0, "the log format must name both temp_a and temp_g, or temp");
   if (f_.header_lines < 0 || f_.header_lines > LogFormat::kMaxHeaderLines)
     throw LogError(
         f_.file, 0,
@@ -163,7 +168,8 @@ bool LogReader::next(ImuSample& s) {
 }
 
 void LogReader::split_fields(const std::string& line, bool had_newline, std::size_t expected,
-                             std::vector<double>& out, const std::vector<char>* text_cols) {
+                             std::vector<double>& out, const std::vector<char>* text_cols,
+                             const std::vector<std::string>& names) {
   out.clear();
   std::size_t pos = 0;
   const bool ws = f_.delimiter == ' ';
@@ -186,15 +192,20 @@ void LogReader::split_fields(const std::string& line, bool had_newline, std::siz
     if (b < e && line[b] == '+') ++b;
     double v = 0.0;
     const auto r = std::from_chars(line.data() + b, line.data() + e, v);
-    const std::string which = "field " + std::to_string(out.size() + 1);
+    // The field's number, and what it is when a temperature (messages only).
+    auto which = [&] {
+      const std::size_t k = out.size();
+      const bool temp = k < names.size() && names[k].compare(0, 4, "temp") == 0;
+      return "field " + std::to_string(k + 1) + (temp ? " (temperature)" : "");
+    };
     if (r.ec == std::errc() && r.ptr == line.data() + e && !std::isfinite(v))
-      bad_sample(which + " is " + (std::isnan(v) ? "NaN" : "infinite"));
+      bad_sample(which() + " is " + (std::isnan(v) ? "NaN" : "infinite"));
     if (b == e || r.ec != std::errc() || r.ptr != line.data() + e) {
       if (!had_newline && out.size() + 1 < expected)
         fail("truncated line: the file ends in the middle of a sample");
       std::string text = line.substr(pos, std::min<std::size_t>(end - pos, 40));
       if (end - pos > 40) text += "...";
-      bad_sample(which + " '" + text + "' is not a number");
+      bad_sample(which() + " '" + text + "' is not a number");
     }
     out.push_back(v);
     pos = end + 1;
@@ -298,12 +309,14 @@ bool LogReader::make_sample(ImuSample& s) {
         bad_sample("table angle " + log_keys::format_number(a) +
                    " rad is beyond 1e6 rad: a wrong table_unit or a damaged value");
   }
+  read_temperatures(s, t);
   s.t = t;
   s.dt = dt;
   t_prev_ = t;
   ++count_;
   skipped_ = false;
   skipped_run_ = 0;
+  accept_temperatures(s);
   return true;
 }
 

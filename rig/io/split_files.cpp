@@ -12,15 +12,16 @@ namespace sinscal {
 
 namespace log_keys {
 
-// Columns of one file of a split log: t x y z or - (skip), x y z required.
+// Columns of one file of a split log: t x y z temp or - (skip), x y z required.
 namespace {
 
 std::vector<std::string> read_split_columns(const IniFile& ini, const std::string& key) {
   if (!ini.has(key)) return {"t", "x", "y", "z"};
   std::vector<std::string> cols;
   for (const auto& c : tokens_of(ini.get_string(key))) {
-    if (c != "t" && c != "x" && c != "y" && c != "z" && c != "-")
-      throw ConfigError(ini.where(key) + "unknown column '" + c + "' (known: t x y z, - to skip)");
+    if (c != "t" && c != "x" && c != "y" && c != "z" && c != "temp" && c != "-")
+      throw ConfigError(ini.where(key) + "unknown column '" + c +
+                        "' (known: t x y z temp, - to skip)");
     if (c != "-" && std::count(cols.begin(), cols.end(), c))
       throw ConfigError(ini.where(key) + "column '" + c + "' given twice");
     cols.push_back(c);
@@ -60,16 +61,20 @@ void read_split_format(const IniFile& ini, const std::string& base_dir, LogForma
                  std::count(f.gyro_columns.begin(), f.gyro_columns.end(), "t");
   f.columns = {"gx", "gy", "gz", "ax", "ay", "az"};
   if (t) f.columns.insert(f.columns.begin(), "t");
+  const bool temp = std::count(f.accel_columns.begin(), f.accel_columns.end(), "temp") ||
+                    std::count(f.gyro_columns.begin(), f.gyro_columns.end(), "temp");
+  read_temperature_keys(ini, temp, "neither accel_columns nor gyro_columns names temp", f);
 }
 
 }  // namespace log_keys
 
 void LogReader::map_split_columns() {
-  auto map = [&](const std::vector<std::string>& cols, std::array<int, 4>& where,
+  auto map = [&](const std::vector<std::string>& cols, std::array<int, 4>& where, int& temp,
                  const std::string& file) {
     for (int i = 0; i < static_cast<int>(cols.size()); ++i) {
       const std::string& c = cols[static_cast<std::size_t>(i)];
       if (c == "t") where[0] = i;
+      if (c == "temp") temp = i;
       if (c.size() == 1 && c[0] >= 'x' && c[0] <= 'z')
         where[static_cast<std::size_t>(c[0] - 'w')] = i;
     }
@@ -77,10 +82,20 @@ void LogReader::map_split_columns() {
       if (where[static_cast<std::size_t>(k)] < 0)
         throw LogError(file, 0, "the columns of a split log's file must name x y z");
   };
-  map(f_.accel_columns, acc_cols_, f_.accel_file);
-  map(f_.gyro_columns, gyr_cols_, f_.gyro_file);
+  map(f_.accel_columns, acc_cols_, acc_temp_col_, f_.accel_file);
+  map(f_.gyro_columns, gyr_cols_, gyr_temp_col_, f_.gyro_file);
   f_.columns = {"gx", "gy", "gz", "ax", "ay", "az"};
   if (acc_cols_[0] >= 0 || gyr_cols_[0] >= 0) f_.columns.insert(f_.columns.begin(), "t");
+  // Each file's temperature is its triad's; in one file only, the unit's (read_split_record
+  // appends them to the record).
+  if (acc_temp_col_ >= 0 && gyr_temp_col_ >= 0) {
+    f_.columns.insert(f_.columns.end(), {"temp_a", "temp_g"});
+    temp_from_ = {&main_, &second_};
+  } else if (acc_temp_col_ >= 0 || gyr_temp_col_ >= 0) {
+    f_.columns.emplace_back("temp");
+    const Input* from = acc_temp_col_ >= 0 ? &main_ : &second_;
+    temp_from_ = {from, from};
+  }
 }
 
 bool LogReader::read_split_record() {
@@ -96,9 +111,9 @@ bool LogReader::read_split_record() {
          std::to_string(ended.line) + " but this file goes on");
   }
   loc_ = &main_;
-  split_fields(text_, nl_a, f_.accel_columns.size(), acc_);
+  split_fields(text_, nl_a, f_.accel_columns.size(), acc_, nullptr, f_.accel_columns);
   loc_ = &second_;
-  split_fields(text2_, nl_g, f_.gyro_columns.size(), gyr_);
+  split_fields(text2_, nl_g, f_.gyro_columns.size(), gyr_, nullptr, f_.gyro_columns);
   const std::vector<double>&acc = acc_, &gyr = gyr_;
   fields_.clear();
   const bool ta = acc_cols_[0] >= 0, tg = gyr_cols_[0] >= 0;
@@ -122,6 +137,8 @@ bool LogReader::read_split_record() {
     fields_.push_back(gyr[static_cast<std::size_t>(gyr_cols_[k])]);
   for (std::size_t k = 1; k < 4; ++k)
     fields_.push_back(acc[static_cast<std::size_t>(acc_cols_[k])]);
+  if (acc_temp_col_ >= 0) fields_.push_back(acc[static_cast<std::size_t>(acc_temp_col_)]);
+  if (gyr_temp_col_ >= 0) fields_.push_back(gyr[static_cast<std::size_t>(gyr_temp_col_)]);
   // Time errors name the file the time comes from.
   loc_ = ta || !tg ? &main_ : &second_;
   return true;
