@@ -49,6 +49,8 @@ struct CoefficientFamily {
   /// (named by the diagnosis when a plan cannot).
   std::string separated_by;
 
+  /// A thermal family (terms thermal, thermal2, thermal3): it needs the sensors' temperatures.
+  bool thermal() const { return term.rfind("thermal", 0) == 0; }
   int size() const { return components.empty() ? 1 : static_cast<int>(components.size()); }
   /// Name of component k ("gyro.bias.x"; the family's name for a single unnamed component).
   std::string coefficient_name(int k) const;

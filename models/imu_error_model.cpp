@@ -16,6 +16,27 @@ Eigen::Matrix3d TriadErrors::linear() const {
   return A;
 }
 
+Eigen::Matrix3d TriadErrors::linear(double dT) const {
+  Eigen::Matrix3d A = linear();
+  if (dT == 0.0) return A;
+  const Eigen::Vector3d p(dT, dT * dT, dT * dT * dT);
+  A += dT * misalignment_temp;
+  A.diagonal() += scale_temp * p - dT * misalignment_temp.diagonal();
+  return A;
+}
+
+Eigen::Vector3d TriadErrors::thermal_bias(double dT, double dT_rate) const {
+  const Eigen::Vector3d p(dT, dT * dT, dT * dT * dT);
+  return bias_temp * p + bias_temp_rate * dT_rate;
+}
+
+Eigen::Vector3d TriadErrors::apply(const Eigen::Vector3d& x, const Eigen::Vector3d& extra,
+                                   double dT, double dT_rate) const {
+  if (dT == 0.0 && dT_rate == 0.0) return apply(x, extra);
+  return linear(dT) * x + scale_asym.cwiseProduct(x.cwiseAbs()) + k2.cwiseProduct(x.cwiseAbs2()) +
+         bias + extra + thermal_bias(dT, dT_rate);
+}
+
 Eigen::Vector3d TriadErrors::input_rate(const Eigen::Vector3d& output_rate) const {
   return linear().partialPivLu().solve(output_rate);
 }
@@ -49,25 +70,40 @@ Eigen::Vector3d ImuErrorModel::size_effect(const Eigen::Vector3d& omega_ib_b,
 }
 
 Eigen::Vector3d ImuErrorModel::gyro_output(const KinematicSample& s) const {
-  return gyro.apply(s.omega_ib_b, gyro_g_sensitivity * s.f_ib_b + gyro.bias_drift * s.t);
+  return gyro.apply(s.omega_ib_b, gyro_g_sensitivity * s.f_ib_b + gyro.bias_drift * s.t,
+                    s.gyro_dtemp, s.gyro_dtemp_rate);
 }
 
 Eigen::Vector3d ImuErrorModel::accel_output(const KinematicSample& s) const {
-  return accel.apply(s.f_ib_b,
-                     size_effect(s.omega_ib_b, s.omega_dot_ib_b) + accel.bias_drift * s.t);
+  return accel.apply(s.f_ib_b, size_effect(s.omega_ib_b, s.omega_dot_ib_b) + accel.bias_drift * s.t,
+                     s.accel_dtemp, 0.0);
+}
+
+bool ImuErrorModel::has_thermal() const {
+  for (const TriadErrors* e : {&gyro, &accel})
+    if (!e->bias_temp.isZero(0.0) || !e->scale_temp.isZero(0.0) ||
+        !e->misalignment_temp.isZero(0.0) || !e->bias_temp_rate.isZero(0.0))
+      return true;
+  return false;
 }
 
 void ImuErrorModel::compensate(const Eigen::Vector3d& y_gyro, const Eigen::Vector3d& y_accel,
                                const Eigen::Vector3d& omega_dot_ib_b, Eigen::Vector3d& omega_ib_b,
-                               Eigen::Vector3d& f_ib_b, double t) const {
+                               Eigen::Vector3d& f_ib_b, double t,
+                               const KinematicSample* temperature) const {
   Eigen::Vector3d w = y_gyro, f = y_accel;
-  const Eigen::Matrix3d gyro_inverse = gyro.linear().inverse();
-  const Eigen::Matrix3d accel_inverse = accel.linear().inverse();
+  const double dTa = temperature ? temperature->accel_dtemp : 0.0;
+  const double dTg = temperature ? temperature->gyro_dtemp : 0.0;
+  const double dTg_rate = temperature ? temperature->gyro_dtemp_rate : 0.0;
+  const Eigen::Matrix3d gyro_inverse = gyro.linear(dTg).inverse();
+  const Eigen::Matrix3d accel_inverse = accel.linear(dTa).inverse();
+  const Eigen::Vector3d accel_fixed = accel.bias_drift * t + accel.thermal_bias(dTa, 0.0);
+  const Eigen::Vector3d gyro_fixed = gyro.bias_drift * t + gyro.thermal_bias(dTg, dTg_rate);
   for (int iter = 0; iter < 60; ++iter) {
-    const Eigen::Vector3d f_new = accel.invert_step(
-        y_accel, size_effect(w, omega_dot_ib_b) + accel.bias_drift * t, f, accel_inverse);
+    const Eigen::Vector3d f_new =
+        accel.invert_step(y_accel, size_effect(w, omega_dot_ib_b) + accel_fixed, f, accel_inverse);
     const Eigen::Vector3d w_new =
-        gyro.invert_step(y_gyro, gyro_g_sensitivity * f_new + gyro.bias_drift * t, w, gyro_inverse);
+        gyro.invert_step(y_gyro, gyro_g_sensitivity * f_new + gyro_fixed, w, gyro_inverse);
     const double change = std::max((f_new - f).norm() / (1.0 + f_new.norm()),
                                    (w_new - w).norm() / (1.0 + w_new.norm()));
     w = w_new;
@@ -79,8 +115,8 @@ void ImuErrorModel::compensate(const Eigen::Vector3d& y_gyro, const Eigen::Vecto
     }
   }
   // Rounding may keep the last digit oscillating; accept a tiny final change.
-  const Eigen::Vector3d f_chk = accel.invert_step(
-      y_accel, size_effect(w, omega_dot_ib_b) + accel.bias_drift * t, f, accel_inverse);
+  const Eigen::Vector3d f_chk =
+      accel.invert_step(y_accel, size_effect(w, omega_dot_ib_b) + accel_fixed, f, accel_inverse);
   if ((f_chk - f).norm() > 1e-13 * (1.0 + f.norm()))
     throw std::runtime_error("IMU error model inverse does not converge: coefficients too large");
   omega_ib_b = w;

@@ -12,6 +12,13 @@
 //          accels: size effect, accelerometer i sees e_i . (dw/dt x r_i + w x (w x r_i)) with r_i
 //          the position of its proof mass relative to the IMU reference point (body axes)
 //
+// Thermal terms, with dT = T - T0 the triad's temperature relative to the model's reference
+// temperature T0 (deg C) and p = (dT, dT^2, dT^3):
+//   b -> b + B p + r dT/dt   (B column d: the bias's degree-d coefficient; r: gyros only)
+//   k -> k + S p             (S column d: the scale factor's)
+//   M -> M + M1 dT           (M1: the misalignments' temperature coefficients)
+// The size effect's sensitive axes stay those at T0 (a thermal change of them is of second order).
+//
 // The coefficient families (names, components, units, switches) are the table of
 // models/coefficient_families.hpp; this file holds their physics.
 //
@@ -32,7 +39,7 @@
 namespace sinscal {
 
 /// Upper bound of the number of coefficients of the catalog (fixed-size storage per sample).
-constexpr int kMaxCoefficients = 96;
+constexpr int kMaxCoefficients = 128;
 
 /// Errors of one sensor triad (gyro or accelerometer), SI units of its input.
 struct TriadErrors {
@@ -42,9 +49,21 @@ struct TriadErrors {
   Eigen::Vector3d scale_asym = Eigen::Vector3d::Zero();    // dimensionless
   Eigen::Vector3d k2 = Eigen::Vector3d::Zero();            // 1/(input unit)
   Eigen::Vector3d bias_drift = Eigen::Vector3d::Zero();    // (rad/s | m/s^2) per s
+  /// Thermal terms (header comment): column d - 1 holds the degree-d coefficients per deg C^d.
+  Eigen::Matrix3d bias_temp = Eigen::Matrix3d::Zero();          // (rad/s | m/s^2) / C^d
+  Eigen::Matrix3d scale_temp = Eigen::Matrix3d::Zero();         // 1 / C^d
+  Eigen::Matrix3d misalignment_temp = Eigen::Matrix3d::Zero();  // rad/C, diagonal unused
+  Eigen::Vector3d bias_temp_rate = Eigen::Vector3d::Zero();     // (rad/s | m/s^2) per C/s
 
   /// I + diag(k) + M.
   Eigen::Matrix3d linear() const;
+  /// I + diag(k + S p) + M + M1 dT: the linear part at dT = T - T0 (deg C).
+  Eigen::Matrix3d linear(double dT) const;
+  /// The thermal terms' additive part at dT and dT/dt: B p + r dT/dt.
+  Eigen::Vector3d thermal_bias(double dT, double dT_rate) const;
+  /// The model formula at a temperature (dT = T - T0, deg C; dT/dt in C/s).
+  Eigen::Vector3d apply(const Eigen::Vector3d& x, const Eigen::Vector3d& extra, double dT,
+                        double dT_rate) const;
   /// The rate of change of the input from that of the output, to first order in the errors:
   /// linear()^-1 y_dot (the rates of change of the nonlinear terms are of second order).
   Eigen::Vector3d input_rate(const Eigen::Vector3d& output_rate) const;
@@ -67,6 +86,11 @@ struct KinematicSample {
   Eigen::Vector3d omega_dot_ib_b = Eigen::Vector3d::Zero();  // rad/s^2
   Eigen::Vector3d f_ib_b = Eigen::Vector3d::Zero();          // m/s^2
   double t = 0.0;  // s, time of the output since the start of the plan (time-dependent terms)
+  /// The triads' temperatures relative to the model's reference temperature (deg C) and the
+  /// gyros' rate of change of temperature (deg C/s): the thermal terms. 0 without temperatures.
+  double accel_dtemp = 0.0;      // deg C
+  double gyro_dtemp = 0.0;       // deg C
+  double gyro_dtemp_rate = 0.0;  // deg C/s
 };
 
 /// Name, unit and family of one coefficient; value_si = value_in_unit * si_per_unit.
@@ -84,6 +108,11 @@ class ImuErrorModel {
   Eigen::Matrix3d gyro_g_sensitivity = Eigen::Matrix3d::Zero();  // rad/s per m/s^2
   Eigen::Matrix3d accel_lever_arm_b = Eigen::Matrix3d::Zero();   // m; column i = r_i of accel i
   double time_delay = 0.0;                                       // s
+  /// T0, the temperature the thermal terms are relative to (deg C; the sensor profile's
+  /// `[thermal] reference_temperature`). Not a coefficient: it defines them.
+  double reference_temperature_c = 25.0;  // deg C
+  /// Whether any thermal coefficient is non-zero.
+  bool has_thermal() const;
 
   /// Gyro output for the kinematics at the gyro sampling instant.
   Eigen::Vector3d gyro_output(const KinematicSample& s) const;
@@ -97,9 +126,12 @@ class ImuErrorModel {
   /// Converges to rounding for any coefficients of realistic size (each step gains the size of
   /// the errors, ~1e-3 or less). Throws std::runtime_error if it does not converge.
   /// `t` is the time of the outputs since the start of the plan (time-dependent terms).
+  /// `temperature` (optional) carries the thermal deviations (KinematicSample's accel_dtemp,
+  /// gyro_dtemp, gyro_dtemp_rate); its other fields are not read.
   void compensate(const Eigen::Vector3d& y_gyro, const Eigen::Vector3d& y_accel,
                   const Eigen::Vector3d& omega_dot_ib_b, Eigen::Vector3d& omega_ib_b,
-                  Eigen::Vector3d& f_ib_b, double t = 0.0) const;
+                  Eigen::Vector3d& f_ib_b, double t = 0.0,
+                  const KinematicSample* temperature = nullptr) const;
 
   /// Sensitivity of the sensor errors (y - x) to every coefficient, in the order of
   /// coefficient_refs(): rows 0-2 gyro outputs (rad/s), rows 3-5 accelerometer outputs (m/s^2),

@@ -84,13 +84,22 @@ SensorProfile SensorProfile::load(const std::string& path) {
   a.random_walk = amount("accel.random_walk", Q::AccelRandomWalk, "ug/sqrt(h)");
   a.quantum = amount("accel.quantum", Q::Velocity, "m/s");
   p.accel_range = amount("accel.range", Q::Acceleration, "g");
+  if (ini.has("thermal.reference_temperature")) {
+    p.reference_temperature_c =
+        ini.get_quantities("thermal.reference_temperature", {{"C", 1.0}}, "C", 1).front();
+    if (!(p.reference_temperature_c >= -60.0 && p.reference_temperature_c <= 130.0))
+      throw ConfigError(ini.where("thermal.reference_temperature") +
+                        "expected a temperature within -60 ... 130 C, where sensors work");
+  }
+  p.thermal_time_constant = amount("thermal.time_constant", Q::Time, "s");
   // Known keys: the noise and range keys above, and every family's profile key.
   std::map<std::string, std::vector<std::string>> allowed = {
       {"sensor", {"name", "description"}},
       {"gyro",
        {"arw", "bias_instability", "correlation_time", "rate_random_walk", "quantum", "range"}},
       {"accel", {"vrw", "bias_instability", "correlation_time", "random_walk", "quantum", "range"}},
-      {"timing", {}}};
+      {"timing", {}},
+      {"thermal", {"reference_temperature", "time_constant"}}};
   for (const auto& f : coefficient_families()) {
     const auto dot = f.profile_key.find('.');
     allowed[f.profile_key.substr(0, dot)].push_back(f.profile_key.substr(dot + 1));
@@ -119,6 +128,7 @@ SensorProfile SensorProfile::load(const std::string& path) {
 
 ImuErrorModel SensorProfile::draw(std::uint64_t seed) const {
   ImuErrorModel m;
+  m.reference_temperature_c = reference_temperature_c;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (auto& [info, value] : m.coefficient_refs()) {

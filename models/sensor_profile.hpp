@@ -37,6 +37,10 @@ struct SensorProfile {
   /// Sigma targets by family ([targets] gyro.bias = 0.005 deg/h): calibration has converged when
   /// every estimated coefficient's sigma is below its family's target. SI.
   std::map<std::string, double> sigma_targets;
+  /// [thermal]: T0, the temperature the thermal coefficients are relative to (deg C, default 25),
+  /// and the sensor's first-order lag behind the chamber's air (s; the simulator's; 0: none).
+  double reference_temperature_c = 25.0;
+  double thermal_time_constant = 0.0;
 
   /// Loads and validates a profile; throws ConfigError naming the file, line and key.
   static SensorProfile load(const std::string& path);

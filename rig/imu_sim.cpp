@@ -37,6 +37,11 @@ Eigen::Vector3d ImuSimulator::integrate(double a, double b, double shift, bool g
   auto output = [&](double t) {
     KinematicState k = motion_.at(t - shift);
     k.imu.t = t;  // the sensor's own time (time-dependent error terms)
+    if (options_.temperature) {
+      k.imu.accel_dtemp = k.imu.gyro_dtemp =
+          options_.temperature->at(t) - errors_.reference_temperature_c;
+      k.imu.gyro_dtemp_rate = options_.temperature->rate(t);
+    }
     return gyro ? errors_.gyro_output(k.imu) : errors_.accel_output(k.imu);
   };
   if (motion_.static_between(a - shift, b - shift)) return output(0.5 * (a + b)) * (b - a);
@@ -80,6 +85,9 @@ bool ImuSimulator::next(ImuSample& s) {
   if (clipped) ++saturated_;
   s.has_table = options_.table_angles;
   if (s.has_table) motion_.table_angles(s.t, s.table_outer, s.table_inner);
+  s.has_temperature = options_.temperature != nullptr;
+  if (s.has_temperature)
+    s.accel_temperature_c = s.gyro_temperature_c = options_.temperature->at(s.t);
   return true;
 }
 

@@ -11,6 +11,7 @@
 #include "models/noise_model.hpp"
 #include "rig/imu_sample.hpp"
 #include "rig/motion.hpp"
+#include "rig/thermal.hpp"
 
 namespace sinscal {
 
@@ -21,6 +22,10 @@ struct SimulatorOptions {
   double gyro_range = 0.0;    // rad/s; outputs beyond it are clipped (0: no limit)
   double accel_range = 0.0;   // m/s^2
   bool table_angles = false;  // fill the table's axis angles (the motion must be table moves)
+  /// The sensor's temperature over the motion's time (a chamber; null: at the reference
+  /// temperature, no column). Not owned: it must outlive the simulator. Both triads read it, the
+  /// samples carry it (deg C at the end of each interval).
+  const SensorTemperature* temperature = nullptr;
 };
 
 class ImuSimulator : public SampleSource {

@@ -227,7 +227,7 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
     throw ConfigError(ini.where("plan.convention") + e.what());
   }
   ini.check_keys("plan", {"name", "description", "type", "convention", "move_rate",
-                          "move_acceleration", "rotation_acceleration", "allow_large"});
+                          "move_acceleration", "rotation_acceleration", "allow_large", "repeat"});
   p.limits =
       ini.get_bool("plan.allow_large", false) ? PlanLimits::raised() : PlanLimits::standard();
   const PlanLimits& limits = p.limits;
@@ -383,6 +383,23 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
                                                    "start", "rotations", "step"};
     if (std::find(known.begin(), known.end(), sec) == known.end())
       throw ConfigError(ini.where(key) + "unknown section");
+  }
+  // `repeat = N`: the orientations (the turns after the start dwell) run N times in a row, e.g.
+  // while a thermal chamber ramps (labels of the k-th run get "#k" from the second on).
+  const int repeat = ini.get_int("plan.repeat", 1, 1, 100000);
+  const std::size_t entries =
+      (p.type == Type::Orientations ? p.orientations.size() : p.steps.size()) *
+      static_cast<std::size_t>(repeat);
+  check_count(entries,
+              p.type == Type::Orientations ? "orientations (repeated)" : "turns (repeated)");
+  const auto one_orientations = p.orientations;
+  const auto one_steps = p.steps;
+  for (int k = 2; k <= repeat; ++k) {
+    for (auto o : one_orientations) {
+      o.label += "#" + std::to_string(k);
+      p.orientations.push_back(o);
+    }
+    p.steps.insert(p.steps.end(), one_steps.begin(), one_steps.end());
   }
   // The whole plan's duration (dwells, moves, turns, pauses), as the motion has it.
   const double total = build_motion(p, Site{}).duration();

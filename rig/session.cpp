@@ -132,6 +132,18 @@ SimulatedSession simulate_session(const std::string& out_dir, const SessionSimul
   if (!(spec.rate_hz > 0.0)) throw std::invalid_argument("simulate_session: rate must be positive");
   SimulatedSession r;
   r.plan = Plan::load(spec.plan_path);
+  if (spec.plan_repeat > 1) {
+    // The plan's own text with `repeat` in [plan]: what the session's plan.ini says.
+    std::string text = r.plan.text;
+    const auto at = text.find("[plan]");
+    const auto eol = at == std::string::npos ? at : text.find('\n', at);
+    if (eol == std::string::npos)
+      throw ConfigError(spec.plan_path + ": no [plan] line to add 'repeat' to");
+    text.insert(eol + 1, "repeat = " + std::to_string(spec.plan_repeat) +
+                             "  # added by simulate --chamber: the plan runs while the chamber "
+                             "ramps\n");
+    r.plan = Plan::parse(spec.plan_path, text);
+  }
   if (!r.plan.has_site)
     throw ConfigError(spec.plan_path + ": the plan has no [site] for the simulation");
   r.profile = SensorProfile::load(spec.data_sensor_path);
@@ -146,14 +158,17 @@ SimulatedSession simulate_session(const std::string& out_dir, const SessionSimul
   SimulatorOptions so;
   so.rate_hz = spec.rate_hz;
   so.noise = spec.noise && !spec.perfect;
-  so.noise_seed = derive_seed(spec.seed, 2);
+  so.noise_seed = spec.noise_stream == 0
+                      ? derive_seed(spec.seed, 2)
+                      : derive_seed(derive_seed(spec.seed, 2), spec.noise_stream);
+  so.temperature = spec.temperature;
   so.gyro_range = r.profile.gyro_range;
   so.accel_range = r.profile.accel_range;
   so.table_angles = spec.table_angles;
   ImuSimulator sim(motion, sensor_errors, r.profile.noise, so);
 
   std::filesystem::create_directories(out_dir);
-  LogWriter log(out_dir + "/imu.csv", spec.rate_hz, spec.table_angles);
+  LogWriter log(out_dir + "/imu.csv", spec.rate_hz, spec.table_angles, spec.temperature != nullptr);
   ImuSample sample;
   while (sim.next(sample)) log.write(sample);
   log.close();
@@ -187,8 +202,10 @@ SimulatedSession simulate_session(const std::string& out_dir, const SessionSimul
   char rate[64];
   std::snprintf(rate, sizeof rate, "%.12g", spec.rate_hz);
   r.session_path = out_dir + "/session.ini";
-  write(r.session_path, "# Written by sinscal simulate\n[session]\nname = " +
-                            (spec.name.empty() ? r.plan.name : spec.name) + "\nrate = " + rate +
+  write(r.session_path, "# Written by sinscal simulate\n" +
+                            (spec.note.empty() ? std::string() : "# " + spec.note + "\n") +
+                            "[session]\nname = " + (spec.name.empty() ? r.plan.name : spec.name) +
+                            "\nrate = " + rate +
                             " Hz\nplan = plan.ini\nsensor = sensor.ini\ntruth = truth.json\n\n"
                             "[site]\n" +
                             site + "\n[log]\nfile = imu.csv\nformat = sinscal\n");
@@ -203,6 +220,8 @@ void write_truth_json(const std::string& path, const ImuErrorModel& model, const
   ImuErrorModel copy = model;
   for (const auto& [info, ptr] : copy.coefficient_refs())
     c[info.name] = {{"value", *ptr / info.si_per_unit}, {"unit", info.unit}};
+  if (model.has_thermal())
+    j["thermal"] = {{"reference_temperature_c", model.reference_temperature_c}};
   if (table) {
     const Eigen::Vector3d m = table->mounting_b / units::deg;
     j["installation"] = {{"base_level_north_deg", table->base_level_north / units::deg},

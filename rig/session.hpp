@@ -14,6 +14,7 @@
 #include "rig/ferraris.hpp"
 #include "rig/io/log_io.hpp"
 #include "rig/plan.hpp"
+#include "rig/thermal.hpp"
 
 namespace sinscal {
 
@@ -68,6 +69,12 @@ struct SessionSimulation {
   bool perfect = false;       // no sensor errors at all
   bool table_angles = false;  // the log gets the table's axis-angle columns
   TableErrors table;
+  /// In a chamber (null: none): the sensor's temperature over the session's time (0 s: the plan
+  /// starts); the log gets the temperature columns. Not owned.
+  const SensorTemperature* temperature = nullptr;
+  int plan_repeat = 1;             // the plan runs this many times in a row (a chamber ramp)
+  std::uint64_t noise_stream = 0;  // another noise draw of the same unit (a chamber's soaks)
+  std::string note;                // a comment line for session.ini (empty: none)
 };
 
 struct SimulatedSession {
@@ -84,6 +91,18 @@ struct SimulatedSession {
 /// Writes a simulated session into `out_dir` (created): imu.csv (streamed, constant memory),
 /// plan.ini, sensor.ini, truth.json, session.ini. Throws naming the file on any failure.
 SimulatedSession simulate_session(const std::string& out_dir, const SessionSimulation& spec);
+
+/// A chamber's sessions (simulate --chamber): soaks, one session per soak in out_dir/soak-K/ and
+/// out_dir/chamber.ini listing them ([thermal] soaks); a ramp, one session in out_dir with the
+/// plan repeated over the ramp. The unit (coefficients) is the same in every soak; each soak has
+/// its own noise. The sensor lags the air by the data profile's [thermal] time_constant.
+struct ChamberSimulation {
+  std::string path;  // chamber.ini (soaks) or session.ini (ramp)
+  std::vector<SimulatedSession> sessions;
+  std::vector<double> soak_c;  // the air of each soak (deg C)
+};
+ChamberSimulation simulate_chamber(const std::string& out_dir, const SessionSimulation& spec,
+                                   const ChamberProgram& chamber);
 
 /// Writes the coefficients of a model (engineering units) as a truth file (the result-file
 /// schema without sigmas, docs/formats.md); with `table`, its base and mounting errors as

@@ -46,11 +46,14 @@ inline std::vector<PlanDwell> plan_dwells(const Motion& motion) {
   return out;
 }
 
-/// All samples of a motion, noise off unless a noise model is given.
+/// All samples of a motion, noise off unless a noise model is given; with `temperature`, in a
+/// chamber (the samples carry the sensor's temperature).
 inline std::vector<ImuSample> simulate(const Motion& motion, const ImuErrorModel& errors = {},
                                        double rate_hz = 100.0, const NoiseModel* noise = nullptr,
-                                       std::uint64_t seed = 1) {
+                                       std::uint64_t seed = 1,
+                                       const SensorTemperature* temperature = nullptr) {
   SimulatorOptions o;
+  o.temperature = temperature;
   o.rate_hz = rate_hz;
   o.noise = noise != nullptr;
   o.noise_seed = seed;

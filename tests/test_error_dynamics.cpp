@@ -73,7 +73,9 @@ const Window& window() {
              build_motion(test::load_plan("rot19.ini"), test::load_plan("rot19.ini").site),
              {},
              every_family_model()};
-    for (const auto& s : test::simulate(x.motion, x.truth))
+    // In a chamber warming by 0.1 C/s (the thermal columns act: 12 C from T0 and more).
+    const SensorTemperature chamber(ChamberAir{{0.0, 200.0}, {30.0, 50.0}}, 0.0);
+    for (const auto& s : test::simulate(x.motion, x.truth, 100.0, nullptr, 1, &chamber))
       if (s.t > 68.0 && s.t <= 74.0 + 1e-9) x.samples.push_back(s);
     return x;
   }();

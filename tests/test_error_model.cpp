@@ -1,4 +1,5 @@
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <random>
 #include <set>
 
@@ -24,7 +25,22 @@ ImuErrorModel random_extended_model(std::uint64_t seed) {
     for (int j = 0; j < 3; ++j) m.gyro_g_sensitivity(i, j) = 0.05 * units::deg_per_h_per_g * u(rng);
     m.gyro.bias_drift(i) = 0.1 * units::deg_per_h / units::hour * u(rng);
     m.accel.bias_drift(i) = 50 * units::ug / units::hour * u(rng);
+    // Thermal terms of a MEMS unit's size.
+    for (int d = 0; d < 3; ++d) {
+      const double per = std::pow(0.02, d);  // per C^d: a MEMS unit's curvature
+      m.gyro.bias_temp(i, d) = 5 * units::deg_per_h * per * u(rng);
+      m.accel.bias_temp(i, d) = 50 * units::ug * per * u(rng);
+      m.gyro.scale_temp(i, d) = 50 * units::ppm * per * u(rng);
+      m.accel.scale_temp(i, d) = 50 * units::ppm * per * u(rng);
+    }
+    for (int j = 0; j < 3; ++j)
+      if (j != i) {
+        m.gyro.misalignment_temp(i, j) = 2 * units::arcsec * u(rng);
+        m.accel.misalignment_temp(i, j) = 2 * units::arcsec * u(rng);
+      }
+    m.gyro.bias_temp_rate(i) = 10 * units::deg_per_h * 60.0 * u(rng);
   }
+  REQUIRE(m.has_thermal());
   return m;
 }
 }  // namespace
@@ -43,9 +59,12 @@ TEST_CASE("Error model: apply then compensate returns the input to 1e-12 relativ
       s.omega_dot_ib_b = Vector3d(n(rng), n(rng), n(rng)) * 0.3;
       s.f_ib_b = Vector3d(n(rng), n(rng), n(rng)) * 9.8;
       s.t = 3600.0 * std::abs(n(rng));  // time-dependent terms (bias drift)
+      s.accel_dtemp = 30.0 * n(rng);    // thermal terms
+      s.gyro_dtemp = 30.0 * n(rng);
+      s.gyro_dtemp_rate = 0.02 * n(rng);
       const Vector3d yg = m.gyro_output(s), ya = m.accel_output(s);
       Vector3d w, f;
-      m.compensate(yg, ya, s.omega_dot_ib_b, w, f, s.t);
+      m.compensate(yg, ya, s.omega_dot_ib_b, w, f, s.t, &s);
       CHECK((w - s.omega_ib_b).norm() <= 1e-12 * s.omega_ib_b.norm());
       CHECK((f - s.f_ib_b).norm() <= 1e-12 * s.f_ib_b.norm());
       // And the errors are really there: output differs from input by far more than that.
@@ -104,7 +123,7 @@ TEST_CASE("Error model: sign conventions of each term", "[error_model]") {
 
 TEST_CASE("Coefficient catalog: names, units and set/get", "[error_model]") {
   const auto& cat = coefficient_catalog();
-  CHECK(cat.size() == 24 + 3 + 6 + 9 + 9 + 1 + 6);
+  CHECK(cat.size() == 24 + 3 + 6 + 9 + 9 + 1 + 6 + 3 * 12 + 6 + 6 + 3);
   std::set<std::string> names;
   for (const auto& c : cat) names.insert(c.name);
   CHECK(names.size() == cat.size());
@@ -174,6 +193,35 @@ TEST_CASE("Every bundled sensor profile loads and draws", "[error_model]") {
   CHECK((g_sens >= 0.01 * units::deg / units::g0 && g_sens <= 0.1 * units::deg / units::g0));
 }
 
+TEST_CASE("Error model: the thermal terms' signs and powers", "[error_model][thermal]") {
+  // docs/conventions.md: b(T) = b + B1 dT + B2 dT^2 + B3 dT^3 + r dT/dt, k(T) likewise, and
+  // M(T) = M + M1 dT, with dT = T - T0.
+  ImuErrorModel m;
+  m.set("gyro.bias_temp1.x", 0.5);          // deg/h/C
+  m.set("gyro.bias_temp2.y", 0.01);         // deg/h/C^2
+  m.set("gyro.bias_temp3.z", -0.001);       // deg/h/C^3
+  m.set("gyro.bias_temp_rate.x", 3.0);      // deg/h/(C/min)
+  m.set("accel.scale_temp1.x", 40.0);       // ppm/C
+  m.set("accel.scale_temp2.x", 1.0);        // ppm/C^2
+  m.set("accel.misalignment_temp1.yz", 2);  // arcsec/C
+  m.set("accel.bias_temp1.z", -20.0);       // ug/C
+  KinematicSample s;
+  s.f_ib_b = Vector3d(9.8, 1.0, 2.0);
+  s.gyro_dtemp = s.accel_dtemp = -10.0;
+  s.gyro_dtemp_rate = 0.5 / 60.0;  // C/s: 0.5 C/min
+  const Vector3d yg = m.gyro_output(s), ya = m.accel_output(s);
+  CHECK(yg(0) / units::deg_per_h == Approx(-5.0 + 1.5).epsilon(1e-12));
+  CHECK(yg(1) / units::deg_per_h == Approx(1.0).epsilon(1e-12));
+  CHECK(yg(2) / units::deg_per_h == Approx(1.0).epsilon(1e-12));
+  CHECK(ya(0) == Approx(9.8 * (1.0 + (-400.0 + 100.0) * units::ppm)).epsilon(1e-14));
+  CHECK(ya(1) == Approx(1.0 - 20.0 * units::arcsec * 2.0).epsilon(1e-14));
+  CHECK(ya(2) == Approx(2.0 + 200.0 * units::ug).epsilon(1e-14));
+  // At T0 nothing is left.
+  s.gyro_dtemp = s.accel_dtemp = s.gyro_dtemp_rate = 0.0;
+  CHECK(m.gyro_output(s).norm() == 0.0);
+  CHECK((m.accel_output(s) - s.f_ib_b).norm() == 0.0);
+}
+
 TEST_CASE("Error model Jacobian matches finite differences of the model",
           "[error_model][jacobian]") {
   std::mt19937_64 rng(5);
@@ -186,6 +234,9 @@ TEST_CASE("Error model Jacobian matches finite differences of the model",
     s.omega_dot_ib_b = Vector3d(n(rng), n(rng), n(rng)) * 0.3;
     s.f_ib_b = Vector3d(n(rng), n(rng), n(rng)) * 9.8;
     s.t = 3600.0 * std::abs(n(rng));
+    s.accel_dtemp = 30.0 * n(rng);
+    s.gyro_dtemp = 30.0 * n(rng);
+    s.gyro_dtemp_rate = 0.02 * n(rng);
     const Vector3d f_dot(n(rng), n(rng), n(rng));
     const auto J = m.jacobian(s, f_dot);
     REQUIRE(J.cols() == static_cast<Eigen::Index>(cat.size()));
@@ -201,8 +252,12 @@ TEST_CASE("Error model Jacobian matches finite differences of the model",
         KinematicSample shifted = s;
         shifted.f_ib_b = s.f_ib_b - h * f_dot;
         fd << Vector3d::Zero(), (p.accel_output(shifted) - p.accel_output(s)) / h;
-        // the model's own scale factors act on the shifted input too (second order)
-        CHECK((fd - J.col(static_cast<Eigen::Index>(k))).norm() < 1e-3 * f_dot.norm());
+        // the model's own linear errors act on the shifted input too (second order): at the
+        // sample's temperature
+        const double linear_error =
+            (m.accel.linear(s.accel_dtemp) - Eigen::Matrix3d::Identity()).norm();
+        CHECK((fd - J.col(static_cast<Eigen::Index>(k))).norm() <
+              (1e-3 + linear_error) * f_dot.norm());
         continue;
       }
       ImuErrorModel plus = m, minus = m;

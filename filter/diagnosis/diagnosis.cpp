@@ -270,7 +270,7 @@ std::vector<int> candidate_components(const std::vector<std::string>& candidates
   std::vector<std::string> families = candidates;
   if (families.empty())
     for (const auto& f : coefficient_families())
-      if (!f.base) families.push_back(f.name);
+      if (!f.base && !f.thermal()) families.push_back(f.name);  // thermal: not tested yet
   const auto& cat = coefficient_catalog();
   std::vector<int> out;
   for (std::size_t k = 0; k < cat.size(); ++k) {

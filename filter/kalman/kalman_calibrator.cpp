@@ -22,6 +22,7 @@ CalibratorOptions calibrator_options_from_profile(const SensorProfile& profile,
   CalibratorOptions o;
   o.noise = profile.noise;
   o.prior_scale = prior_scale;
+  o.reference_temperature_c = profile.reference_temperature_c;
   for (const auto& f : coefficient_families())
     if (!f.base && profile.has(f.name)) o.layout.extended.insert(f.name);
   const auto& cat = coefficient_catalog();
@@ -58,6 +59,9 @@ Calibrator::Calibrator(PlanTimeline timeline, const Site& site, const Calibrator
   if (dwells_.empty()) throw std::invalid_argument("the Kalman calibrator needs the plan's dwells");
   initialize_covariance();
   if (o_.initial_model) model_ = *o_.initial_model;
+  model_.reference_temperature_c = o_.reference_temperature_c;
+  for (const auto& f : coefficient_families())
+    if (f.thermal() && layout_.block(f.name)) thermal_ = true;
   C_base_ = dcm_from_rotvec(o_.initial_base_n);
   if (o_.static_from == CalibratorOptions::StaticFrom::Data)
     detector_.emplace(o_.noise, o_.detector);
@@ -141,6 +145,10 @@ void Calibrator::finish() {
 void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot_raw,
                          const Eigen::Vector3d& f_dot_raw, const Eigen::Vector3d& f_ddot_raw) {
   current_ = s;
+  if (!started_ && thermal_ && !s.has_temperature)
+    throw std::invalid_argument(
+        "thermal coefficients are estimated (the sensor profile or --terms) but the log has no "
+        "temperature column (docs/formats.md \"Temperature columns\")");
   if (!started_) {
     nav_.reset(NavState::at_rest(
         C_base_ *
@@ -171,7 +179,12 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot_ra
   KinematicSample k;
   k.omega_dot_ib_b = omega_dot;
   k.t = s.t - 0.5 * dt - o_.time_offset;
-  model_.compensate(s.dtheta_b / dt, s.dv_b / dt, omega_dot, k.omega_ib_b, k.f_ib_b, k.t);
+  if (s.has_temperature) {
+    k.accel_dtemp = s.accel_temperature_c - model_.reference_temperature_c;
+    k.gyro_dtemp = s.gyro_temperature_c - model_.reference_temperature_c;
+    k.gyro_dtemp_rate = temperature_rate_.add(s.t, s.gyro_temperature_c);
+  }
+  model_.compensate(s.dtheta_b / dt, s.dv_b / dt, omega_dot, k.omega_ib_b, k.f_ib_b, k.t, &k);
   // Accelerometers late by tau: f(t) = f_meas(t + tau), to second order.
   const double tau = model_.time_delay;
   k.f_ib_b += tau * f_dot + 0.5 * tau * tau * f_ddot;

@@ -35,6 +35,7 @@
 #include "models/units.hpp"
 #include "rig/imu_sample.hpp"
 #include "rig/table.hpp"
+#include "rig/thermal.hpp"
 #include "rig/timeline.hpp"
 
 namespace sinscal {
@@ -101,6 +102,8 @@ struct CalibratorOptions {
   /// Coefficients to start from (the linearization point; the prior sigmas stay those above).
   /// Multi-pass runs start each pass from the previous pass's estimate.
   std::optional<ImuErrorModel> initial_model;
+  /// T0 of the thermal coefficients (deg C): the sensor profile's [thermal] reference_temperature.
+  double reference_temperature_c = 25.0;
   /// Where the static dwells are: the plan's timing (shifted by time_offset), or detected in the
   /// data (StaticDetector; the k-th static interval is the plan's k-th dwell, whose orientation
   /// the attitude updates use; time_offset is then not needed).
@@ -238,7 +241,9 @@ class Calibrator {
   int attitude_dwell_done_ = 0;
   std::optional<StaticDetector> detector_;
   Table table_;
-  ImuSample current_;  // the sample being processed (its table angles)
+  TemperatureRate temperature_rate_;  // the gyros' dT/dt from the log's temperatures
+  bool thermal_ = false;              // the layout has thermal coefficient states
+  ImuSample current_;                 // the sample being processed (its table angles)
   int table_updates_ = 0;
   double nis_sum_ = 0.0;
   int nis_dof_ = 0;
