@@ -1,0 +1,559 @@
+// sinscal export (report/firmware_export.hpp): the numbers a firmware applies, read back from the
+// JSON export and from the C header (compiled with the system C compiler into
+// tests/export/apply.c), applied to the raw outputs of a simulated unit and compared with the
+// simulator's true omega_ib_b and f_ib_b, within the sigma the coefficients' sigmas give.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "helpers.hpp"
+#include "models/coefficient_families.hpp"
+#include "models/units.hpp"
+#include "report/firmware_export.hpp"
+#include "report/result.hpp"
+#include "rig/session.hpp"
+
+using namespace sinscal;
+
+namespace {
+
+using Json = nlohmann::json;
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+int run(const std::string& command) { return std::system((command + " > /dev/null").c_str()); }
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The export as the firmware reads it: absent terms are zero.
+struct ExportedTriad {
+  Vector3d b = Vector3d::Zero(), asym = Vector3d::Zero(), k2 = Vector3d::Zero(),
+           drift = Vector3d::Zero();
+  Matrix3d C = Matrix3d::Identity(), A = Matrix3d::Identity();
+};
+struct Exported {
+  ExportedTriad gyro, accel;
+  Matrix3d G = Matrix3d::Zero();
+  Matrix3d arms = Matrix3d::Zero();  // row i: r_i
+  double tau = 0.0;
+};
+
+Vector3d vec(const Json& j, const char* key) {
+  if (!j.contains(key)) return Vector3d::Zero();
+  return {j[key][0].get<double>(), j[key][1].get<double>(), j[key][2].get<double>()};
+}
+Matrix3d mat(const Json& j, const char* key) {
+  Matrix3d m = Matrix3d::Zero();
+  if (!j.contains(key)) return m;
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k) m(i, k) = j[key][i][k].get<double>();
+  return m;
+}
+
+Exported parse_export(const Json& j) {
+  Exported e;
+  auto triad = [](const Json& t) {
+    ExportedTriad r;
+    r.b = vec(t, "bias");
+    r.asym = vec(t, "scale_asym");
+    r.k2 = vec(t, "k2");
+    r.drift = vec(t, "bias_drift");
+    r.C = mat(t, "correction_matrix");
+    r.A = mat(t, "model_matrix");
+    return r;
+  };
+  e.gyro = triad(j.at("gyro"));
+  e.accel = triad(j.at("accel"));
+  e.G = mat(j["gyro"], "g_sensitivity");
+  e.arms = mat(j["accel"], "lever_arm");
+  if (j.contains("time_delay")) e.tau = j["time_delay"]["value"].get<double>();
+  return e;
+}
+
+// Raw outputs as rates (increments / dt), t the middle of each interval.
+struct Raw {
+  double dt = 0.0;
+  std::vector<double> t;
+  std::vector<Vector3d> gyro, accel;
+};
+
+Raw raw_of(const std::vector<ImuSample>& samples, double dt) {
+  Raw r;
+  r.dt = dt;
+  for (const auto& s : samples) {
+    r.t.push_back(s.t - 0.5 * dt);
+    r.gyro.push_back(s.dtheta_b / dt);
+    r.accel.push_back(s.dv_b / dt);
+  }
+  return r;
+}
+
+// The formula of the export (docs/formats.md "Firmware export"), step by step.
+void apply(const Exported& e, const Raw& raw, std::vector<Vector3d>& w, std::vector<Vector3d>& f) {
+  const auto n = static_cast<long>(raw.t.size());
+  w.assign(raw.t.size(), Vector3d::Zero());
+  f.assign(raw.t.size(), Vector3d::Zero());
+  for (long k = 0; k < n; ++k) {
+    const auto K = static_cast<std::size_t>(k);
+    const double pos = static_cast<double>(k) + e.tau / raw.dt;
+    const long j = std::clamp(static_cast<long>(std::floor(pos)), 0L, n - 2);
+    const double frac = pos - static_cast<double>(j);
+    const auto J = static_cast<std::size_t>(j);
+    const Vector3d ya = raw.accel[J] + frac * (raw.accel[J + 1] - raw.accel[J]);
+    const Vector3d ua = ya - e.accel.b - e.accel.drift * raw.t[K];
+    const Vector3d va = e.accel.C * ua;
+    f[K] = e.accel.C * (ua - e.accel.asym.cwiseProduct(va.cwiseAbs()) -
+                        e.accel.k2.cwiseProduct(va.cwiseAbs2()));
+    const Vector3d ug = raw.gyro[K] - e.gyro.b - e.gyro.drift * raw.t[K] - e.G * f[K];
+    const Vector3d vg = e.gyro.C * ug;
+    w[K] = e.gyro.C * (ug - e.gyro.asym.cwiseProduct(vg.cwiseAbs()));
+  }
+  std::vector<Vector3d> s(raw.t.size());
+  for (long k = 0; k < n; ++k) {
+    const auto a = static_cast<std::size_t>(std::max(k - 1, 0L));
+    const auto b = static_cast<std::size_t>(std::min(k + 1, n - 1));
+    const auto K = static_cast<std::size_t>(k);
+    const Vector3d wd = (w[b] - w[a]) / (static_cast<double>(b - a) * raw.dt);
+    for (int i = 0; i < 3; ++i) {
+      const Vector3d r = e.arms.row(i).transpose();
+      s[K](i) = e.accel.A.row(i).dot(wd.cross(r) + w[K].cross(w[K].cross(r)));
+    }
+  }
+  for (std::size_t k = 0; k < f.size(); ++k) f[k] -= e.accel.C * s[k];
+}
+
+// A model with every family on (sizes of a navigation-grade unit, MEMS-size asymmetry).
+ImuErrorModel full_model() {
+  ImuErrorModel m =
+      SensorProfile::load(test::source_path("config/sensors/nav-fog-extended.ini")).draw(7);
+  m.gyro.scale_asym = Vector3d(300, -200, 100) * units::ppm;
+  m.accel.scale_asym = Vector3d(-150, 250, 50) * units::ppm;
+  m.gyro_g_sensitivity << 0.1, -0.05, 0.02, 0.03, 0.2, -0.1, -0.07, 0.04, 0.15;
+  m.gyro_g_sensitivity *= units::deg_per_h_per_g;
+  m.gyro.bias_drift = Vector3d(0.01, -0.02, 0.03) * units::deg_per_h / units::hour;
+  m.accel.bias_drift = Vector3d(5, -3, 2) * units::ug / units::hour;
+  return m;
+}
+
+// A result file of `m` with every coefficient, sigma 1 % of the value's unit.
+void write_result(const std::string& path, const ImuErrorModel& m,
+                  const nlohmann::ordered_json& extra) {
+  ResultCoefficients rc;
+  for (const auto& [name, v] : m.coefficients()) {
+    ResultCoefficient c;
+    c.value = v;
+    c.sigma = 0.01;
+    c.unit = coefficient_info(name).unit;
+    rc[name] = c;
+  }
+  write_result_json(path, rc, extra);
+}
+
+nlohmann::ordered_json kf_method() {
+  return {{"method", {{"name", "kf"}, {"body_frame", "table"}}}};
+}
+
+bool have_cc() { return std::system("command -v cc > /dev/null 2>&1") == 0; }
+
+// Compiles tests/export/apply.c with `header`, runs it on `raw`, reads its output.
+bool run_c_apply(const std::string& dir, const std::string& header, const Raw& raw,
+                 std::vector<Vector3d>& w, std::vector<Vector3d>& f) {
+  const std::string exe = dir + "/apply";
+  const std::string compile =
+      "cc -std=c99 -Wall -Wextra -Wpedantic -Werror -O2 "
+      "-DSINSCAL_EXPORT_HEADER='\"" +
+      header + "\"' -o " + exe + " " + test::source_path("tests/export/apply.c") + " -lm";
+  if (std::system(compile.c_str()) != 0) return false;
+  {
+    std::ofstream in(dir + "/raw.txt");
+    in.precision(17);
+    in << raw.t.size() << " " << raw.dt << "\n";
+    for (std::size_t k = 0; k < raw.t.size(); ++k)
+      in << raw.t[k] << " " << raw.gyro[k].transpose() << " " << raw.accel[k].transpose() << "\n";
+  }
+  if (std::system((exe + " < " + dir + "/raw.txt > " + dir + "/out.txt").c_str()) != 0)
+    return false;
+  std::ifstream out(dir + "/out.txt");
+  w.clear();
+  f.clear();
+  Vector3d a, b;
+  while (out >> a(0) >> a(1) >> a(2) >> b(0) >> b(1) >> b(2)) {
+    w.push_back(a);
+    f.push_back(b);
+  }
+  return w.size() == raw.t.size();
+}
+
+}  // namespace
+
+TEST_CASE("Export: the result's numbers, the correction matrices, every format", "[export]") {
+  const std::string dir = test::temp_dir("export_formats");
+  const ImuErrorModel m = full_model();
+  write_result(dir + "/r.json", m, kf_method());
+  const FirmwareExport e = read_result_for_export(dir + "/r.json");
+  CHECK(e.method == "kf");
+  CHECK(e.body_frame == "table platform");
+  CHECK(e.families.size() == coefficient_families().size());
+  CHECK((e.model.vector() - m.vector()).cwiseAbs().maxCoeff() <=
+        1e-12 * m.vector().cwiseAbs().maxCoeff());
+
+  const Json j = Json::parse(render_export(e, ExportFormat::Json));
+  CHECK(j["body_frame"] == "table platform");
+  CHECK(j["units"]["angular_rate"] == "rad/s");
+  const Exported x = parse_export(j);
+  CHECK((x.gyro.C * m.gyro.linear() - Matrix3d::Identity()).norm() < 1e-14);
+  CHECK((x.accel.C * m.accel.linear() - Matrix3d::Identity()).norm() < 1e-14);
+  CHECK((x.gyro.b - m.gyro.bias).norm() == 0.0);
+  CHECK((x.arms - m.accel_lever_arm_b.transpose()).norm() == 0.0);
+  CHECK(x.tau == m.time_delay);
+  // Sigmas in SI: 0.01 of each coefficient's result unit.
+  CHECK(j["gyro"]["bias_sigma"][0].get<double>() == Approx(0.01 * units::deg_per_h));
+  CHECK(j["accel"]["model_matrix_sigma"][0][1].get<double>() == Approx(0.01 * units::arcsec));
+
+  SECTION("the firmware form inverts the model to its stated first-order accuracy") {
+    // Constant inputs (rates, specific forces, a turn at constant rate): no delay or omega_dot.
+    const Json acc = j["accuracy"];
+    for (const auto& [w_true, f_true] :
+         {std::pair{Vector3d(1e-5, -2e-5, 7e-5), Vector3d(0.1, -0.2, -9.8)},
+          std::pair{Vector3d(0.3, -0.2, 0.1), Vector3d(6.9, -6.9, 0.3)},
+          std::pair{Vector3d(-1.0, 0.5, 2.0), Vector3d(-20.0, 5.0, 12.0)}}) {
+      KinematicSample s;
+      s.omega_ib_b = w_true;
+      s.f_ib_b = f_true;
+      s.t = 600.0;
+      Raw raw;
+      raw.dt = 0.01;
+      for (int k = 0; k < 3; ++k) {
+        raw.t.push_back(s.t);
+        raw.gyro.push_back(m.gyro_output(s));
+        raw.accel.push_back(m.accel_output(s));
+      }
+      std::vector<Vector3d> w, f;
+      apply(x, raw, w, f);
+      // Second order in the nonlinear terms (accuracy in the export) and |G| |C s|.
+      const double fx = f_true.cwiseAbs().maxCoeff();
+      const double bound_f = (acc["accel_nonlinear_error_at_1g_m_per_s2"].get<double>() + 1e-15) *
+                             std::pow(std::max(fx / units::g0, 1.0), 3.0) * 3.0;
+      CAPTURE(w_true.transpose(), f_true.transpose(), bound_f);
+      CHECK((f[1] - f_true).cwiseAbs().maxCoeff() <= bound_f + 1e-13 * fx);
+      // The size effect G leaves out (step 2 uses f1): |G| |s|, s = w x (w x r), |r| <= 0.1 m.
+      const double size_effect = w_true.squaredNorm() * 0.1;
+      const double bound_w = 3.0 * (300e-6 * 300e-6) * w_true.cwiseAbs().maxCoeff() +
+                             m.gyro_g_sensitivity.norm() * (size_effect + 3.0 * bound_f) + 1e-15;
+      CHECK((w[1] - w_true).cwiseAbs().maxCoeff() <= bound_w);
+    }
+  }
+  SECTION("YAML: the same data (checked with Python's yaml when it is installed)") {
+    const std::string yaml = render_export(e, ExportFormat::Yaml);
+    CHECK(yaml.find("correction_matrix:\n    - [") != std::string::npos);
+    CHECK(yaml.find("body_frame: \"table platform\"") != std::string::npos);
+    test::write_file(dir + "/e.yaml", yaml);
+    test::write_file(dir + "/e.json", render_export(e, ExportFormat::Json));
+    if (std::system("python3 -c 'import yaml' > /dev/null 2>&1") != 0) {
+      WARN("python3 with yaml not installed: the YAML export is not parsed back");
+    } else {
+      CHECK(std::system(("python3 -c 'import json, sys, yaml; "
+                         "a = yaml.safe_load(open(sys.argv[1])); b = json.load(open(sys.argv[2])); "
+                         "sys.exit(0 if a == b else 1)' " +
+                         dir + "/e.yaml " + dir + "/e.json")
+                            .c_str()) == 0);
+    }
+  }
+  SECTION("C header: compiles with -Wall -Wextra -Wpedantic -Werror and gives the JSON's numbers") {
+    if (!have_cc()) {
+      WARN("no C compiler 'cc' on this machine: the C header is not compiled");
+      return;
+    }
+    const std::string header = dir + "/sinscal_calibration.h";
+    test::write_file(header, render_export(e, ExportFormat::CHeader));
+    KinematicSample s;
+    Raw raw;
+    raw.dt = 0.01;
+    for (int k = 0; k < 5; ++k) {
+      s.t = 0.01 * k;
+      s.omega_ib_b = Vector3d(0.3, -0.2, 0.1) * (1.0 + 0.1 * k);
+      s.f_ib_b = Vector3d(1.0, -2.0, -9.5) + 0.01 * k * Vector3d::Ones();
+      raw.t.push_back(s.t);
+      raw.gyro.push_back(m.gyro_output(s));
+      raw.accel.push_back(m.accel_output(s));
+    }
+    std::vector<Vector3d> wc, fc, wj, fj;
+    REQUIRE(run_c_apply(dir, header, raw, wc, fc));
+    apply(x, raw, wj, fj);
+    for (std::size_t k = 0; k < wc.size(); ++k) {
+      CHECK((wc[k] - wj[k]).norm() <= 1e-15 * (1.0 + wj[k].norm()));
+      CHECK((fc[k] - fj[k]).norm() <= 1e-14 * (1.0 + fj[k].norm()));
+    }
+  }
+}
+
+TEST_CASE("Export: what a result lacks or failed is refused with file and cause", "[export]") {
+  const std::string dir = test::temp_dir("export_refused");
+  const ImuErrorModel m = full_model();
+  auto refused = [&](const std::string& name, const std::string& text, const std::string& cause) {
+    const std::string path = dir + "/" + name;
+    test::write_file(path, text);
+    CAPTURE(name);
+    CHECK_THROWS_WITH(read_result_for_export(path),
+                      Catch::Contains(path) && Catch::Contains(cause));
+  };
+  refused("not.json", "gyro.bias.x = 1\n", "not a sinscal result file (not JSON");
+  refused("nocoef.json", "{\"method\": {\"name\": \"kf\"}}", "no \"coefficients\" object");
+  write_result(dir + "/truth.json", m, {{"note", "simulate ..."}});
+  CHECK_THROWS_WITH(read_result_for_export(dir + "/truth.json"),
+                    Catch::Contains("a truth file (simulate's), not a calibration result"));
+  write_result(dir + "/nomethod.json", m, nlohmann::ordered_json::object());
+  CHECK_THROWS_WITH(read_result_for_export(dir + "/nomethod.json"),
+                    Catch::Contains("no \"method\" section"));
+
+  write_result(dir + "/ok.json", m, kf_method());
+  const Json full = Json::parse(read_text(dir + "/ok.json"));
+  auto variant = [&](const std::string& name, const std::function<void(Json&)>& change) {
+    Json v = full;
+    change(v);
+    const std::string path = dir + "/" + name;
+    test::write_file(path, v.dump(2));
+    return path;
+  };
+  auto cause = [](const std::string& path, const std::string& text, bool force = false) {
+    FirmwareExportOptions o;
+    o.force = force;
+    CAPTURE(path, force);
+    CHECK_THROWS_WITH(read_result_for_export(path, o),
+                      Catch::Contains(path) && Catch::Contains(text));
+  };
+  cause(variant("unknown.json",
+                [](Json& v) {
+                  v["coefficients"]["gyro.wobble.x"] = {{"value", 1}};
+                }),
+        "unknown coefficient 'gyro.wobble.x'", true);
+  cause(variant("unit.json", [](Json& v) { v["coefficients"]["gyro.bias.x"]["unit"] = "deg/s"; }),
+        "'gyro.bias.x' is in 'deg/s', results give it in 'deg/h'", true);
+  cause(variant("missing.json", [](Json& v) { v["coefficients"].erase("accel.scale.y"); }),
+        "coefficients missing (accel.scale.y)", true);
+  cause(variant("partial.json", [](Json& v) { v["coefficients"].erase("accel.lever_arm.z.x"); }),
+        "coefficients missing (accel.lever_arm.z.x)", true);
+  cause(variant("nan.json", [](Json& v) { v["coefficients"]["gyro.bias.y"].erase("value"); }),
+        "'gyro.bias.y' has no finite value", true);
+  cause(variant("sigma.json", [](Json& v) { v["coefficients"]["gyro.bias.y"]["sigma"] = -1; }),
+        "a sigma must be a finite number >= 0", true);
+
+  // Failed verdicts: refused, exported with --force and a warning.
+  const std::string gate = variant("gate.json", [](Json& v) {
+    v["plausibility"] = {
+        {"passed", false},
+        {"checks", Json::array({Json{{"check", "Earth rate"}, {"passed", false}}})}};
+  });
+  cause(gate, "the plausibility gate failed (Earth rate)");
+  cause(gate, "--force exports it anyway");
+  cause(variant("diverged.json",
+                [](Json& v) {
+                  v["diverged"] = {{"reason", "NIS"}};
+                }),
+        "the filter diverged (NIS)");
+  cause(variant("stopped.json",
+                [](Json& v) {
+                  v["stopped"] = {{"reason", "imu.csv:30: NaN"}};
+                }),
+        "the run stopped before the end of the data (imu.csv:30: NaN)");
+  cause(variant("notconv.json", [](Json& v) { v["method"]["converged"] = false; }),
+        "the solution did not converge");
+  FirmwareExportOptions force;
+  force.force = true;
+  const FirmwareExport forced = read_result_for_export(gate, force);
+  REQUIRE(forced.warnings.size() == 1);
+  CHECK(render_export(forced, ExportFormat::CHeader).find("WARNING (--force)") !=
+        std::string::npos);
+
+  // Unobservable coefficients: refused; with --force zero, listed, their sigma kept.
+  const std::string unobs = variant("unobs.json", [](Json& v) {
+    v["coefficients"]["gyro.scale.z"] = {{"observable", false}, {"sigma", 44.1}, {"unit", "ppm"}};
+  });
+  cause(unobs,
+        "1 coefficients are not determined by the data (\"observable\": false): gyro.scale.z");
+  const FirmwareExport zero = read_result_for_export(unobs, force);
+  CHECK(zero.model.gyro.scale.z() == 0.0);
+  CHECK(zero.sigma.gyro.scale.z() == Approx(44.1 * units::ppm));
+  CHECK(zero.unobservable == std::vector<std::string>{"gyro.scale.z"});
+  const Json zj = Json::parse(render_export(zero, ExportFormat::Json));
+  CHECK(zj["unobservable_exported_as_zero"][0] == "gyro.scale.z");
+  // Coefficients fixed by the body frame's convention are zero and listed, not refused.
+  const std::string triad = variant("triad.json", [](Json& v) {
+    v["method"]["body_frame"] = "accelerometer triad";
+    for (const char* c :
+         {"accel.misalignment.xy", "accel.misalignment.xz", "accel.misalignment.yz"})
+      v["coefficients"][c] = {{"value", 0}, {"fixed_by_convention", true}, {"unit", "arcsec"}};
+  });
+  const FirmwareExport t = read_result_for_export(triad);
+  CHECK(t.body_frame == "accelerometer triad");
+  CHECK(t.fixed_by_convention.size() == 3);
+  CHECK(t.model.accel.misalignment(0, 1) == 0.0);
+}
+
+namespace {
+
+// Block means of the compensated outputs against the truth, and the sigma of each block's mean
+// that the coefficients' sigmas give (first order, coefficients independent: a result file has
+// no covariance): the output error J dtheta of the model's Jacobian, taken to the input by C.
+struct BlockCheck {
+  double max_z = 0.0, rms_z = 0.0;  // |mean residual| / sigma over blocks and axes
+  double max_excess = 0.0;          // largest |mean residual| - 4 sigma - form error (<= 0: ok)
+  std::size_t blocks = 0;
+};
+
+struct BlockTruth {
+  std::vector<Vector3d> w_true, f_true;            // block means of the truth
+  std::vector<Eigen::Matrix<double, 6, 1>> sigma;  // of the compensated block means
+};
+
+BlockTruth block_truth(const Motion& motion, const Raw& truth, const FirmwareExport& e,
+                       std::size_t block) {
+  BlockTruth bt;
+  const Eigen::VectorXd sig = e.sigma.vector();
+  const Matrix3d Cg = e.model.gyro.linear().inverse(), Ca = e.model.accel.linear().inverse();
+  for (std::size_t b0 = block; b0 + 2 * block <= truth.t.size(); b0 += block) {
+    Vector3d w = Vector3d::Zero(), f = Vector3d::Zero();
+    Eigen::Matrix<double, 6, Eigen::Dynamic> M =
+        Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, sig.size());
+    for (std::size_t k = b0; k < b0 + block; ++k) {
+      w += truth.gyro[k] / static_cast<double>(block);
+      f += truth.accel[k] / static_cast<double>(block);
+      KinematicSample s = motion.at(truth.t[k]).imu;
+      s.t = truth.t[k];
+      const double h = 1e-3;
+      const Vector3d f_dot =
+          (motion.at(truth.t[k] + h).imu.f_ib_b - motion.at(truth.t[k] - h).imu.f_ib_b) / (2 * h);
+      const auto J = e.model.jacobian(s, f_dot);
+      M.topRows<3>() += Cg * J.topRows<3>() / static_cast<double>(block);
+      M.bottomRows<3>() += Ca * J.bottomRows<3>() / static_cast<double>(block);
+    }
+    bt.w_true.push_back(w);
+    bt.f_true.push_back(f);
+    Eigen::Matrix<double, 6, 1> s;
+    for (int i = 0; i < 6; ++i) s(i) = M.row(i).cwiseProduct(sig.transpose()).norm();
+    bt.sigma.push_back(s);
+  }
+  return bt;
+}
+
+std::vector<Eigen::Matrix<double, 6, 1>> block_residuals(const std::vector<Vector3d>& w,
+                                                         const std::vector<Vector3d>& f,
+                                                         const BlockTruth& bt, std::size_t block) {
+  std::vector<Eigen::Matrix<double, 6, 1>> out;
+  for (std::size_t b = 0; b < bt.w_true.size(); ++b) {
+    Eigen::Matrix<double, 6, 1> r = Eigen::Matrix<double, 6, 1>::Zero();
+    const std::size_t b0 = (b + 1) * block;
+    for (std::size_t k = b0; k < b0 + block; ++k) {
+      r.head<3>() += w[k] / static_cast<double>(block);
+      r.tail<3>() += f[k] / static_cast<double>(block);
+    }
+    r.head<3>() -= bt.w_true[b];
+    r.tail<3>() -= bt.f_true[b];
+    out.push_back(r);
+  }
+  return out;
+}
+
+BlockCheck check_blocks(const std::vector<Eigen::Matrix<double, 6, 1>>& residual,
+                        const std::vector<Eigen::Matrix<double, 6, 1>>& form,
+                        const BlockTruth& bt) {
+  BlockCheck c;
+  double sum = 0.0;
+  for (std::size_t b = 0; b < residual.size(); ++b)
+    for (int i = 0; i < 6; ++i) {
+      const double z = std::abs(residual[b](i)) / bt.sigma[b](i);
+      c.max_z = std::max(c.max_z, z);
+      sum += z * z;
+      c.max_excess = std::max(
+          c.max_excess, std::abs(residual[b](i)) - 4.0 * bt.sigma[b](i) - std::abs(form[b](i)));
+    }
+  c.blocks = residual.size();
+  c.rms_z = std::sqrt(sum / (6.0 * static_cast<double>(residual.size())));
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("Export: a simulated unit calibrated, exported and applied matches the truth",
+          "[export][cli]") {
+  const std::string bin = SINSCAL_BINARY;
+  const std::string dir = test::temp_dir("export_roundtrip");
+  SessionSimulation spec;
+  spec.plan_path = test::source_path("config/plans/rot19.ini");
+  spec.data_sensor_path = test::source_path("config/sensors/nav-fog-extended.ini");
+  spec.rate_hz = 50.0;
+  spec.seed = 3;
+  const SimulatedSession sim = simulate_session(dir + "/session", spec);
+  REQUIRE(run(bin + " calibrate --method kf --session " + sim.session_path + " --out " + dir +
+              "/result.json") == 0);
+  REQUIRE(run(bin + " export --result " + dir + "/result.json --format json --out " + dir +
+              "/export.json") == 0);
+  REQUIRE(run(bin + " export " + dir + "/result.json --format c-header --out " + dir +
+              "/sinscal_calibration.h") == 0);
+  const FirmwareExport e = read_result_for_export(dir + "/result.json");
+  const Exported x = parse_export(Json::parse(read_text(dir + "/export.json")));
+
+  // The unit's raw outputs (its errors, no noise) and the truth, sample by sample.
+  const Motion motion = build_motion(sim.plan, sim.plan.site);
+  const double dt = 1.0 / spec.rate_hz;
+  const Raw raw = raw_of(test::simulate(motion, sim.truth, spec.rate_hz), dt);
+  const Raw truth = raw_of(test::simulate(motion, ImuErrorModel{}, spec.rate_hz), dt);
+  const std::size_t block = 25;  // 0.5 s: the differences of step 0 and 3 telescope in a mean
+  const BlockTruth bt = block_truth(motion, truth, e, block);
+
+  // The form's own error: the truth's coefficients through the same export and formula.
+  FirmwareExport exact = e;
+  exact.model = sim.truth;
+  const Exported xt = parse_export(Json::parse(render_export(exact, ExportFormat::Json)));
+  std::vector<Vector3d> w, f;
+  apply(xt, raw, w, f);
+  const auto form = block_residuals(w, f, bt, block);
+  double form_max = 0.0;
+  for (const auto& r : form) form_max = std::max(form_max, r.tail<3>().cwiseAbs().maxCoeff());
+
+  apply(x, raw, w, f);
+  const auto residual = block_residuals(w, f, bt, block);
+  const BlockCheck c = check_blocks(residual, form, bt);
+  INFO("JSON export: " << c.blocks << " blocks of 0.5 s, |residual| / sigma: max " << c.max_z
+                       << ", RMS " << c.rms_z << "; form error (true coefficients) up to "
+                       << form_max << " m/s^2");
+  CHECK(c.max_excess <= 0.0);
+  WARN("export round trip: max |residual|/sigma " << c.max_z << ", RMS " << c.rms_z
+                                                  << ", form error " << form_max << " m/s^2");
+
+  SECTION("a sign flipped in the export is caught") {
+    for (int flip = 0; flip < 3; ++flip) {
+      Exported bad = x;
+      if (flip == 0) bad.gyro.C = x.gyro.A;     // A exported instead of A^-1
+      if (flip == 1) bad.accel.b = -x.accel.b;  // +b
+      if (flip == 2) bad.accel.C = x.accel.A;
+      apply(bad, raw, w, f);
+      CAPTURE(flip);
+      CHECK(check_blocks(block_residuals(w, f, bt, block), form, bt).max_excess > 0.0);
+    }
+  }
+  SECTION("the C header, compiled and applied in C, gives the same") {
+    if (!have_cc()) {
+      WARN("no C compiler 'cc' on this machine: the C header is not compiled");
+      return;
+    }
+    std::vector<Vector3d> wc, fc;
+    REQUIRE(run_c_apply(dir, dir + "/sinscal_calibration.h", raw, wc, fc));
+    const BlockCheck cc = check_blocks(block_residuals(wc, fc, bt, block), form, bt);
+    INFO("C header: max |residual| / sigma " << cc.max_z << ", RMS " << cc.rms_z);
+    CHECK(cc.max_excess <= 0.0);
+    double diff = 0.0;
+    for (std::size_t k = 0; k < wc.size(); ++k)
+      diff = std::max(diff, std::max((wc[k] - w[k]).norm(), (fc[k] - f[k]).norm()));
+    CHECK(diff <= 1e-12);
+  }
+}
