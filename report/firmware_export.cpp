@@ -300,12 +300,27 @@ std::string c_terms(const ImuErrorModel& m, bool sigma) {
          ".time_delay = " + number(m.time_delay) + "}";
 }
 
+// One comment paragraph, wrapped at 100 columns (continuation lines indented), never closing
+// the comment early.
 std::string c_comment_line(const std::string& text) {
   std::string safe = text;
   for (std::size_t p = 0; (p = safe.find("*/", p)) != std::string::npos;) safe.replace(p, 2, "* /");
   for (char& c : safe)
     if (static_cast<unsigned char>(c) < 0x20) c = ' ';
-  return " * " + safe + "\n";
+  const std::size_t indent =
+      safe.find_first_not_of(' ') == std::string::npos ? 0 : safe.find_first_not_of(' ');
+  std::string out, line = " *";
+  std::istringstream words(safe);
+  for (std::string word; words >> word;) {
+    const bool first = line == " *";
+    if (!first && line.size() + 1 + word.size() > 100) {
+      out += line + "\n";
+      line = " *" + std::string(indent + 4, ' ') + word;
+    } else {
+      line += (first ? " " + std::string(indent, ' ') : " ") + word;
+    }
+  }
+  return out + line + "\n";
 }
 
 std::string c_header(const FirmwareExport& e) {
@@ -505,8 +520,9 @@ std::vector<std::string> export_formula(const FirmwareExport& e) {
   std::vector<std::string> f;
   f.push_back(
       "inputs: raw gyro output y_g (rad/s) and accelerometer output y_a (m/s^2) of one "
-      "sample, body axes; increments (rad, m/s over the interval dt): divide by dt "
-      "first, multiply the results by dt");
+      "sample, body axes, as the calibrated log gave them to sinscal (its columns converted "
+      "to SI by the session's [log] units, scales and axis map); increments (rad, m/s over "
+      "the interval dt): divide by dt first, multiply the results by dt");
   f.push_back(
       "C = correction_matrix = A^-1, A = model_matrix = I + diag(scale) + misalignment; "
       ".* and |.| per component");
@@ -523,35 +539,42 @@ std::vector<std::string> export_formula(const FirmwareExport& e) {
         "/ 2 |d2f/dt2|");
   std::string u_a = "y_a - b_a";
   if (drift_a) u_a += " - d_a t";
+  // Gyros first: the size effect needs omega; the g-sensitivity takes the accelerometers'
+  // linear estimate f0 (the terms it leaves out are second order in G).
+  std::string u_g = "y_g - b_g";
+  if (drift_g) u_g += " - d_g t";
+  if (g_sens) u_g += " - G f0";
+  const std::string f0 = g_sens ? "f0 = C_a (" + u_a + "); " : "";
+  if (asym_g)
+    f.push_back("1. gyros: " + f0 + "u_g = " + u_g +
+                "; v_g = C_g u_g; omega_ib_b = C_g (u_g - a_g .* |v_g|)");
+  else
+    f.push_back("1. gyros: " + f0 + "omega_ib_b = C_g (" + u_g + ")");
+  if (lever) {
+    f.push_back(
+        "2. size effect: omega_dot = rate of change of omega_ib_b (central difference "
+        "(omega[k+1] - omega[k-1]) / (2 dt)); s_i = A_a(i,:) . (omega_dot x r_i + omega_ib_b x "
+        "(omega_ib_b x r_i)), r_i = lever_arm row i");
+    u_a += " - s";
+  } else {
+    f.push_back("2. size effect: none (no lever arms in the result)");
+  }
   if (asym_a || k2) {
     std::string n;
     if (asym_a) n += " - a_a .* |v_a|";
     if (k2) n += " - k2 .* v_a .* v_a";
-    f.push_back("1. accelerometers: u_a = " + u_a + "; v_a = C_a u_a; f1 = C_a (u_a" + n + ")");
+    f.push_back("3. accelerometers: u_a = " + u_a + "; v_a = C_a u_a; f_ib_b = C_a (u_a" + n + ")");
   } else {
-    f.push_back("1. accelerometers: f1 = C_a (" + u_a + ")");
+    f.push_back("3. accelerometers: f_ib_b = C_a (" + u_a + ")");
   }
-  std::string u_g = "y_g - b_g";
-  if (drift_g) u_g += " - d_g t";
-  if (g_sens) u_g += " - G f1";
-  if (asym_g)
-    f.push_back("2. gyros: u_g = " + u_g +
-                "; v_g = C_g u_g; omega_ib_b = C_g (u_g - a_g .* |v_g|)");
-  else
-    f.push_back("2. gyros: omega_ib_b = C_g (" + u_g + ")");
-  if (lever)
-    f.push_back(
-        "3. size effect: omega_dot = rate of change of omega_ib_b (central difference "
-        "(omega[k+1] - omega[k-1]) / (2 dt)); s_i = A_a(i,:) . (omega_dot x r_i + omega_ib_b x "
-        "(omega_ib_b x r_i)), r_i = lever_arm row i; f_ib_b = f1 - C_a s");
-  else
-    f.push_back("3. f_ib_b = f1");
   if (asym_a || k2 || asym_g)
     f.push_back(
         "the nonlinear terms use the linear estimate v (first order): error per axis at "
         "most (|a| + 2 |k2| |x|) (|a| |x| + |k2| x^2), stated under accuracy");
-  if (g_sens && lever)
-    f.push_back("G f1 leaves out the size effect s of f: error |G| |C_a s| (second order)");
+  if (g_sens)
+    f.push_back(
+        "G f0 leaves out what f0 lacks (the accelerometers' nonlinear terms and size effect): "
+        "error |G| |f_ib_b - f0| (second order)");
   return f;
 }
 

@@ -7,9 +7,11 @@
 // The firmware's inverse of the error model (docs/conventions.md), per sample, outputs y_g (rad/s),
 // y_a (m/s^2) time-aligned (step 0 below), t the time since the start of the calibration session:
 //   0. accelerometers late by tau: take the accelerometer output at t + tau (linear interpolation)
-//   1. u_a = y_a - b_a - d_a t;  v_a = C_a u_a;  f1 = C_a (u_a - a_a .* |v_a| - k2 .* v_a .* v_a)
-//   2. u_g = y_g - b_g - d_g t - G f1;  v_g = C_g u_g;  omega_ib_b = C_g (u_g - a_g .* |v_g|)
-//   3. s_i = A_a(i,:) . (omega_dot x r_i + omega x (omega x r_i));  f_ib_b = f1 - C_a s
+//   1. f0 = C_a (y_a - b_a - d_a t);  u_g = y_g - b_g - d_g t - G f0;  v_g = C_g u_g;
+//      omega_ib_b = C_g (u_g - a_g .* |v_g|)
+//   2. s_i = A_a(i,:) . (omega_dot x r_i + omega x (omega x r_i))  (size effect)
+//   3. u_a = y_a - b_a - d_a t - s;  v_a = C_a u_a;
+//      f_ib_b = C_a (u_a - a_a .* |v_a| - k2 .* v_a .* v_a)
 // The nonlinear terms are evaluated at the linear estimate v (first order); the exact inverse
 // (ImuErrorModel::compensate) differs by a second-order amount the export states.
 #pragma once
