@@ -442,8 +442,11 @@ struct BlockTruth {
   std::vector<Eigen::Matrix<double, 6, 1>> sigma;  // of the compensated block means
 };
 
+// `truth` and the motion in the body frame of the simulation; the result's body frame r has
+// x_b = C_r_b x_r.
 BlockTruth block_truth(const Motion& motion, const Raw& truth, const FirmwareExport& e,
-                       std::size_t block) {
+                       const Matrix3d& C_r_b, std::size_t block) {
+  const Matrix3d C_b_r = C_r_b.transpose();
   BlockTruth bt;
   const Eigen::VectorXd sig = e.sigma.vector();
   const Matrix3d Cg = e.model.gyro.linear().inverse(), Ca = e.model.accel.linear().inverse();
@@ -452,13 +455,17 @@ BlockTruth block_truth(const Motion& motion, const Raw& truth, const FirmwareExp
     Eigen::Matrix<double, 6, Eigen::Dynamic> M =
         Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, sig.size());
     for (std::size_t k = b0; k < b0 + block; ++k) {
-      w += truth.gyro[k] / static_cast<double>(block);
-      f += truth.accel[k] / static_cast<double>(block);
+      w += C_b_r * truth.gyro[k] / static_cast<double>(block);
+      f += C_b_r * truth.accel[k] / static_cast<double>(block);
       KinematicSample s = motion.at(truth.t[k]).imu;
       s.t = truth.t[k];
+      s.omega_ib_b = C_b_r * s.omega_ib_b;
+      s.omega_dot_ib_b = C_b_r * s.omega_dot_ib_b;
+      s.f_ib_b = C_b_r * s.f_ib_b;
       const double h = 1e-3;
       const Vector3d f_dot =
-          (motion.at(truth.t[k] + h).imu.f_ib_b - motion.at(truth.t[k] - h).imu.f_ib_b) / (2 * h);
+          C_b_r * (motion.at(truth.t[k] + h).imu.f_ib_b - motion.at(truth.t[k] - h).imu.f_ib_b) /
+          (2 * h);
       const auto J = e.model.jacobian(s, f_dot);
       M.topRows<3>() += Cg * J.topRows<3>() / static_cast<double>(block);
       M.bottomRows<3>() += Ca * J.bottomRows<3>() / static_cast<double>(block);
@@ -510,79 +517,124 @@ BlockCheck check_blocks(const std::vector<Eigen::Matrix<double, 6, 1>>& residual
 
 }  // namespace
 
-TEST_CASE("Export: a simulated unit calibrated, exported and applied matches the truth",
-          "[export][cli]") {
+namespace {
+
+// A calibrated simulation, exported (JSON and C header by the command line) and applied to the
+// unit's raw outputs without noise: the block means against the truth.
+struct RoundTrip {
+  std::string dir;
+  FirmwareExport e;
+  Exported x;
+  Raw raw;
+  BlockTruth bt;
+  std::vector<Eigen::Matrix<double, 6, 1>> form;  // the formula's own error (true coefficients)
+  double form_max = 0.0;
+  std::size_t block = 0;
+  BlockCheck check(const Exported& exported) const {
+    std::vector<Vector3d> w, f;
+    apply(exported, raw, w, f);
+    return check_blocks(block_residuals(w, f, bt, block), form, bt);
+  }
+};
+
+// `dir`/result.json calibrated from a simulation of `motion` with the sensor errors `sensor`
+// (the simulation's body frame b); the result's frame r has x_b = C_r_b x_r, `truth_r` is the
+// truth in it.
+RoundTrip round_trip(const std::string& dir, const Motion& motion, const ImuErrorModel& sensor,
+                     const ImuErrorModel& truth_r, const Matrix3d& C_r_b, double rate_hz) {
   const std::string bin = SINSCAL_BINARY;
-  const std::string dir = test::temp_dir("export_roundtrip");
+  RoundTrip rt;
+  rt.dir = dir;
+  REQUIRE(run(bin + " export --result " + dir + "/result.json --format json --out " + dir +
+              "/export.json") == 0);
+  REQUIRE(run(bin + " export " + dir + "/result.json --format c-header --out " + dir +
+              "/sinscal_calibration.h") == 0);
+  rt.e = read_result_for_export(dir + "/result.json");
+  rt.x = parse_export(Json::parse(read_text(dir + "/export.json")));
+  const double dt = 1.0 / rate_hz;
+  rt.raw = raw_of(test::simulate(motion, sensor, rate_hz), dt);
+  const Raw truth = raw_of(test::simulate(motion, ImuErrorModel{}, rate_hz), dt);
+  rt.block = static_cast<std::size_t>(std::lround(0.5 * rate_hz));  // 0.5 s: the differences of
+  rt.bt = block_truth(motion, truth, rt.e, C_r_b, rt.block);        // steps 0 and 2 telescope
+  // The form's own error: the true coefficients through the same formula (taken from the model
+  // here, not from the export, so that a fault of the export cannot hide in it).
+  std::vector<Vector3d> w, f;
+  apply(exported_of(truth_r), rt.raw, w, f);
+  rt.form = block_residuals(w, f, rt.bt, rt.block);
+  for (const auto& r : rt.form)
+    rt.form_max = std::max(rt.form_max, r.tail<3>().cwiseAbs().maxCoeff());
+  return rt;
+}
+
+// The JSON export and the compiled C header both within the sigma of the coefficients.
+void check_round_trip(const RoundTrip& rt, const std::string& what) {
+  const BlockCheck c = rt.check(rt.x);
+  INFO(what << ", JSON export: " << c.blocks << " blocks of 0.5 s, |residual| / sigma: max "
+            << c.max_z << ", RMS " << c.rms_z << "; form error (true coefficients) up to "
+            << rt.form_max << " m/s^2");
+  CHECK(c.max_excess <= 0.0);
+  WARN(what << ": export round trip over " << c.blocks << " blocks: max |residual|/sigma "
+            << c.max_z << ", RMS " << c.rms_z << ", form error " << rt.form_max << " m/s^2");
+  if (!have_cc()) {
+    WARN("no C compiler 'cc' on this machine: the C header is not compiled");
+    return;
+  }
+  std::vector<Vector3d> wc, fc, w, f;
+  REQUIRE(run_c_apply(rt.dir, rt.dir + "/sinscal_calibration.h", rt.raw, wc, fc));
+  const BlockCheck cc = check_blocks(block_residuals(wc, fc, rt.bt, rt.block), rt.form, rt.bt);
+  INFO("C header: max |residual| / sigma " << cc.max_z << ", RMS " << cc.rms_z);
+  CHECK(cc.max_excess <= 0.0);
+  apply(rt.x, rt.raw, w, f);
+  double diff = 0.0;
+  for (std::size_t k = 0; k < wc.size(); ++k)
+    diff = std::max(diff, std::max((wc[k] - w[k]).norm(), (fc[k] - f[k]).norm()));
+  CHECK(diff <= 1e-12);
+}
+
+}  // namespace
+
+TEST_CASE("Export: a unit calibrated by the Kalman filter, exported and applied matches the truth",
+          "[export][cli]") {
+  const std::string dir = test::temp_dir("export_roundtrip_kf");
   SessionSimulation spec;
   spec.plan_path = test::source_path("config/plans/rot19.ini");
   spec.data_sensor_path = test::source_path("config/sensors/nav-fog-extended.ini");
   spec.rate_hz = 50.0;
   spec.seed = 3;
   const SimulatedSession sim = simulate_session(dir + "/session", spec);
-  REQUIRE(run(bin + " calibrate --method kf --session " + sim.session_path + " --out " + dir +
-              "/result.json") == 0);
-  REQUIRE(run(bin + " export --result " + dir + "/result.json --format json --out " + dir +
-              "/export.json") == 0);
-  REQUIRE(run(bin + " export " + dir + "/result.json --format c-header --out " + dir +
-              "/sinscal_calibration.h") == 0);
-  const FirmwareExport e = read_result_for_export(dir + "/result.json");
-  const Exported x = parse_export(Json::parse(read_text(dir + "/export.json")));
-
-  // The unit's raw outputs (its errors, no noise) and the truth, sample by sample.
+  REQUIRE(run(std::string(SINSCAL_BINARY) + " calibrate --method kf --session " + sim.session_path +
+              " --out " + dir + "/result.json") == 0);
   const Motion motion = build_motion(sim.plan, sim.plan.site);
-  const double dt = 1.0 / spec.rate_hz;
-  const Raw raw = raw_of(test::simulate(motion, sim.truth, spec.rate_hz), dt);
-  const Raw truth = raw_of(test::simulate(motion, ImuErrorModel{}, spec.rate_hz), dt);
-  const std::size_t block = 25;  // 0.5 s: the differences of step 0 and 3 telescope in a mean
-  const BlockTruth bt = block_truth(motion, truth, e, block);
-
-  // The form's own error: the true coefficients through the same formula (taken from the model
-  // here, not from the export, so that a fault of the export cannot hide in it).
-  const Exported xt = exported_of(sim.truth);
-  std::vector<Vector3d> w, f;
-  apply(xt, raw, w, f);
-  const auto form = block_residuals(w, f, bt, block);
-  double form_max = 0.0;
-  for (const auto& r : form) form_max = std::max(form_max, r.tail<3>().cwiseAbs().maxCoeff());
-
-  apply(x, raw, w, f);
-  const auto residual = block_residuals(w, f, bt, block);
-  const BlockCheck c = check_blocks(residual, form, bt);
-  INFO("JSON export: " << c.blocks << " blocks of 0.5 s, |residual| / sigma: max " << c.max_z
-                       << ", RMS " << c.rms_z << "; form error (true coefficients) up to "
-                       << form_max << " m/s^2");
-  CHECK(c.max_excess <= 0.0);
-  WARN("export round trip: max |residual|/sigma " << c.max_z << ", RMS " << c.rms_z
-                                                  << ", form error " << form_max << " m/s^2");
-
-  SECTION("a sign flipped in the export is caught") {
-    for (int flip = 0; flip < 6; ++flip) {
-      Exported bad = x;
-      if (flip == 0) bad.gyro.C = x.gyro.A;  // A exported instead of A^-1
-      if (flip == 1) bad.accel.C = x.accel.A;
-      if (flip == 2) bad.accel.b = -x.accel.b;  // +b
-      if (flip == 3) bad.tau = -x.tau;
-      if (flip == 4) bad.arms = -x.arms;
-      if (flip == 5) bad.accel.k2 = -x.accel.k2;
-      apply(bad, raw, w, f);
-      CAPTURE(flip);
-      CHECK(check_blocks(block_residuals(w, f, bt, block), form, bt).max_excess > 0.0);
-    }
+  const RoundTrip rt =
+      round_trip(dir, motion, sim.truth, sim.truth, Matrix3d::Identity(), spec.rate_hz);
+  check_round_trip(rt, "kf, rot19, nav-fog-extended");
+  // The test sees a sign flipped in the export: each of these fails it.
+  for (int flip = 0; flip < 6; ++flip) {
+    Exported bad = rt.x;
+    if (flip == 0) bad.gyro.C = rt.x.gyro.A;  // A exported instead of A^-1
+    if (flip == 1) bad.accel.C = rt.x.accel.A;
+    if (flip == 2) bad.accel.b = -rt.x.accel.b;  // +b
+    if (flip == 3) bad.tau = -rt.x.tau;
+    if (flip == 4) bad.arms = -rt.x.arms;
+    if (flip == 5) bad.accel.k2 = -rt.x.accel.k2;
+    CAPTURE(flip);
+    CHECK(rt.check(bad).max_excess > 0.0);
   }
-  SECTION("the C header, compiled and applied in C, gives the same") {
-    if (!have_cc()) {
-      WARN("no C compiler 'cc' on this machine: the C header is not compiled");
-      return;
-    }
-    std::vector<Vector3d> wc, fc;
-    REQUIRE(run_c_apply(dir, dir + "/sinscal_calibration.h", raw, wc, fc));
-    const BlockCheck cc = check_blocks(block_residuals(wc, fc, bt, block), form, bt);
-    INFO("C header: max |residual| / sigma " << cc.max_z << ", RMS " << cc.rms_z);
-    CHECK(cc.max_excess <= 0.0);
-    double diff = 0.0;
-    for (std::size_t k = 0; k < wc.size(); ++k)
-      diff = std::max(diff, std::max((wc[k] - w[k]).norm(), (fc[k] - f[k]).norm()));
-    CHECK(diff <= 1e-12);
-  }
+}
+
+TEST_CASE("Export: a unit calibrated by the closed form, exported and applied matches the truth",
+          "[export][cli]") {
+  const std::string dir = test::temp_dir("export_roundtrip_cf");
+  SessionSimulation spec;
+  spec.plan_path = test::source_path("config/plans/seed8.ini");
+  spec.data_sensor_path = test::source_path("config/sensors/nav-fog.ini");
+  spec.rate_hz = 20.0;
+  spec.seed = 5;
+  const SimulatedSession sim = simulate_session(dir + "/session", spec);
+  REQUIRE(run(std::string(SINSCAL_BINARY) + " calibrate --method closed-form --session " +
+              sim.session_path + " --out " + dir + "/result.json") == 0);
+  const Motion motion = build_motion(sim.plan, sim.plan.site);
+  check_round_trip(
+      round_trip(dir, motion, sim.truth, sim.truth, Matrix3d::Identity(), spec.rate_hz),
+      "closed form, seed8, nav-fog");
 }
