@@ -159,8 +159,7 @@ Json document(const FirmwareExport& e) {
   d["sinscal_version"] = SINSCAL_VERSION;
   d["source"] = {{"file", e.source_file},
                  {"bytes", e.source_bytes},
-                 {"method", e.method},
-                 {"sha256", "not computed (sinscal's dependencies have no SHA-256)"}};
+                 {"method", e.method}};
   d["body_frame"] = e.body_frame;
   d["body_frame_note"] = e.body_frame_note;
   d["units"] = {{"angular_rate", "rad/s"},

@@ -85,7 +85,9 @@ check "unknown --terms is a usage error" test $? -eq 1
 check "unknown --terms is named" contains "$work/terms.err" "unknown term 'lever'"
 
 # export: the Kalman result as a firmware's compensation, in every format; the C header compiles
-# (with the system C compiler when there is one); the golden export of the committed result.
+# (with the system C compiler when there is one); the golden export of the committed result
+# (after an intended change of the header: (cd SOURCE_DIR && sinscal export --result
+# tests/golden/seed8-closed-form.json --format c-header > tests/golden/seed8-closed-form.export.h)).
 "$bin" export --result "$work/r19/kf.json" --format json --out "$work/r19/export.json" > "$work/export.txt"
 check "export exits 0" test $? -eq 0
 check "export says what it wrote" contains "$work/export.txt" "json export of $work/r19/kf.json (method kf, body frame: table platform"
