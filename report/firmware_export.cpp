@@ -157,11 +157,10 @@ Json document(const FirmwareExport& e) {
   d["format"] = "sinscal firmware export";
   d["format_version"] = 1;
   d["sinscal_version"] = SINSCAL_VERSION;
-  d["source"] = {{"file", e.source_file},
-                 {"bytes", e.source_bytes},
-                 {"method", e.method}};
+  d["source"] = {{"file", e.source_file}, {"bytes", e.source_bytes}, {"method", e.method}};
   d["body_frame"] = e.body_frame;
   d["body_frame_note"] = e.body_frame_note;
+  if (!e.reference_point.empty()) d["reference_point"] = e.reference_point;
   d["units"] = {{"angular_rate", "rad/s"},
                 {"specific_force", "m/s^2"},
                 {"time", "s"},
@@ -328,6 +327,7 @@ std::string c_header(const FirmwareExport& e) {
   h += c_comment_line("Source: " + e.source_file + " (" + std::to_string(e.source_bytes) +
                       " bytes), method " + e.method);
   h += c_comment_line("Body frame: " + e.body_frame + ": " + e.body_frame_note);
+  if (!e.reference_point.empty()) h += c_comment_line("Reference point: " + e.reference_point);
   h += c_comment_line(
       "Units: SI (rad/s, m/s^2, s, m; k2 in 1/(m/s^2), g-sensitivity in rad/s "
       "per m/s^2, bias drift in rad/s^2 and m/s^3).");
@@ -485,6 +485,18 @@ FirmwareExport read_result_for_export(const std::string& path,
   };
   catalog_order(e.fixed_by_convention);
   catalog_order(e.unobservable);
+  if (e.has("accel.lever_arm")) {
+    e.reference_point =
+        "the IMU reference point of the calibration (on a table with zero velocity while "
+        "turning: the intersection of the table's axes); lever_arm row i is accelerometer i's "
+        "proof mass relative to it";
+    for (const char* axis : {"x", "y", "z"})
+      if (std::find(e.fixed_by_convention.begin(), e.fixed_by_convention.end(),
+                    std::string("accel.lever_arm.") + axis + ".x") != e.fixed_by_convention.end())
+        e.reference_point = std::string("the proof mass of the ") + axis +
+                            " accelerometer (the result's lever-arm reference: its lever arm is "
+                            "zero by convention, the others are relative to it)";
+  }
 
   const std::vector<std::string> verdicts = failed_verdicts(j);
   if (!verdicts.empty() && !options.force)

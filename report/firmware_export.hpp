@@ -37,6 +37,9 @@ struct FirmwareExport {
   std::string method;      // the result's method.name: "kf", "closed-form", "table-free", ...
   std::string body_frame;  // "table platform", "accelerometer triad", "box faces"
   std::string body_frame_note;
+  /// Where omega_ib_b and f_ib_b are (the point the lever arms are relative to); empty without
+  /// lever arms.
+  std::string reference_point;
   ImuErrorModel model;  // the estimate; absent families are zero
   ImuErrorModel sigma;  // 1-sigma of every coefficient (0: none given)
   /// Families the result has, in the family table's order (the base ones always).

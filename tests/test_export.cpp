@@ -424,7 +424,15 @@ TEST_CASE("Export: what a result lacks or failed is refused with file and cause"
       v["coefficients"][c] = {{"value", 0}, {"fixed_by_convention", true}, {"unit", "arcsec"}};
   });
   const FirmwareExport t = read_result_for_export(triad);
+  CHECK(t.reference_point.find("the IMU reference point") == 0);
   CHECK(t.body_frame == "accelerometer triad");
+  // The lever-arm reference: the compensated outputs are at that accelerometer's proof mass.
+  const FirmwareExport ref = read_result_for_export(variant("reference.json", [](Json& v) {
+    for (const char* c : {"accel.lever_arm.y.x", "accel.lever_arm.y.y", "accel.lever_arm.y.z"})
+      v["coefficients"][c] = {{"value", 0}, {"fixed_by_convention", true}, {"unit", "mm"}};
+  }));
+  CHECK(ref.reference_point.find("the proof mass of the y accelerometer") == 0);
+  CHECK(ref.model.accel_lever_arm_b.col(1).isZero(0.0));
   CHECK(t.fixed_by_convention.size() == 3);
   CHECK(t.model.accel.misalignment(0, 1) == 0.0);
 }
