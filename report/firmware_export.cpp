@@ -390,22 +390,9 @@ struct sinscal_imu_calibration {
   return h;
 }
 
-}  // namespace
-
-bool FirmwareExport::has(const std::string& family) const {
-  return std::find(families.begin(), families.end(), family) != families.end();
-}
-
-FirmwareExport read_result_for_export(const std::string& path,
-                                      const FirmwareExportOptions& options) {
-  std::ifstream in(path);
-  if (!in) fail(path, "cannot open");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& x) {
-    fail(path, std::string("not a sinscal result file (not JSON: ") + x.what() + ")");
-  }
+// The export of a parsed result file `path`.
+FirmwareExport export_of(const std::string& path, const nlohmann::json& j,
+                         const FirmwareExportOptions& options) {
   if (!j.is_object() || !j.contains("coefficients") || !j["coefficients"].is_object())
     fail(path, "not a sinscal result file (no \"coefficients\" object)");
   if (!j.contains("method") || !j["method"].is_object() || !j["method"].contains("name") ||
@@ -514,6 +501,29 @@ FirmwareExport read_result_for_export(const std::string& path,
                          joined(e.unobservable));
   }
   return e;
+}
+
+}  // namespace
+
+bool FirmwareExport::has(const std::string& family) const {
+  return std::find(families.begin(), families.end(), family) != families.end();
+}
+
+FirmwareExport read_result_for_export(const std::string& path,
+                                      const FirmwareExportOptions& options) {
+  std::ifstream in(path);
+  if (!in) fail(path, "cannot open");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& x) {
+    fail(path, std::string("not a sinscal result file (not JSON: ") + x.what() + ")");
+  }
+  try {
+    return export_of(path, j, options);
+  } catch (const nlohmann::json::exception& x) {  // a field of the wrong type
+    fail(path, std::string("not a sinscal result file (") + x.what() + ")");
+  }
 }
 
 ExportFormat export_format_from_name(const std::string& name) {

@@ -374,6 +374,9 @@ TEST_CASE("Export: what a result lacks or failed is refused with file and cause"
         "coefficients missing (accel.lever_arm.z.x)", true);
   cause(variant("nan.json", [](Json& v) { v["coefficients"]["gyro.bias.y"].erase("value"); }),
         "'gyro.bias.y' has no finite value", true);
+  cause(variant("type.json",
+                [](Json& v) { v["coefficients"]["gyro.bias.y"]["fixed_by_convention"] = "yes"; }),
+        "not a sinscal result file (", true);
   cause(variant("sigma.json", [](Json& v) { v["coefficients"]["gyro.bias.y"]["sigma"] = -1; }),
         "a sigma must be a finite number >= 0", true);
 
