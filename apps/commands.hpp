@@ -14,5 +14,6 @@ int cmd_plot_convergence(const std::vector<std::string>& args);
 int cmd_diagnose(const std::vector<std::string>& args);
 int cmd_allan(const std::vector<std::string>& args);
 int cmd_design(const std::vector<std::string>& args);
+int cmd_export(const std::vector<std::string>& args);
 
 }  // namespace sinscal::cli

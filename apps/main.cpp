@@ -17,6 +17,7 @@ const char* kUsage =
     "  calibrate  estimate the calibration coefficients of a session or a batch of sessions\n"
     "             (closed-form method, Kalman filter, or table-free for hand-held sessions)\n"
     "  compare    two results side by side, difference over its sigma\n"
+    "  export     a result as the compensation a firmware applies (JSON, YAML, C header)\n"
     "  plot-convergence\n"
     "             estimates and sigmas over time from a Kalman monitor file, to PNG (gnuplot)\n"
     "  diagnose   what the calibrated model misses on a table session: the effect, its\n"
@@ -38,6 +39,7 @@ int main(int argc, char** argv) {
     if (command == "navigate") return cmd_navigate(args);
     if (command == "calibrate") return cmd_calibrate(args);
     if (command == "compare") return cmd_compare(args);
+    if (command == "export") return cmd_export(args);
     if (command == "plot-convergence") return cmd_plot_convergence(args);
     if (command == "diagnose") return cmd_diagnose(args);
     if (command == "allan") return cmd_allan(args);

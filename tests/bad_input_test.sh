@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The bad-input corpus, end to end: every command (simulate, navigate, calibrate --method
-# closed-form, kf and table-free, compare, plot-convergence, allan) and every input file type
-# (plan, sensor profile, session.ini with or without a plan, native log, custom log, split, one
-# file per dwell, NovAtel, result JSON, monitor JSONL). Each case is one bad input, made in its
+# closed-form, kf and table-free, compare, export, plot-convergence, allan) and every input file
+# type (plan, sensor profile, session.ini with or without a plan, native log, custom log, split,
+# one file per dwell, NovAtel, result JSON, monitor JSONL). Each case is one bad input, made in its
 # own folder from small bundled ones, and must end with the documented exit code (2: data, 1:
 # usage), a message on standard error holding the cause, the file's name and :LINE where there is
 # a line, and every input file unchanged (sha256sum of the case's folder before and after; outputs
@@ -138,6 +138,9 @@ S calibrate --method closed-form --session s8/session.ini --out s8/cf.json > /de
   die "closed form s8"
 S calibrate --method kf --session mini/session.ini --out mini/kf.json --monitor mini/monitor.jsonl \
   > /dev/null 2>&1 || die "kf mini"
+# The paper's two channels leave the common accelerometer scale factor undetermined (export).
+S calibrate --method closed-form --session s8/session.ini --stage1 point --model uncoupled \
+  --channels north,east --out s8/paper.json > /dev/null || die "closed form s8, paper's method"
 # Custom: rates in deg/s and g, accelerometers first, one header line.
 awk -F, 'BEGIN { pi = atan2(0, -1); print "time,ax,ay,az,gx,gy,gz" }
   NR > 3 { printf "%.10g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n", $1, $5 * 10 / 9.80665,
@@ -606,6 +609,49 @@ sed 's/"value": [-0-9.e]*/"value": "abc"/' "$base/s8/cf.json" > "$d/b.json"
 fixed 2 "b.json: not a sinscal result file" S compare a.json b.json
 new compare-one-file; cp "$base/s8/cf.json" "$d/a.json"
 fixed 1 "give two result files" S compare a.json
+
+# --- export (result JSON to a firmware's compensation) -----------------------------------------
+new control-export; cp "$base/s8/cf.json" "$d/r.json"
+POST='grep -q "correction_matrix" out/e.json'
+control 0 "" S export --result r.json --format json --out out/e.json
+new export-missing-file
+fixed 2 "nope.json: cannot open" S export --result nope.json --format json
+new export-not-json; echo "not json" > "$d/r.json"
+fixed 2 "r.json: not a sinscal result file (not JSON" S export --result r.json --format yaml
+new export-no-coefficients-key; echo '{"method": {"name": "kf"}}' > "$d/r.json"
+fixed 2 "r.json: not a sinscal result file (no \"coefficients\" object)" S export --result r.json --format json
+new export-truth-file; cp "$base/s8/truth.json" "$d/"
+fixed 2 "truth.json: a truth file (simulate's), not a calibration result" S export --result truth.json --format json
+new export-unknown-coefficient; sed 's/"gyro.bias.x"/"gyro.wobble.x"/' "$base/s8/cf.json" > "$d/r.json"
+fixed 2 "r.json: unknown coefficient 'gyro.wobble.x'" S export --result r.json --format json
+new export-missing-coefficient
+awk '/"accel.scale.y": \{/ { skip = 1; next } skip && /\}/ { skip = 0; next } !skip' "$base/s8/cf.json" > "$d/r.json"
+fixed 2 "r.json: coefficients missing (accel.scale.y)" S export --result r.json --format c-header
+new export-value-not-a-number; sed '0,/"value": [-0-9.e]*/s//"value": "abc"/' "$base/s8/cf.json" > "$d/r.json"
+fixed 2 "r.json: coefficient 'gyro.bias.x' has no finite value" S export --result r.json --format json
+new export-unobservable; cp "$base/s8/paper.json" "$d/r.json"
+fixed 2 "r.json: 3 coefficients are not determined by the data|accel.scale.x, accel.scale.y, accel.scale.z|--force" \
+  S export --result r.json --format json --out out/e.json
+new export-unobservable-forced; cp "$base/s8/paper.json" "$d/r.json"
+POST='grep -A1 unobservable_exported_as_zero out/e.json | grep -q accel.scale.x'
+fixed 0 "WARNING (--force)|not determined by the data exported as zero" \
+  S export --result r.json --format json --out out/e.json --force
+new export-failed-verdict; sed '$ s/}$/, "diverged": {"reason": "filter diverging at t = 5 s"}}/' "$base/s8/cf.json" > "$d/r.json"
+POST='! test -e out/e.h'
+fixed 2 "r.json: the calibration failed its own checks: the filter diverged (filter diverging at t = 5 s)|--force" \
+  S export --result r.json --format c-header --out out/e.h
+new export-failed-verdict-forced; sed '$ s/}$/, "stopped": {"reason": "imu.csv:30: NaN"}}/' "$base/s8/cf.json" > "$d/r.json"
+POST='grep -q "WARNING (--force): the run stopped" out/e.h'
+fixed 0 "WARNING (--force)" S export --result r.json --format c-header --out out/e.h --force
+new export-out-is-the-input; cp "$base/s8/cf.json" "$d/r.json"
+fixed 1 "--out r.json is the result: an output never replaces an input" S export --result r.json --format json --out r.json
+new export-out-directory-missing; cp "$base/s8/cf.json" "$d/r.json"
+POST='! test -e out/no/e.yaml'
+fixed 2 "out/no/e.yaml: cannot create" S export --result r.json --format yaml --out out/no/e.yaml
+new export-unknown-format; cp "$base/s8/cf.json" "$d/r.json"
+fixed 1 "--format: export format must be json | yaml | c-header, not 'xml'" S export --result r.json --format xml
+new export-no-format; cp "$base/s8/cf.json" "$d/r.json"
+fixed 1 "'--format' is required" S export --result r.json
 
 # --- plot-convergence (monitor JSONL) -----------------------------------------------------------
 new plot-monitor-missing

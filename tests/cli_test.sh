@@ -84,6 +84,40 @@ check "--terms -time_delay drops the delay" test "$(grep -c '"time_delay"' "$wor
 check "unknown --terms is a usage error" test $? -eq 1
 check "unknown --terms is named" contains "$work/terms.err" "unknown term 'lever'"
 
+# export: the Kalman result as a firmware's compensation, in every format; the C header compiles
+# (with the system C compiler when there is one); the golden export of the committed result
+# (after an intended change of the header: (cd SOURCE_DIR && sinscal export --result
+# tests/golden/seed8-closed-form.json --format c-header > tests/golden/seed8-closed-form.export.h)).
+"$bin" export --result "$work/r19/kf.json" --format json --out "$work/r19/export.json" > "$work/export.txt"
+check "export exits 0" test $? -eq 0
+check "export says what it wrote" contains "$work/export.txt" "json export of $work/r19/kf.json (method kf, body frame: table platform"
+check "export has the correction matrices, the extended terms, the frame" python3 -c "
+import json, sys
+e = json.load(open('$work/r19/export.json'))
+ok = (len(e['gyro']['correction_matrix']) == 3 and 'k2' in e['accel'] and 'lever_arm' in e['accel']
+      and abs(e['time_delay']['value'] - 0.005) < 1e-4 and e['body_frame'] == 'table platform'
+      and e['units']['angular_rate'] == 'rad/s' and e['source']['method'] == 'kf'
+      and 'time_delay' in e['terms'] and e['unobservable_exported_as_zero'] == [])
+sys.exit(0 if ok else 1)"
+"$bin" export "$work/r19/kf.json" --format yaml > "$work/r19/export.yaml"
+check "export to standard output exits 0" test $? -eq 0
+check "YAML export has the correction matrix as rows" grep -q '^  correction_matrix:$' "$work/r19/export.yaml"
+"$bin" export --result "$work/r19/kf.json" --format c-header --out "$work/r19/cal.h" > /dev/null
+check "C header export exits 0" test $? -eq 0
+if command -v cc > /dev/null; then
+  printf '#include "%s"\nint main(void) { return sinscal_calibration.value.accel.correction[0][0] > 0.5 ? 0 : 1; }\n' \
+    "$work/r19/cal.h" > "$work/r19/use.c"
+  cc -std=c99 -Wall -Wextra -Wpedantic -Werror -o "$work/r19/use" "$work/r19/use.c" && "$work/r19/use"
+  check "the C header compiles and is usable" test $? -eq 0
+else
+  echo "SKIPPED: no C compiler 'cc': the C header export is not compiled"
+fi
+(cd "$src" && "$bin" export --result tests/golden/seed8-closed-form.json --format c-header) > "$work/golden.h"
+check "the export of the committed closed-form result is the golden header" \
+  diff -u "$src/tests/golden/seed8-closed-form.export.h" "$work/golden.h"
+"$bin" export --result "$work/r19/kf.json" --format json --out "$work/r19/kf.json" 2> "$work/export_self.err"
+check "export refuses to overwrite its result" test $? -eq 1
+
 # Streaming from standard input: the same result as the batch run; a monitor line per interval.
 "$bin" calibrate --session "$work/r19/session.ini" --method kf --stream --monitor "$work/r19/mon.jsonl" \
   --monitor-interval 100 --out "$work/r19/stream.json" < "$work/r19/imu.csv" > /dev/null
