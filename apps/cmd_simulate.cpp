@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -66,7 +67,7 @@ std::vector<double> angles_deg(const std::string& option, const std::string& tex
 }
 
 void print_simulation(const SimulatedSession& sim, const SessionSimulation& spec,
-                      const std::string& out_dir, double seconds) {
+                      const std::string& session_file, double seconds) {
   const bool noise = spec.noise && !spec.perfect;
   std::cout << "Simulated plan '" << sim.plan.name << "' (" << sim.plan.path << "), sensor '"
             << sim.profile.name << "'\n  " << sim.samples << " samples at " << spec.rate_hz
@@ -83,7 +84,7 @@ void print_simulation(const SimulatedSession& sim, const SessionSimulation& spec
   }
   if (sim.saturated > 0)
     std::cout << "  WARNING: " << sim.saturated << " samples clipped at the sensor range\n";
-  std::cout << "  session: " << out_dir << "/session.ini\n  injected coefficients (truth.json):\n";
+  std::cout << "  session: " << session_file << "\n  injected coefficients (truth.json):\n";
   const auto truth = sim.truth.coefficients();
   for (const auto& info : coefficient_catalog()) {
     const double v = truth.at(info.name);
@@ -97,7 +98,7 @@ int cmd_simulate(const std::vector<std::string>& args) {
   SessionSimulation spec;
   std::string out_dir;
   double angle_sigma_arcsec = 0.0, non_orth_arcsec = 0.0, base_heading_deg = 0.0;
-  std::string base_level = "0,0", mounting = "0,0,0";
+  std::string base_level = "0,0", mounting = "0,0,0", chamber_path;
   unsigned long long seed = 1;
   // clang-format off
   d.add_options()
@@ -106,6 +107,9 @@ int cmd_simulate(const std::vector<std::string>& args) {
       ("sensor", po::value(&spec.data_sensor_path)->required(),
        "sensor profile INI (config/sensors/*.ini)")
       ("out", po::value(&out_dir)->required(), "output session directory")
+      ("chamber", po::value(&chamber_path),
+       "in a thermal chamber (config/chambers/*.ini): soaks, one session per soak in DIR/soak-K "
+       "listed by DIR/chamber.ini; or a ramp, one session with the plan repeated")
       ("rate", po::value(&spec.rate_hz)->default_value(100.0), "IMU output rate [Hz]")
       ("seed", po::value(&seed)->default_value(1), "seed of all random draws")
       ("no-noise", "no sensor noise (coefficients still drawn)")
@@ -156,15 +160,34 @@ int cmd_simulate(const std::vector<std::string>& args) {
   std::vector<std::pair<std::string, std::string>> outputs;
   for (const char* f : {"imu.csv", "session.ini", "plan.ini", "sensor.ini", "truth.json"})
     outputs.emplace_back("output", out_dir + "/" + f);
-  refuse_overwrite({{"plan", spec.plan_path}, {"sensor profile", spec.data_sensor_path}}, outputs);
+  refuse_overwrite({{"plan", spec.plan_path},
+                    {"sensor profile", spec.data_sensor_path},
+                    {"chamber", chamber_path}},
+                   outputs);
+  std::optional<ChamberProgram> chamber;
+  if (!chamber_path.empty()) chamber = ChamberProgram::load(chamber_path);
   const bool merge = check_out_dir(out_dir, vm->count("force") > 0);
   const auto t0 = std::chrono::steady_clock::now();
   SimulatedSession sim;
   write_directory_whole(
       out_dir, kSimulationMarker,
-      [&](const std::string& dir) { sim = simulate_session(dir, spec); }, merge);
-  print_simulation(sim, spec, out_dir,
-                   std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      [&](const std::string& dir) {
+        if (!chamber) {
+          sim = simulate_session(dir, spec);
+          return;
+        }
+        const ChamberSimulation c = simulate_chamber(dir, spec, *chamber);
+        sim = c.sessions.back();
+        if (c.sessions.size() > 1)
+          std::cout << c.sessions.size() << " soaks: " << out_dir
+                    << "/chamber.ini lists their sessions (sinscal thermal --chamber)\n";
+      },
+      merge);
+  const bool soaks = chamber && chamber->type == ChamberProgram::Type::Soaks;
+  print_simulation(
+      sim, spec,
+      out_dir + (soaks ? "/soak-" + std::to_string(chamber->soaks_c.size()) : "") + "/session.ini",
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   return 0;
 }
 

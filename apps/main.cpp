@@ -23,7 +23,8 @@ const char* kUsage =
     "  diagnose   what the calibrated model misses on a table session: the effect, its\n"
     "             magnitude and the gain of adding it (model discovery)\n"
     "  allan      Allan deviation of a static record or pose, fitted noise terms, plot\n"
-    "  design     the accuracy a plan will give, predicted without data (table, targets)\n";
+    "  design     the accuracy a plan will give, predicted without data (table, targets)\n"
+    "  thermal    thermal calibration from a chamber's soaks: coefficients against temperature\n";
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -44,6 +45,7 @@ int main(int argc, char** argv) {
     if (command == "diagnose") return cmd_diagnose(args);
     if (command == "allan") return cmd_allan(args);
     if (command == "design") return cmd_design(args);
+    if (command == "thermal") return cmd_thermal(args);
     std::cerr << "sinscal: unknown command '" << command << "'\n" << kUsage;
     return kUsageError;
   } catch (const po::error& e) {

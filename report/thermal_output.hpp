@@ -1,0 +1,33 @@
+// A chamber's thermal calibration as files (docs/formats.md "Thermal results"): result.json
+// with the coefficients at T0 and the thermal coefficients with sigmas, the soaks and each
+// family's degree test; the compensation table (each coefficient on a temperature grid).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "filter/thermal/soak_fit.hpp"
+#include "report/result.hpp"
+
+namespace sinscal {
+
+/// The fit's coefficients (at T0, and the thermal ones), engineering units, sigma from its
+/// covariance.
+ResultCoefficients thermal_coefficients(const ThermalFit& fit);
+
+/// One soak in the result: its session, result file and temperatures.
+struct SoakRecord {
+  std::string session, result;
+  double accel_temperature_c = 0.0, gyro_temperature_c = 0.0, span_c = 0.0;
+  double nis_per_dof = 0.0;
+};
+/// The "thermal" section of result.json.
+nlohmann::ordered_json thermal_section(const ThermalFit& fit, const std::vector<SoakRecord>& soaks);
+
+/// The compensation table: every fitted coefficient (not the thermal ones) at each temperature
+/// from `from_c` to `to_c` in steps of `step_c`, value and sigma, engineering units. Written
+/// atomically.
+void write_thermal_table(const std::string& path, const ThermalFit& fit, double from_c, double to_c,
+                         double step_c);
+
+}  // namespace sinscal
