@@ -62,6 +62,10 @@ int cmd_thermal(const std::vector<std::string>& args) {
   fo.significance = significance;
   const ThermalFit fit = fit_soaks(estimates, fo);
   nlohmann::ordered_json sections;
+  sections["method"] = {{"name", "thermal"},
+                        {"per_soak", "kf"},
+                        {"soaks", estimates.size()},
+                        {"body_frame", "table"}};
   sections["thermal"] = thermal_section(fit, records);
   write_result_json(out_dir + "/result.json", thermal_coefficients(fit), sections);
   const double from = std::floor(t_lo / grid_step) * grid_step;

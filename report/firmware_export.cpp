@@ -355,7 +355,7 @@ std::string c_header(const FirmwareExport& e) {
       " */\n#pragma once\n#ifndef SINSCAL_IMU_CALIBRATION_H\n#define SINSCAL_IMU_CALIBRATION_H\n\n";
   h += "#define SINSCAL_EXPORT_FORMAT_VERSION 1\n";
   for (const auto& f : coefficient_families()) {
-    if (f.base) continue;
+    if (f.base || f.thermal()) continue;  // thermal results are refused (read_export_input)
     std::string macro = "SINSCAL_HAS_" + f.name;
     for (char& c : macro) c = c == '.' ? '_' : static_cast<char>(std::toupper(c));
     h += "#define " + macro + (e.has(f.name) ? " 1\n" : " 0\n");
@@ -458,6 +458,13 @@ FirmwareExport export_of(const std::string& path, const nlohmann::json& j,
     missing.insert(missing.end(), lacking.begin(), lacking.end());
     e.families.push_back(f.name);
   }
+  std::vector<std::string> thermal;
+  for (const auto& f : e.families)
+    if (coefficient_family_info(f).thermal()) thermal.push_back(f);
+  if (!thermal.empty())
+    fail(path, "thermal coefficients (" + joined(thermal) +
+                   "): the export does not carry a temperature compensation yet; the thermal "
+                   "result's thermal_table.csv gives each coefficient on a temperature grid");
   if (!missing.empty())
     fail(path, "coefficients missing (" + joined(missing) +
                    "): a firmware correction needs every coefficient of the base 24 and of each "

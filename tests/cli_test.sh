@@ -338,5 +338,41 @@ check "design of an orientation plan missing families exits 0" test $? -eq 0
 check "... names the orientation to append" grep -qE '^  accel.scale: .*append body .* (up|down), .* \(heading .*\(observed\)$' "$work/zonly.txt"
 check "... and writes it as orientation advice" python3 -c "import json,sys; a=json.load(open('$work/zonly/design.json'))['separation_advice']; sys.exit(not any(x['append_kind'] == 'orientation' and x['orientation'] and x['turn'] is None for x in a))"
 
+# Thermal calibration: a chamber's six soaks, simulated and fitted; the ramp of the same unit
+# calibrated by the filter with the thermal states agrees with the fit; calibrated without them
+# (a room-temperature profile) it is flagged, not reported as right.
+"$bin" simulate --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog-thermal.ini" \
+  --chamber "$src/config/chambers/soaks6.ini" --rate 50 --seed 3 --out "$work/soaks" > "$work/soaks.txt"
+check "simulate --chamber (soaks) exits 0" test $? -eq 0
+check "... writes six soak sessions and chamber.ini" test -f "$work/soaks/soak-6/session.ini" -a -f "$work/soaks/chamber.ini"
+check "... their logs have temperature columns" grep -q 'temperature_accel' "$work/soaks/soak-1/imu.csv"
+"$bin" thermal --chamber "$work/soaks/chamber.ini" --out "$work/thermal" > "$work/thermal.txt"
+check "thermal exits 0" test $? -eq 0
+check "... chooses degree 2 for the gyro bias (quadratic in the truth)" grep -qE '^  gyro.bias +degree 2 of 3' "$work/thermal.txt"
+check "... and 1 for the accelerometer misalignment" grep -qE '^  accel.misalignment +degree 1 of 1' "$work/thermal.txt"
+check "... result.json has the thermal section and coefficients" python3 -c "import json,sys; r=json.load(open('$work/thermal/result.json')); sys.exit(not (r['thermal']['reference_temperature_c'] == 20 and 'gyro.bias_temp2.x' in r['coefficients'] and len(r['thermal']['soaks']) == 6))"
+check "... the compensation table runs -40 ... 60 C in 5 C steps" test "$(grep -cE '^-?[0-9]' "$work/thermal/thermal_table.csv")" -eq 21
+check "... thermal coefficients within 4 sigma of the truth" python3 -c "
+import json,sys
+r=json.load(open('$work/thermal/result.json'))['coefficients']; t=json.load(open('$work/soaks/soak-1/truth.json'))['coefficients']
+z=[abs(v['value']-t[k]['value'])/v['sigma'] for k,v in r.items() if '_temp' in k]
+sys.exit(not (len(z) >= 30 and max(z) < 4))"
+"$bin" simulate --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog-thermal.ini" \
+  --chamber "$src/config/chambers/ramp.ini" --rate 50 --seed 3 --out "$work/ramp" > /dev/null
+check "simulate --chamber (ramp) exits 0" test $? -eq 0
+"$bin" calibrate --method kf --session "$work/ramp/session.ini" --out "$work/ramp.json" > "$work/ramp.txt"
+check "the ramp calibrates with the thermal states" test $? -eq 0
+"$bin" compare "$work/thermal/result.json" "$work/ramp.json" --max-sigma 4 > "$work/ramp-compare.txt"
+check "... compare finds only the dT/dt terms, which soaks cannot have (exit 3)" test $? -eq 3
+check "... every coefficient both have within 4 sigma" python3 -c "
+import re,sys
+rows=[l.split() for l in open('$work/ramp-compare.txt') if re.match(r'^(gyro|accel)\\.', l)]
+both=[r for r in rows if r[1] != '-' and r[2] != '-']; only=[r[0] for r in rows if r[1] == '-']
+sys.exit(not (len(both) >= 50 and max(abs(float(r[4])) for r in both) < 4 and all('bias_temp_rate' in n for n in only) and len(only) == 3))"
+sed "s|sensor = sensor.ini|sensor = $src/config/sensors/nav-fog.ini|" "$work/ramp/session.ini" > "$work/ramp/room.ini"
+"$bin" calibrate --method kf --session "$work/ramp/room.ini" --out "$work/room.json" > /dev/null 2> "$work/room.err"
+check "the ramp calibrated without thermal terms is flagged (exit 2)" test $? -eq 2
+check "... as a diverging filter" contains "$work/room.err" "filter diverging"
+
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0
