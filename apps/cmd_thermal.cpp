@@ -8,6 +8,7 @@
 #include "apps/cli.hpp"
 #include "apps/commands.hpp"
 #include "filter/thermal/soak_run.hpp"
+#include "models/units.hpp"
 #include "report/output.hpp"
 #include "report/thermal_output.hpp"
 
@@ -16,7 +17,7 @@ namespace sinscal::cli {
 int cmd_thermal(const std::vector<std::string>& args) {
   po::options_description d("sinscal thermal options");
   std::string chamber_path, out_dir;
-  double significance = 0.01, grid_step = 5.0;
+  double significance = 0.01, grid_step = 5.0, table_sigma = 2.5;
   // clang-format off
   d.add_options()
       ("help,h", "this help")
@@ -25,19 +26,26 @@ int cmd_thermal(const std::vector<std::string>& args) {
       ("out", po::value(&out_dir)->required(), "output directory (created; results are replaced)")
       ("significance", po::value(&significance),
        "of each degree's chi-square test (default 0.01)")
-      ("grid-step", po::value(&grid_step), "C between the compensation table's rows (default 5)");
+      ("grid-step", po::value(&grid_step), "C between the compensation table's rows (default 5)")
+      ("table-sigma", po::value(&table_sigma),
+       "the table's attitude error per dwell and axis, arcsec (default 2.5)")
+      ("no-plot", "no DIR/thermal.png (gnuplot)");
   // clang-format on
-  const auto vm = parse(args, d,
-                        "Usage: sinscal thermal --chamber chamber.ini --out DIR\n"
-                        "Thermal calibration from soaks: each soak calibrated by the Kalman "
-                        "filter at its temperature,\nthen each coefficient fitted against "
-                        "temperature, its polynomial degree chosen by a chi-square test.\n"
-                        "Writes DIR/soak-K.json, DIR/result.json, DIR/thermal_table.csv.");
+  const auto vm =
+      parse(args, d,
+            "Usage: sinscal thermal --chamber chamber.ini --out DIR\n"
+            "Thermal calibration from soaks: each soak calibrated by the Kalman "
+            "filter at its temperature,\nthen each coefficient fitted against "
+            "temperature, its polynomial degree chosen by a chi-square test.\n"
+            "Writes DIR/soak-K.json, DIR/result.json, DIR/thermal_table.csv, DIR/thermal.png.");
   if (!vm) return 0;
   if (!(significance > 0.0 && significance < 0.5))
     throw UsageError("--significance must be above 0 and below 0.5");
   if (!(grid_step > 0.0)) throw UsageError("--grid-step must be positive");
-  const ChamberSoaks chamber = ChamberSoaks::load(chamber_path);
+  if (!(table_sigma > 0.0 && table_sigma < 3600.0))
+    throw UsageError("--table-sigma must be above 0 and below 3600 arcsec");
+  ChamberSoaks chamber = ChamberSoaks::load(chamber_path);
+  chamber.table_sigma = table_sigma * units::arcsec;
   std::filesystem::create_directories(out_dir);
   std::vector<SoakEstimate> estimates;
   std::vector<SoakRecord> records;
@@ -71,8 +79,21 @@ int cmd_thermal(const std::vector<std::string>& args) {
   const double from = std::floor(t_lo / grid_step) * grid_step;
   const double to = std::ceil(t_hi / grid_step) * grid_step;
   write_thermal_table(out_dir + "/thermal_table.csv", fit, from, to, grid_step);
-  std::printf("\nDegrees in T - T0 (T0 = %g C), chosen by chi-square tests at %g:\n", reference,
-              significance);
+  std::string plotted = out_dir + "/thermal.png";
+  if (vm->count("no-plot")) {
+    plotted.clear();
+  } else {
+    try {
+      plot_thermal(fit, estimates, plotted);
+    } catch (const std::runtime_error& e) {
+      std::fprintf(stderr, "sinscal thermal: warning: no plot: %s\n", e.what());
+      plotted.clear();
+    }
+  }
+  std::printf(
+      "\nDegrees in T - T0 (T0 = %g C), chosen by chi-square tests at %g over the %zu "
+      "families:\n",
+      reference, significance, fit.degrees.size());
   for (const auto& t : fit.degrees) {
     std::string chi2;
     for (double c : t.chi2) chi2 += fmt(" %.1f", c);
@@ -80,8 +101,8 @@ int cmd_thermal(const std::vector<std::string>& args) {
                 t.family.c_str(), t.degree, t.max_degree, chi2.c_str(), t.threshold);
   }
   std::printf("Joint fit: chi2 %.1f on %d dof, p = %.3g\n", fit.chi2, fit.dof, fit.p_value);
-  std::printf("Written: %s/result.json, %s/thermal_table.csv (%g ... %g C)\n", out_dir.c_str(),
-              out_dir.c_str(), from, to);
+  std::printf("Written: %s/result.json, %s/thermal_table.csv (%g ... %g C)%s%s\n", out_dir.c_str(),
+              out_dir.c_str(), from, to, plotted.empty() ? "" : ", ", plotted.c_str());
   return 0;
 }
 

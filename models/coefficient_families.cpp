@@ -17,6 +17,123 @@ int off_col(int k) {
   return j < i ? j : j + 1;
 }
 
+// Thermal terms (models/imu_error_model.hpp), after the others.
+void add_thermal_families(std::vector<CoefficientFamily>& t) {
+  const std::vector<std::string> kAxes = {"x", "y", "z"};
+  const std::vector<std::string> kOffDiagonal = {"xy", "xz", "yx", "yz", "zx", "zy"};
+  using namespace units;
+  using F = CoefficientFamily;
+  using O = FamilyOutput;
+  // Bias and scale factor polynomials in T - T0 of
+  // degree 1 to 3 (terms thermal, thermal2, thermal3), misalignment linear in T - T0, and the gyro
+  // bias in the rate of change of temperature (term thermal).
+  const std::string chamber =
+      "soaks at several temperatures, or a chamber ramp, with a temperature column in the log";
+  const char* const power[3] = {"C", "C^2", "C^3"};
+  const char* const degree_name[3] = {"linear", "quadratic", "cubic"};
+  const char* const terms[3] = {"thermal", "thermal2", "thermal3"};
+  const double bias_prior[2][3] = {{0.1 * deg_per_h, 0.01 * deg_per_h, 0.001 * deg_per_h},
+                                   {50 * ug, 1 * ug, 0.05 * ug}};
+  const double scale_prior[3] = {20 * ppm, 1 * ppm, 0.05 * ppm};
+  for (int d = 0; d < 3; ++d) {
+    const std::string n = std::to_string(d + 1), per = power[d];
+    const std::string degree = degree_name[d];
+    using Value = double& (*)(ImuErrorModel&, int);
+    static const Value gyro_bias[3] = {
+        [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias_temp(k, 0); },
+        [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias_temp(k, 1); },
+        [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias_temp(k, 2); }};
+    static const Value accel_bias[3] = {
+        [](ImuErrorModel& m, int k) -> double& { return m.accel.bias_temp(k, 0); },
+        [](ImuErrorModel& m, int k) -> double& { return m.accel.bias_temp(k, 1); },
+        [](ImuErrorModel& m, int k) -> double& { return m.accel.bias_temp(k, 2); }};
+    static const Value gyro_scale[3] = {
+        [](ImuErrorModel& m, int k) -> double& { return m.gyro.scale_temp(k, 0); },
+        [](ImuErrorModel& m, int k) -> double& { return m.gyro.scale_temp(k, 1); },
+        [](ImuErrorModel& m, int k) -> double& { return m.gyro.scale_temp(k, 2); }};
+    static const Value accel_scale[3] = {
+        [](ImuErrorModel& m, int k) -> double& { return m.accel.scale_temp(k, 0); },
+        [](ImuErrorModel& m, int k) -> double& { return m.accel.scale_temp(k, 1); },
+        [](ImuErrorModel& m, int k) -> double& { return m.accel.scale_temp(k, 2); }};
+    t.push_back(F{"gyro.bias_temp" + n,
+                  "gyro.bias_temp" + n,
+                  kAxes,
+                  {{"deg/h/" + per, deg_per_h}, {"deg/s/" + per, deg_per_s}, {"rad/s/" + per, 1.0}},
+                  O::Gyro,
+                  false,
+                  terms[d],
+                  bias_prior[0][d],
+                  false,
+                  "gyro bias, " + degree + " in the temperature",
+                  gyro_bias[d],
+                  chamber});
+    t.push_back(F{"accel.bias_temp" + n,
+                  "accel.bias_temp" + n,
+                  kAxes,
+                  {{"ug/" + per, ug}, {"mg/" + per, mg}, {"m/s^2/" + per, 1.0}},
+                  O::Accel,
+                  false,
+                  terms[d],
+                  bias_prior[1][d],
+                  false,
+                  "accelerometer bias, " + degree + " in the temperature",
+                  accel_bias[d],
+                  chamber});
+    t.push_back(F{"gyro.scale_temp" + n,
+                  "gyro.scale_temp" + n,
+                  kAxes,
+                  {{"ppm/" + per, ppm}, {"1/" + per, 1.0}},
+                  O::Gyro,
+                  false,
+                  terms[d],
+                  scale_prior[d],
+                  false,
+                  "gyro scale factor, " + degree + " in the temperature",
+                  gyro_scale[d],
+                  chamber});
+    t.push_back(F{"accel.scale_temp" + n,
+                  "accel.scale_temp" + n,
+                  kAxes,
+                  {{"ppm/" + per, ppm}, {"1/" + per, 1.0}},
+                  O::Accel,
+                  false,
+                  terms[d],
+                  scale_prior[d],
+                  false,
+                  "accelerometer scale factor, " + degree + " in the temperature",
+                  accel_scale[d],
+                  chamber});
+    if (d > 0) continue;
+    const std::vector<UnitToken> angle_per_c = {{"arcsec/C", arcsec}, {"rad/C", 1.0}};
+    t.push_back(F{"gyro.misalignment_temp1", "gyro.misalignment_temp1", kOffDiagonal, angle_per_c,
+                  O::Gyro, false, terms[0], 1 * arcsec, false,
+                  "gyro misalignment, linear in the temperature",
+                  [](ImuErrorModel& m, int k) -> double& {
+                    return m.gyro.misalignment_temp(off_row(k), off_col(k));
+                  },
+                  chamber});
+    t.push_back(F{"accel.misalignment_temp1", "accel.misalignment_temp1", kOffDiagonal, angle_per_c,
+                  O::Accel, false, terms[0], 1 * arcsec, false,
+                  "accelerometer misalignment, linear in the temperature",
+                  [](ImuErrorModel& m, int k) -> double& {
+                    return m.accel.misalignment_temp(off_row(k), off_col(k));
+                  },
+                  chamber});
+    t.push_back(F{"gyro.bias_temp_rate",
+                  "gyro.bias_temp_rate",
+                  kAxes,
+                  {{"deg/h/(C/min)", deg_per_h * 60.0}, {"rad/s/(C/s)", 1.0}},
+                  O::Gyro,
+                  false,
+                  terms[0],
+                  1 * deg_per_h * 60.0,
+                  false,
+                  "gyro bias in the rate of change of temperature",
+                  [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias_temp_rate(k); },
+                  "a chamber ramp (the temperature changing while the plan runs)"});
+  }
+}
+
 std::vector<CoefficientFamily> make_families() {
   // Local, not namespace-scope: the table may be built during another file's static
   // initialization.
@@ -144,114 +261,7 @@ std::vector<CoefficientFamily> make_families() {
                 "accelerometer bias drift (linear in the time since the start of the plan)",
                 [](ImuErrorModel& m, int k) -> double& { return m.accel.bias_drift(k); },
                 "orientations revisited later in the session"});
-  // Thermal terms (models/imu_error_model.hpp): bias and scale factor polynomials in T - T0 of
-  // degree 1 to 3 (terms thermal, thermal2, thermal3), misalignment linear in T - T0, and the gyro
-  // bias in the rate of change of temperature (term thermal).
-  const std::string chamber =
-      "soaks at several temperatures, or a chamber ramp, with a temperature column in the log";
-  const char* const power[3] = {"C", "C^2", "C^3"};
-  const char* const degree_name[3] = {"linear", "quadratic", "cubic"};
-  const char* const terms[3] = {"thermal", "thermal2", "thermal3"};
-  const double bias_prior[2][3] = {{0.1 * deg_per_h, 0.01 * deg_per_h, 0.001 * deg_per_h},
-                                   {50 * ug, 1 * ug, 0.05 * ug}};
-  const double scale_prior[3] = {20 * ppm, 1 * ppm, 0.05 * ppm};
-  for (int d = 0; d < 3; ++d) {
-    const std::string n = std::to_string(d + 1), per = power[d];
-    const std::string degree = degree_name[d];
-    using Value = double& (*)(ImuErrorModel&, int);
-    static const Value gyro_bias[3] = {
-        [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias_temp(k, 0); },
-        [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias_temp(k, 1); },
-        [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias_temp(k, 2); }};
-    static const Value accel_bias[3] = {
-        [](ImuErrorModel& m, int k) -> double& { return m.accel.bias_temp(k, 0); },
-        [](ImuErrorModel& m, int k) -> double& { return m.accel.bias_temp(k, 1); },
-        [](ImuErrorModel& m, int k) -> double& { return m.accel.bias_temp(k, 2); }};
-    static const Value gyro_scale[3] = {
-        [](ImuErrorModel& m, int k) -> double& { return m.gyro.scale_temp(k, 0); },
-        [](ImuErrorModel& m, int k) -> double& { return m.gyro.scale_temp(k, 1); },
-        [](ImuErrorModel& m, int k) -> double& { return m.gyro.scale_temp(k, 2); }};
-    static const Value accel_scale[3] = {
-        [](ImuErrorModel& m, int k) -> double& { return m.accel.scale_temp(k, 0); },
-        [](ImuErrorModel& m, int k) -> double& { return m.accel.scale_temp(k, 1); },
-        [](ImuErrorModel& m, int k) -> double& { return m.accel.scale_temp(k, 2); }};
-    t.push_back(F{"gyro.bias_temp" + n,
-                  "gyro.bias_temp" + n,
-                  kAxes,
-                  {{"deg/h/" + per, deg_per_h}, {"deg/s/" + per, deg_per_s}, {"rad/s/" + per, 1.0}},
-                  O::Gyro,
-                  false,
-                  terms[d],
-                  bias_prior[0][d],
-                  false,
-                  "gyro bias, " + degree + " in the temperature",
-                  gyro_bias[d],
-                  chamber});
-    t.push_back(F{"accel.bias_temp" + n,
-                  "accel.bias_temp" + n,
-                  kAxes,
-                  {{"ug/" + per, ug}, {"mg/" + per, mg}, {"m/s^2/" + per, 1.0}},
-                  O::Accel,
-                  false,
-                  terms[d],
-                  bias_prior[1][d],
-                  false,
-                  "accelerometer bias, " + degree + " in the temperature",
-                  accel_bias[d],
-                  chamber});
-    t.push_back(F{"gyro.scale_temp" + n,
-                  "gyro.scale_temp" + n,
-                  kAxes,
-                  {{"ppm/" + per, ppm}, {"1/" + per, 1.0}},
-                  O::Gyro,
-                  false,
-                  terms[d],
-                  scale_prior[d],
-                  false,
-                  "gyro scale factor, " + degree + " in the temperature",
-                  gyro_scale[d],
-                  chamber});
-    t.push_back(F{"accel.scale_temp" + n,
-                  "accel.scale_temp" + n,
-                  kAxes,
-                  {{"ppm/" + per, ppm}, {"1/" + per, 1.0}},
-                  O::Accel,
-                  false,
-                  terms[d],
-                  scale_prior[d],
-                  false,
-                  "accelerometer scale factor, " + degree + " in the temperature",
-                  accel_scale[d],
-                  chamber});
-    if (d > 0) continue;
-    const std::vector<UnitToken> angle_per_c = {{"arcsec/C", arcsec}, {"rad/C", 1.0}};
-    t.push_back(F{"gyro.misalignment_temp1", "gyro.misalignment_temp1", kOffDiagonal, angle_per_c,
-                  O::Gyro, false, terms[0], 1 * arcsec, false,
-                  "gyro misalignment, linear in the temperature",
-                  [](ImuErrorModel& m, int k) -> double& {
-                    return m.gyro.misalignment_temp(off_row(k), off_col(k));
-                  },
-                  chamber});
-    t.push_back(F{"accel.misalignment_temp1", "accel.misalignment_temp1", kOffDiagonal, angle_per_c,
-                  O::Accel, false, terms[0], 1 * arcsec, false,
-                  "accelerometer misalignment, linear in the temperature",
-                  [](ImuErrorModel& m, int k) -> double& {
-                    return m.accel.misalignment_temp(off_row(k), off_col(k));
-                  },
-                  chamber});
-    t.push_back(F{"gyro.bias_temp_rate",
-                  "gyro.bias_temp_rate",
-                  kAxes,
-                  {{"deg/h/(C/min)", deg_per_h * 60.0}, {"rad/s/(C/s)", 1.0}},
-                  O::Gyro,
-                  false,
-                  terms[0],
-                  1 * deg_per_h * 60.0,
-                  false,
-                  "gyro bias in the rate of change of temperature",
-                  [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias_temp_rate(k); },
-                  "a chamber ramp (the temperature changing while the plan runs)"});
-  }
+  add_thermal_families(t);
   return t;
 }
 

@@ -458,9 +458,21 @@ FirmwareExport export_of(const std::string& path, const nlohmann::json& j,
     missing.insert(missing.end(), lacking.begin(), lacking.end());
     e.families.push_back(f.name);
   }
+  // Thermal families: zero ones (a model written whole) add nothing; any other is refused.
   std::vector<std::string> thermal;
-  for (const auto& f : e.families)
-    if (coefficient_family_info(f).thermal()) thermal.push_back(f);
+  for (const auto& f : e.families) {
+    const CoefficientFamily& info = coefficient_family_info(f);
+    if (!info.thermal()) continue;
+    for (int k = 0; k < info.size(); ++k)
+      if (info.value(e.model, k) != 0.0) {
+        thermal.push_back(f);
+        break;
+      }
+  }
+  e.families.erase(
+      std::remove_if(e.families.begin(), e.families.end(),
+                     [](const std::string& f) { return coefficient_family_info(f).thermal(); }),
+      e.families.end());
   if (!thermal.empty())
     fail(path, "thermal coefficients (" + joined(thermal) +
                    "): the export does not carry a temperature compensation yet; the thermal "

@@ -30,4 +30,13 @@ nlohmann::ordered_json thermal_section(const ThermalFit& fit, const std::vector<
 void write_thermal_table(const std::string& path, const ThermalFit& fit, double from_c, double to_c,
                          double step_c);
 
+/// The plot script: one panel per fitted family whose degree is above 0 (the ones that vary), each
+/// component's per-soak estimates with their 1-sigma bars and the fitted curve (dashed), against
+/// temperature; written with its data inline (gnuplot redraws it).
+std::string thermal_plot_script(const ThermalFit& fit, const std::vector<SoakEstimate>& soaks,
+                                const std::string& png_path);
+/// Writes the script beside the PNG and runs gnuplot (report/gnuplot.hpp).
+void plot_thermal(const ThermalFit& fit, const std::vector<SoakEstimate>& soaks,
+                  const std::string& png_path, const std::string& gnuplot = "gnuplot");
+
 }  // namespace sinscal

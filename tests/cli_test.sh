@@ -351,6 +351,9 @@ check "thermal exits 0" test $? -eq 0
 check "... chooses degree 2 for the gyro bias (quadratic in the truth)" grep -qE '^  gyro.bias +degree 2 of 3' "$work/thermal.txt"
 check "... and 1 for the accelerometer misalignment" grep -qE '^  accel.misalignment +degree 1 of 1' "$work/thermal.txt"
 check "... result.json has the thermal section and coefficients" python3 -c "import json,sys; r=json.load(open('$work/thermal/result.json')); sys.exit(not (r['thermal']['reference_temperature_c'] == 20 and 'gyro.bias_temp2.x' in r['coefficients'] and len(r['thermal']['soaks']) == 6))"
+check "... draws thermal.png" cmp -s -n 4 "$work/thermal/thermal.png" <(printf '\x89PNG')
+check "... a panel per varying family, the gyro bias quadratic" contains "$work/thermal/thermal.gp" "set title 'gyro.bias: degree 2'"
+check "... six panels" test "$(grep -c '^set title' "$work/thermal/thermal.gp")" -eq 6
 check "... the compensation table runs -40 ... 60 C in 5 C steps" test "$(grep -cE '^-?[0-9]' "$work/thermal/thermal_table.csv")" -eq 21
 check "... thermal coefficients within 4 sigma of the truth" python3 -c "
 import json,sys

@@ -248,8 +248,9 @@ ThermalFit fit_soaks(const std::vector<SoakEstimate>& soaks, const ThermalFitOpt
     t.family = f.name;
     t.max_degree = f.max_degree;
     t.dof_step = static_cast<int>(f.positions.size());
-    t.threshold = boost::math::quantile(boost::math::complement(
-        boost::math::chi_squared_distribution<double>(t.dof_step), options.significance));
+    t.threshold = boost::math::quantile(
+        boost::math::complement(boost::math::chi_squared_distribution<double>(t.dof_step),
+                                options.significance / static_cast<double>(families.size())));
     t.chi2.push_back(solve(s, f.positions, parameters(f, 0)).chi2);
     while (t.degree < f.max_degree) {
       const double next = solve(s, f.positions, parameters(f, t.degree + 1)).chi2;

@@ -1,10 +1,10 @@
 // Thermal calibration from soaks: one calibration per soak (each at its own temperature), then a
 // weighted least-squares fit of each coefficient against temperature with the full covariance of
 // the per-soak estimates. Each family's polynomial degree is chosen by a test, not by hand: the
-// degree rises while the drop in chi-square is beyond the chi-square quantile of the family's
-// size (the family table says how far: a family F has degrees 1 ... d when F_temp1 ... F_tempd
-// exist). Degree k of family F is the thermal family F_tempk (models/coefficient_families.hpp);
-// degree 0 is F itself at the reference temperature T0.
+// degree rises while the drop in chi-square is beyond the chi-square quantile, at the significance
+// over the number of families, of the family's size (the family table says how far: a family F has
+// degrees 1 ... d when F_temp1 ... F_tempd exist). Degree k of family F is the thermal family
+// F_tempk (models/coefficient_families.hpp); degree 0 is F itself at the reference temperature T0.
 #pragma once
 
 #include <Eigen/Core>
@@ -41,7 +41,9 @@ SoakTemperature measure_soak_temperature(const LogFormat& log);
 struct ThermalFitOptions {
   double reference_temperature_c = 25.0;  // T0
   int max_degree = 3;                     // the family table allows at most 3
-  double significance = 0.01;             // of each degree's chi-square test
+  /// Of the whole choice: each family's tests at significance / families (Bonferroni), so a fit
+  /// whose truth has the degrees the table allows takes a degree too many in at most this share.
+  double significance = 0.01;
 };
 
 /// How one family's degree was chosen.

@@ -63,6 +63,7 @@ SoakRun calibrate_soak(const std::string& session_path, const ChamberSoaks& cham
   const SensorProfile profile = SensorProfile::load(r.session.sensor_file);
   CalibratorOptions o = calibrator_options_from_profile(profile);
   o.time_offset = r.session.time_offset;
+  o.attitude_sigma = chamber.table_sigma;
   const auto& cat = coefficient_catalog();
   for (const auto& f : coefficient_families()) {
     if (!f.thermal()) continue;

@@ -9,6 +9,7 @@
 
 #include "filter/kalman/kalman_run.hpp"
 #include "filter/thermal/soak_fit.hpp"
+#include "models/units.hpp"
 
 namespace sinscal {
 
@@ -18,6 +19,9 @@ struct ChamberSoaks {
   std::string path;
   std::vector<std::string> sessions;
   double tolerance_c = 1.0;
+  /// The table's attitude error per dwell and axis the soaks' filters take (rad; `thermal
+  /// --table-sigma`, docs/conventions.md).
+  double table_sigma = 2.5 * units::arcsec;
   /// Throws ConfigError naming file, line and key.
   static ChamberSoaks load(const std::string& path);
   /// Whether a file is a chamber session (has [thermal] soaks).
