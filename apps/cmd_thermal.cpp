@@ -55,7 +55,7 @@ int cmd_thermal(const std::vector<std::string>& args) {
     const SoakRun r = calibrate_soak(chamber.sessions[k], chamber);
     const std::string result = out_dir + "/soak-" + std::to_string(k + 1) + ".json";
     write_result_json(result, result_coefficients(r.run), result_sections(r.run));
-    reference = SensorProfile::load(r.session.sensor_file).reference_temperature_c;
+    reference = r.reference_temperature_c;
     estimates.push_back(r.estimate);
     records.push_back({chamber.sessions[k], result, r.temperature.accel_mean_c,
                        r.temperature.gyro_mean_c, r.temperature.max_c - r.temperature.min_c,

@@ -61,6 +61,7 @@ SoakRun calibrate_soak(const std::string& session_path, const ChamberSoaks& cham
                    std::max(T.line_min, T.line_max), msg);
   }
   const SensorProfile profile = SensorProfile::load(r.session.sensor_file);
+  r.reference_temperature_c = profile.reference_temperature_c;
   CalibratorOptions o = calibrator_options_from_profile(profile);
   o.time_offset = r.session.time_offset;
   o.attitude_sigma = chamber.table_sigma;

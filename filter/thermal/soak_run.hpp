@@ -33,6 +33,7 @@ struct SoakRun {
   KalmanRun run;
   SoakTemperature temperature;
   SoakEstimate estimate;
+  double reference_temperature_c = 25.0;  // T0 of the soak's sensor profile
 };
 
 /// Calibrates one soak by the Kalman filter with its session's sensor profile: the thermal
