@@ -10,6 +10,7 @@
 #include "apps/diagnose.hpp"
 #include "filter/diagnosis/diagnosis_table.hpp"
 #include "filter/plausibility/plausibility.hpp"
+#include "filter/thermal/soak_run.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"
@@ -18,11 +19,6 @@
 namespace sinscal::cli {
 
 namespace {
-
-// The dwells' residual chi2 per dof above which the output cautions that the noise model does
-// not hold (a clean nav-fog session: 0.7-1.2; a clean MEMS session, bias instability unmodelled
-// by the dwells: 5).
-constexpr double kNoiseModelCaution = 2.5;
 
 // An extended family of the family table.
 bool is_extended_family(const std::string& name) {
@@ -60,64 +56,11 @@ void add_handheld_options(po::options_description& d, HandheldDiagnoseOptions& h
   // clang-format on
 }
 
-void print_diagnosis(const TableDiagnosis& d) {
-  const DiagnosisReport& r = d.dwells;
-  std::printf("Calibrated model: %zu coefficients, residual chi2 per dof %.3f over %zu dwells",
-              r.initial_parameters.size(), r.initial.fit.chi2_per_dof, r.residuals.size());
-  if (d.turns) std::printf("; the filter's NIS per dof %.3f", d.turns->initial_nis_per_dof);
-  std::printf("\n");
-  if (r.final_fit.fit.chi2_per_dof > kNoiseModelCaution)
-    std::printf(
-        "Caution: with the findings, the dwells' residual is still %.1f times its noise model "
-        "(unmodelled noise such "
-        "as bias instability, or errors beyond the linearization): the tests rescale by it, "
-        "but a finding without a held-out gain is doubtful\n",
-        r.final_fit.fit.chi2_per_dof);
-  if (d.findings.empty())
-    std::printf("Findings: none (no candidate significant at the family-wise level %g)\n", r.alpha);
-  int number = 0;
-  for (const auto& f : d.findings) {
-    std::printf("%d. %s: %s\n", ++number, finding_title(f).c_str(), finding_summary(f).c_str());
-    const CoefficientFamily& info = coefficient_family_info(f.family);
-    int undetermined = 0;
-    for (const auto& c : f.coefficients) {
-      if (c.source.empty()) {
-        ++undetermined;
-        continue;
-      }
-      std::printf("     %-26s %12.4g +- %-10.3g %s\n",
-                  coefficient_catalog()[static_cast<std::size_t>(c.catalog)].name.c_str(),
-                  c.value / info.si_per_unit(), c.sigma / info.si_per_unit(), info.unit().c_str());
-    }
-    for (const auto& c : f.combinations)
-      std::printf("     %s = %.4g +- %.3g %s\n", c.text().c_str(), c.value / info.si_per_unit(),
-                  c.sigma / info.si_per_unit(), info.unit().c_str());
-    if (undetermined > 0 && f.combinations.empty())
-      std::printf("     (%d components not determined on this plan)\n", undetermined);
-    if (!f.ambiguous_with.empty()) {
-      std::printf("   Separated by: %s: %s", f.family.c_str(), f.separated_by.front().c_str());
-      for (std::size_t i = 0; i < f.ambiguous_with.size(); ++i)
-        std::printf("; %s: %s", f.ambiguous_with[i].c_str(), f.separated_by[i + 1].c_str());
-      std::printf("\n");
-    }
-  }
-  for (const auto& c : r.not_separable) {
-    bool turns_tested = false;
-    if (d.turns)
-      for (const auto& round : d.turns->rounds)
-        for (const auto& k : round)
-          turns_tested = turns_tested || (k.family == c.family && k.dof > 0);
-    if (turns_tested) continue;  // the turns separate it
-    std::printf("Not separable on this plan: %s (%zu of its components); separated by %s\n",
-                c.family.c_str(), c.aliased.size(), c.separated_by.c_str());
-  }
-}
-
 }  // namespace
 
 int cmd_diagnose(const std::vector<std::string>& args) {
   po::options_description d("sinscal diagnose options");
-  std::string session_path, out_dir;
+  std::string session_path, out_dir, sensor;
   DiagnosisOptions o;
   double table_sigma = 2.5, min_dwell = 20.0;
   int passes = 0;
@@ -141,7 +84,10 @@ int cmd_diagnose(const std::vector<std::string>& args) {
        "errors: MEMS); 0: automatic (3 when one pass's NIS per dof is above 1.5), 1: about zero")
       ("no-plot", "write no PNG (no gnuplot needed)")
       ("no-kalman", "skip the Kalman-filter test of the effects of the turns")
-      ("force", "run even when the plausibility gate fails");
+      ("force", "run even when the plausibility gate fails")
+      ("sensor", po::value(&sensor),
+       "chamber: the thermal model is this profile's thermal families (default: the soaks' "
+       "profile)");
   // clang-format on
   HandheldDiagnoseOptions h;
   add_handheld_options(d, h);
@@ -154,9 +100,16 @@ int cmd_diagnose(const std::vector<std::string>& args) {
                         "(effects of the turns) are then tested in the Kalman filter (needs the\n"
                         "session's sensor profile). A session without a plan is hand-held:\n"
                         "calibrated table-free, its poses and turns diagnosed, plus the noise of\n"
-                        "its longest pose.");
+                        "its longest pose. A chamber session ([thermal] soaks) is calibrated\n"
+                        "soak by soak and the thermal families its model lacks are tested.");
   if (!vm) return 0;
   if (!(o.alpha > 0.0 && o.alpha < 0.5)) throw UsageError("--alpha must be in (0, 0.5)");
+  if (!(table_sigma > 0.0 && table_sigma < 3600.0))
+    throw UsageError("--table-sigma must be above 0 and below 3600 arcsec");
+  if (ChamberSoaks::is_chamber(session_path))
+    return diagnose_chamber(session_path, {out_dir, o.alpha, table_sigma, sensor});
+  if (!sensor.empty())
+    throw UsageError("--sensor acts on chamber sessions; " + session_path + " is not one");
   const Session any = Session::load(session_path, Session::PlanNeed::Optional);
   if (any.six_face) return diagnose_six_face_session(any, out_dir, o.alpha);
   if (!any.has_plan) {
@@ -185,8 +138,6 @@ int cmd_diagnose(const std::vector<std::string>& args) {
     if (given(*vm, name))
       throw UsageError("--" + name + " acts on hand-held sessions (no plan); " + session_path +
                        " has a plan");
-  if (!(table_sigma > 0.0 && table_sigma < 3600.0))
-    throw UsageError("--table-sigma must be above 0 and below 3600 arcsec");
   if (!(min_dwell > 0.0 && min_dwell < 1e6)) throw UsageError("--min-dwell must be positive");
   if (passes < 0 || passes > 20) throw UsageError("--passes must be 0 (automatic) to 20");
   for (const auto& f : o.prefer) {
@@ -206,6 +157,7 @@ int cmd_diagnose(const std::vector<std::string>& args) {
   s1.min_dwell = min_dwell;
   const PlausibilityLimits limits = PlausibilityLimits::from_profile(profile ? &*profile : nullptr);
   const bool force = vm->count("force") > 0;
+  check_log_temperature(session, force);
   PlausibilityReport gate = check_plausibility(session, limits);
   enforce(gate, force);
   const TableAttitudeError table{table_sigma * units::arcsec};

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "apps/cli.hpp"
+#include "filter/diagnosis/diagnosis_table.hpp"
 #include "filter/table_free/handheld_run.hpp"
 
 namespace sinscal::cli {
@@ -23,6 +24,24 @@ struct HandheldDiagnoseOptions {
 /// summary; a temperature candidate without a temperature column, or a requested candidate the
 /// poses are too few for, throws (exit 2) after the files are written.
 int diagnose_handheld_session(const Session& session, const HandheldDiagnoseOptions& o);
+
+/// A chamber session (`[thermal] soaks`): the thermal families the model lacks, tested on the
+/// soaks (apps/diagnose_chamber.cpp); DIR/diagnosis.json.
+struct ChamberDiagnoseOptions {
+  std::string out_dir;
+  double alpha = 0.01;
+  double table_sigma = 2.5;  // arcsec
+  std::string sensor;        // the model's profile (empty: the first soak's)
+};
+int diagnose_chamber(const std::string& chamber_path, const ChamberDiagnoseOptions& o);
+
+/// A table session's log with a temperature column: one temperature (span below 2 C) is said
+/// and the diagnosis goes on; a moving temperature throws LogError (the dwells' test has no
+/// temperature), or with `force` is said as a warning.
+void check_log_temperature(const Session& session, bool force);
+
+/// The table session's findings on the terminal (apps/print_diagnosis.cpp).
+void print_diagnosis(const TableDiagnosis& d);
 
 /// A six-face session ([six_face]): the gyro g-sensitivity test on its rests
 /// (apps/diagnose_six_face.cpp); DIR/diagnosis.json when `out_dir` is given.

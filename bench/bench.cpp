@@ -214,6 +214,51 @@ double bench_six_face(const std::string& src) {
   return sink;
 }
 
+// The thermal filter's cost per sample against the fixed-temperature filter's (issue 19: at
+// most 1.5x): rot19 simulated with nav-fog's errors, its samples given a chamber ramp's
+// temperature (1 C/min from -40 C), calibrated with nav-fog-thermal (the thermal states) and with
+// nav-fog (without), both from memory.
+double bench_thermal(const std::string& src) {
+  const Plan rot = Plan::load(src + "/config/plans/rot19.ini");
+  const Motion motion = build_motion(rot, rot.site);
+  const SensorProfile fixed = SensorProfile::load(src + "/config/sensors/nav-fog.ini");
+  const SensorProfile thermal = SensorProfile::load(src + "/config/sensors/nav-fog-thermal.ini");
+  std::vector<ImuSample> samples;
+  {
+    ImuSimulator sim(motion, fixed.draw(1), fixed.noise, SimulatorOptions{});
+    ImuSample s;
+    while (sim.next(s)) {
+      s.has_temperature = true;
+      s.accel_temperature_c = s.gyro_temperature_c = -40.0 + s.t / 60.0;
+      samples.push_back(s);
+    }
+  }
+  double sink = 0.0;
+  const auto run = [&](const SensorProfile& profile, int* states) {
+    double best = 1e300;
+    for (int pass = 0; pass < 3; ++pass) {
+      Calibrator kf(PlanTimeline::of(rot, rot.site), rot.site,
+                    calibrator_options_from_profile(profile));
+      const auto t0 = Clock::now();
+      for (const auto& s : samples) kf.push(s);
+      kf.finish();
+      best = std::min(best, seconds_since(t0));
+      *states = kf.layout().size;
+      sink += kf.estimate()[0].value;
+    }
+    return best;
+  };
+  int n_fixed = 0, n_thermal = 0;
+  const double t_fixed = run(fixed, &n_fixed);
+  const double t_thermal = run(thermal, &n_thermal);
+  const double n = static_cast<double>(samples.size());
+  std::printf(
+      "thermal Kalman filter on rot19 with a ramp's temperature: %d states %.0f samples/s, "
+      "without the thermal states %d states %.0f samples/s: %.2fx per sample (aim 1.5x)\n",
+      n_thermal, n / t_thermal, n_fixed, n / t_fixed, t_thermal / t_fixed);
+  return sink;
+}
+
 int main(int argc, char** argv) {
   const std::string src = argc > 1 ? argv[1] : ".";
   const Plan plan = Plan::load(src + "/config/plans/seed8.ini");
@@ -391,6 +436,7 @@ int main(int argc, char** argv) {
   sink += bench_design(src);
   bench_handheld(src);
   sink += bench_six_face(src);
+  sink += bench_thermal(src);
   std::printf("navigator / simulator throughput ratio: %.1f\n", t_sim / t_nav);
   std::printf("navigator aim: 5e6 samples/s -> %s\n", n / t_nav >= 5e6 ? "met" : "NOT met");
   return sink > 0 ? 0 : 1;

@@ -997,6 +997,15 @@ new chamber-ramp-rate-zero; printf '[chamber]\ntype = ramp\nfrom = 0 C\nto = 40 
 fixed 2 "c.ini:5: 'chamber.rate'|above 0" S simulate --plan "$base/mini.ini" --sensor "$therm" --chamber c.ini --out out/s --rate 10
 new chamber-soaks-with-ramp-key; printf '[chamber]\ntype = soaks\nsoaks = 0 40 C\nrate = 1 C/min\n' > "$d/c.ini"
 fixed 2 "c.ini:4: 'chamber.rate'|a key of type = ramp in type = soaks" S simulate --plan "$base/mini.ini" --sensor "$therm" --chamber c.ini --out out/s --rate 10
+new diagnose-chamber-unsettled-soak; cp -r "$base/soaks-short" "$d/soaks"
+fixed 2 "soak-1/imu.csv:|the soak had not settled" S diagnose --session soaks/chamber.ini --out out/d
+new diagnose-sensor-on-a-table-session; mini
+fixed 1 "--sensor acts on chamber sessions" S diagnose --session session.ini --out out/d --sensor "$therm"
+new diagnose-chamber-sensor-missing; cp -r "$base/soaks" "$d/soaks"
+fixed 2 "nope.ini" S diagnose --session soaks/chamber.ini --out out/d --sensor nope.ini
+new control-diagnose-chamber; cp -r "$base/soaks" "$d/soaks"
+POST='test -s out/d/diagnosis.json'
+control 0 "" S diagnose --session soaks/chamber.ini --out out/d
 new profile-reference-temperature-kelvin; cp "$therm" "$d/p.ini"; set_key "$d/p.ini" reference_temperature "293 C"
 fixed 2 "p.ini:$L: 'thermal.reference_temperature'|expected a temperature within -60 ... 130 C" S simulate --plan "$base/mini.ini" --sensor p.ini --out out/s --rate 10
 

@@ -376,6 +376,23 @@ sed "s|sensor = sensor.ini|sensor = $src/config/sensors/nav-fog.ini|" "$work/ram
 "$bin" calibrate --method kf --session "$work/ramp/room.ini" --out "$work/room.json" > /dev/null 2> "$work/room.err"
 check "the ramp calibrated without thermal terms is flagged (exit 2)" test $? -eq 2
 check "... as a diverging filter" contains "$work/room.err" "filter diverging"
+# The thermal diagnosis on the soaks: the profile's model names nothing; the model without the
+# accelerometers' scale-factor slope names it first, with its gain on held-out soaks; the ramp's
+# log (temperature moving by tens of C) is refused by the table diagnosis, which has no
+# temperature.
+"$bin" diagnose --session "$work/soaks/chamber.ini" --out "$work/tdiag" > "$work/tdiag.txt"
+check "diagnose on a chamber exits 0" test $? -eq 0
+check "... the profile's thermal model: no finding" contains "$work/tdiag.txt" "Findings: none"
+check "... the dT/dt term is not fitted on soaks" contains "$work/tdiag.txt" "In the model, not fitted on soaks: gyro.bias_temp_rate"
+awk '/^\[accel\]/{a=1} /^\[gyro\]/{a=0} !(a && /^scale_temp1/)' "$src/config/sensors/nav-fog-thermal.ini" > "$work/hidden-thermal.ini"
+"$bin" diagnose --session "$work/soaks/chamber.ini" --sensor "$work/hidden-thermal.ini" --out "$work/tdiag-hidden" > "$work/tdiag-hidden.txt"
+check "... accel.scale_temp1 hidden from the profile: named first" grep -qE '^1\. accel\.scale_temp1: chi2\(3\)' "$work/tdiag-hidden.txt"
+check "... its held-out gain: soaks predicted to about their sigmas after" python3 -c "
+import json,sys; f=json.load(open('$work/tdiag-hidden/diagnosis.json'))['findings'][0]
+sys.exit(not (f['family'] == 'accel.scale_temp1' and f['heldout_before']['sigmas'] > 5 and f['heldout_after']['sigmas'] < 1.5 and f['family_error']['after'] < 0.2 * f['family_error']['before']))"
+"$bin" diagnose --session "$work/ramp/session.ini" --out "$work/rdiag" --no-plot > /dev/null 2> "$work/rdiag.err"
+check "diagnose on the ramp's log is refused (exit 2): its temperature moves" test $? -eq 2
+check "... naming the span" contains "$work/rdiag.err" "the log's temperature moves by"
 
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0

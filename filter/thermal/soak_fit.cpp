@@ -52,10 +52,6 @@ bool family_exists(const std::string& name) {
   return std::any_of(all.begin(), all.end(), [&](const auto& f) { return f.name == name; });
 }
 
-std::string thermal_family(const std::string& family, int degree) {
-  return family + "_temp" + std::to_string(degree);
-}
-
 // One family's coefficients among the fitted ones.
 struct FamilyColumns {
   std::string name;
@@ -199,7 +195,8 @@ std::vector<FamilyColumns> group(const Scaled& s, std::size_t soaks, const Therm
       FamilyColumns f;
       f.name = family;
       f.gyro_temperature = coefficient_family_info(family).output != FamilyOutput::Accel;
-      while (f.max_degree < o.max_degree && family_exists(thermal_family(family, f.max_degree + 1)))
+      while (f.max_degree < o.max_degree &&
+             family_exists(thermal_family_name(family, f.max_degree + 1)))
         ++f.max_degree;
       f.max_degree = std::min(f.max_degree, static_cast<int>(soaks) - 2);
       out.push_back(f);
@@ -209,7 +206,50 @@ std::vector<FamilyColumns> group(const Scaled& s, std::size_t soaks, const Therm
   return out;
 }
 
+// The joint fit of `params` on the coefficients `rows`, unscaled into `fit`.
+void joint_fit(const Scaled& s, const std::vector<int>& rows, const std::vector<Parameter>& params,
+               std::size_t soaks, ThermalFit& fit) {
+  const Solution joint = solve(s, rows, params);
+  const auto& cat = coefficient_catalog();
+  const auto np = static_cast<Eigen::Index>(params.size());
+  Eigen::VectorXd unscale(np);
+  fit.catalog.clear();
+  for (Eigen::Index j = 0; j < np; ++j) {
+    const Parameter& q = params[static_cast<std::size_t>(j)];
+    const CoefficientInfo& base =
+        cat[static_cast<std::size_t>(s.catalog[static_cast<std::size_t>(q.position)])];
+    const std::string component = base.name.substr(base.family.size());
+    const std::string name =
+        q.degree == 0 ? base.name : thermal_family_name(base.family, q.degree) + component;
+    fit.catalog.push_back(static_cast<int>(&coefficient_info(name) - cat.data()));
+    unscale(j) = s.scale(q.position) / std::pow(s.t_scale, q.degree);
+  }
+  fit.value = joint.theta.cwiseProduct(unscale);
+  fit.covariance = unscale.asDiagonal() * joint.covariance * unscale.asDiagonal();
+  fit.chi2 = joint.chi2;
+  fit.dof = static_cast<int>(rows.size() * soaks) - static_cast<int>(np);
+  fit.p_value = fit.dof > 0 ? boost::math::cdf(boost::math::complement(
+                                  boost::math::chi_squared_distribution<double>(fit.dof), fit.chi2))
+                            : 1.0;
+}
+
 }  // namespace
+
+std::pair<std::string, int> thermal_family_parts(const std::string& name) {
+  const auto at = name.rfind("_temp");
+  if (at == std::string::npos || at + 6 != name.size()) return {"", 0};
+  const char d = name.back();
+  if (d < '1' || d > '9') return {"", 0};
+  return {name.substr(0, at), d - '0'};
+}
+
+std::string thermal_family_name(const std::string& family, int degree) {
+  return family + "_temp" + std::to_string(degree);
+}
+
+bool thermal_family_exists(const std::string& family, int degree) {
+  return family_exists(thermal_family_name(family, degree));
+}
 
 int ThermalFit::degree(const std::string& family) const {
   for (const auto& d : degrees)
@@ -217,22 +257,49 @@ int ThermalFit::degree(const std::string& family) const {
   return -1;
 }
 
-std::pair<double, double> ThermalFit::at(int catalog_index, double temperature_c) const {
+namespace {
+
+// The row of the fit's parameters that gives coefficient `catalog_index` at dT from T0.
+Eigen::VectorXd at_row(const ThermalFit& fit, int catalog_index, double dT) {
   const auto& info = coefficient_catalog().at(static_cast<std::size_t>(catalog_index));
-  const auto& fam = coefficient_family_info(info.family);
   const std::string component = info.name.substr(info.family.size());  // ".x" or ""
-  const double dT = temperature_c - options.reference_temperature_c;
-  Eigen::VectorXd g = Eigen::VectorXd::Zero(value.size());
-  const int d = degree(fam.name);
-  if (d < 0) throw std::invalid_argument(info.name + " is not in the thermal fit");
-  for (int k = 0; k <= d; ++k) {
-    const std::string name = (k == 0 ? fam.name : thermal_family(fam.name, k)) + component;
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(fit.value.size());
+  bool found = false;
+  for (int k = 0; k <= 3; ++k) {  // the family table allows degrees 1 to 3
+    if (k > 0 && !thermal_family_exists(info.family, k)) continue;
+    const std::string name =
+        (k == 0 ? info.family : thermal_family_name(info.family, k)) + component;
     const int c = static_cast<int>(&coefficient_info(name) - coefficient_catalog().data());
-    const auto it = std::find(catalog.begin(), catalog.end(), c);
-    if (it == catalog.end()) throw std::invalid_argument(name + " is not in the thermal fit");
-    g(it - catalog.begin()) = std::pow(dT, k);
+    const auto it = std::find(fit.catalog.begin(), fit.catalog.end(), c);
+    if (it == fit.catalog.end()) continue;
+    g(it - fit.catalog.begin()) = std::pow(dT, k);
+    found = found || k == 0;
   }
+  if (!found) throw std::invalid_argument(info.name + " is not in the thermal fit");
+  return g;
+}
+
+}  // namespace
+
+std::pair<double, double> ThermalFit::at(int catalog_index, double temperature_c) const {
+  const Eigen::VectorXd g =
+      at_row(*this, catalog_index, temperature_c - options.reference_temperature_c);
   return {g.dot(value), std::sqrt(std::max(0.0, g.dot(covariance * g)))};
+}
+
+std::pair<Eigen::VectorXd, Eigen::MatrixXd> ThermalFit::predict(
+    const SoakEstimate& soak, const std::vector<int>& coefficients) const {
+  const auto n = static_cast<Eigen::Index>(coefficients.size());
+  Eigen::MatrixXd G(n, value.size());
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const int c = coefficients[static_cast<std::size_t>(i)];
+    const auto& family =
+        coefficient_family_info(coefficient_catalog()[static_cast<std::size_t>(c)].family);
+    const double T =
+        family.output == FamilyOutput::Accel ? soak.accel_temperature_c : soak.gyro_temperature_c;
+    G.row(i) = at_row(*this, c, T - options.reference_temperature_c).transpose();
+  }
+  return {G * value, G * covariance * G.transpose()};
 }
 
 ThermalFit fit_soaks(const std::vector<SoakEstimate>& soaks, const ThermalFitOptions& options) {
@@ -265,27 +332,35 @@ ThermalFit fit_soaks(const std::vector<SoakEstimate>& soaks, const ThermalFitOpt
   // The joint fit with the chosen degrees and the soaks' full covariance.
   std::vector<int> rows;
   for (const auto& f : families) rows.insert(rows.end(), f.positions.begin(), f.positions.end());
-  const Solution joint = solve(s, rows, all);
-  const auto& cat = coefficient_catalog();
-  const auto np = static_cast<Eigen::Index>(all.size());
-  Eigen::VectorXd unscale(np);
-  for (Eigen::Index j = 0; j < np; ++j) {
-    const Parameter& q = all[static_cast<std::size_t>(j)];
-    const CoefficientInfo& base =
-        cat[static_cast<std::size_t>(s.catalog[static_cast<std::size_t>(q.position)])];
-    const std::string component = base.name.substr(base.family.size());
-    const std::string name =
-        q.degree == 0 ? base.name : thermal_family(base.family, q.degree) + component;
-    fit.catalog.push_back(static_cast<int>(&coefficient_info(name) - cat.data()));
-    unscale(j) = s.scale(q.position) / std::pow(s.t_scale, q.degree);
+  joint_fit(s, rows, all, soaks.size(), fit);
+  return fit;
+}
+
+ThermalFit fit_soaks_with(const std::vector<SoakEstimate>& soaks,
+                          const std::vector<std::string>& thermal_families,
+                          double reference_temperature_c) {
+  if (soaks.size() < 2) throw std::invalid_argument("a thermal fit needs at least 2 soaks");
+  ThermalFit fit;
+  fit.options.reference_temperature_c = reference_temperature_c;
+  const Scaled s = scale_soaks(soaks, reference_temperature_c);
+  ThermalFitOptions o;
+  o.max_degree = 0;
+  const auto families = group(s, soaks.size(), o);
+  std::vector<Parameter> params;
+  std::vector<int> rows;
+  for (const auto& f : families) {
+    rows.insert(rows.end(), f.positions.begin(), f.positions.end());
+    for (int pos : f.positions) params.push_back({pos, 0, f.gyro_temperature});
   }
-  fit.value = joint.theta.cwiseProduct(unscale);
-  fit.covariance = unscale.asDiagonal() * joint.covariance * unscale.asDiagonal();
-  fit.chi2 = joint.chi2;
-  fit.dof = static_cast<int>(rows.size() * soaks.size()) - static_cast<int>(np);
-  fit.p_value = fit.dof > 0 ? boost::math::cdf(boost::math::complement(
-                                  boost::math::chi_squared_distribution<double>(fit.dof), fit.chi2))
-                            : 1.0;
+  for (const auto& name : thermal_families) {
+    const auto [base, degree] = thermal_family_parts(name);
+    if (degree == 0 || !family_exists(name))
+      throw std::invalid_argument(name + " is not a polynomial thermal family");
+    for (const auto& f : families)
+      if (f.name == base)
+        for (int pos : f.positions) params.push_back({pos, degree, f.gyro_temperature});
+  }
+  joint_fit(s, rows, params, soaks.size(), fit);
   return fit;
 }
 

@@ -67,15 +67,35 @@ struct ThermalFit {
   double chi2 = 0.0;  // of the joint fit
   int dof = 0;
   double p_value = 1.0;
-  /// The degree chosen for `family` (-1: not fitted).
+  /// The degree chosen for `family` (-1: not fitted or no degree chosen: fit_soaks_with).
   int degree(const std::string& family) const;
   /// Coefficient `catalog_index` (a family's, not a thermal one's) at `temperature_c` from the
-  /// fit: value and sigma (SI).
+  /// fit: value and sigma (SI); the sum over its thermal coefficients in the fit.
   std::pair<double, double> at(int catalog_index, double temperature_c) const;
+  /// The fit's prediction of a soak's `coefficients` (catalog indices, not thermal ones) at the
+  /// soak's temperatures (each family at its triad's): values and their covariance from the fit
+  /// (SI).
+  std::pair<Eigen::VectorXd, Eigen::MatrixXd> predict(const SoakEstimate& soak,
+                                                      const std::vector<int>& coefficients) const;
 };
 
 /// Fits the soaks (at least 2, sharing their estimated coefficients: those all soaks have).
 /// Throws std::invalid_argument naming the problem (too few soaks, a singular covariance).
 ThermalFit fit_soaks(const std::vector<SoakEstimate>& soaks, const ThermalFitOptions& options);
+
+/// The joint fit of a chosen model: every coefficient the soaks share at T0, plus the given
+/// thermal families (each with the components whose coefficient at T0 the soaks share; no degree
+/// test). Throws std::invalid_argument as fit_soaks, and for a name that is not a thermal family.
+ThermalFit fit_soaks_with(const std::vector<SoakEstimate>& soaks,
+                          const std::vector<std::string>& thermal_families,
+                          double reference_temperature_c);
+
+/// The thermal family of degree `degree` of `family` ("gyro.bias", 2: "gyro.bias_temp2"), and
+/// whether the family table has it.
+std::string thermal_family_name(const std::string& family, int degree);
+bool thermal_family_exists(const std::string& family, int degree);
+/// The family and degree of a polynomial thermal family ("accel.scale_temp2": {"accel.scale",
+/// 2}); {"", 0} for any other name (the gyro bias in dT/dt among them).
+std::pair<std::string, int> thermal_family_parts(const std::string& name);
 
 }  // namespace sinscal

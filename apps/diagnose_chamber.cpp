@@ -1,0 +1,147 @@
+// sinscal diagnose on a chamber session (apps/cmd_diagnose.cpp): each soak calibrated by the
+// Kalman filter, then the thermal families the model lacks tested against the soaks
+// (filter/diagnosis/thermal_diagnosis.hpp).
+#include <array>
+#include <cstdio>
+#include <filesystem>
+
+#include "apps/cli.hpp"
+#include "apps/diagnose.hpp"
+#include "filter/diagnosis/thermal_diagnosis.hpp"
+#include "filter/thermal/soak_run.hpp"
+#include "models/coefficient_families.hpp"
+#include "models/sensor_profile.hpp"
+#include "models/units.hpp"
+#include "report/output.hpp"
+#include "report/thermal_diagnosis_report.hpp"
+
+namespace sinscal::cli {
+
+namespace {
+
+void print_heldout(const HeldoutSoaks& h) {
+  if (h.soaks == 0) {
+    std::printf("no held-out soaks (the others do not determine the model)");
+    return;
+  }
+  std::printf("held-out soaks %.2f sigma", h.sigmas);
+}
+
+void print_thermal_findings(const ThermalDiagnosis& d) {
+  std::printf("\nModel fit: chi2 %.1f on %d dof; ", d.initial_chi2, d.initial_dof);
+  print_heldout(d.initial_heldout);
+  std::printf(" (1: the soaks predicted as their sigmas say)\n");
+  if (d.findings.empty())
+    std::printf("Findings: none (no thermal family significant at the family-wise level %g)\n",
+                d.alpha);
+  int number = 0;
+  for (const auto& f : d.findings) {
+    const ThermalCandidateTest& t = f.test;
+    std::printf("%d. %s: ", ++number, t.family.c_str());
+    if (t.test == "F")
+      std::printf("F(%d, %d) = %.2f", t.dof, t.dof2, t.statistic);
+    else
+      std::printf("chi2(%d) = %.2f", t.dof, t.statistic);
+    std::printf(
+        ", p = %s (below %.3g); ",
+        t.p_value > 1e-300 ? fmt("%.3g", t.p_value).c_str() : fmt("1e%.0f", t.log10_p).c_str(),
+        t.threshold);
+    const std::string base = thermal_family_parts(t.family).first;
+    const CoefficientFamily& b = coefficient_family_info(base);
+    if (f.before.soaks > 0 && f.after.soaks > 0)
+      std::printf("held-out soaks %.2f -> %.2f sigma; %s at a held-out soak %.4g -> %.4g %s RMS\n",
+                  f.before.sigmas, f.after.sigmas, base.c_str(),
+                  f.family_error_before / b.si_per_unit(), f.family_error_after / b.si_per_unit(),
+                  b.unit().c_str());
+    else
+      std::printf("no held-out soaks (the others do not determine the model)\n");
+    const CoefficientFamily& info = coefficient_family_info(t.family);
+    for (const auto& c : f.coefficients)
+      std::printf("     %-28s %12.4g +- %-10.3g %s\n",
+                  coefficient_catalog()[static_cast<std::size_t>(c.catalog)].name.c_str(),
+                  c.value / info.si_per_unit(), c.sigma / info.si_per_unit(), info.unit().c_str());
+  }
+  for (const auto& m : d.model)
+    if (thermal_family_parts(m).second == 0)
+      std::printf(
+          "In the model, not fitted on soaks: %s (a soak holds its temperature: a ramp "
+          "separates it)\n",
+          m.c_str());
+  for (const auto& t : d.not_testable)
+    std::printf("Not testable on these soaks: %s (%s)\n", t.family.c_str(), t.not_testable.c_str());
+}
+
+// A table log's temperature span below which it is one temperature for the diagnosis.
+constexpr double kConstantTemperatureSpan = 2.0;  // deg C
+
+}  // namespace
+
+void check_log_temperature(const Session& session, bool force) {
+  {
+    LogReader reader(session.log);
+    ImuSample s;
+    if (!reader.next(s) || !s.has_temperature) return;
+  }
+  const SoakTemperature T = measure_soak_temperature(session.log);
+  const double span = T.max_c - T.min_c;
+  if (span < kConstantTemperatureSpan) {
+    std::printf(
+        "Temperature: %.2f ... %.2f C over the log (span %.2f C, below %.0f C): one "
+        "temperature, the thermal families are not tested (a chamber's soaks test them: "
+        "diagnose --session chamber.ini)\n",
+        T.min_c, T.max_c, span, kConstantTemperatureSpan);
+    return;
+  }
+  std::array<char, 800> buf{};
+  std::snprintf(
+      buf.data(), buf.size(),
+      "the log's temperature moves by %.1f C (%.2f C at t = %.1f s, line %zu; %.2f C at t = "
+      "%.1f s, line %zu): the dwells' test has no temperature and would take thermal effects for "
+      "others (a ramp's named accel.bias_drift); diagnose the chamber's soaks (diagnose --session "
+      "chamber.ini), or calibrate the ramp with the thermal model (calibrate --method kf)",
+      span, T.min_c, T.t_min, T.line_min, T.max_c, T.t_max, T.line_max);
+  const std::string what = buf.data();
+  if (!force) throw LogError(session.log.file, T.line_max, what);
+  std::printf("Warning (--force): %s\n", what.c_str());
+}
+
+int diagnose_chamber(const std::string& chamber_path, const ChamberDiagnoseOptions& o) {
+  ChamberSoaks chamber = ChamberSoaks::load(chamber_path);
+  chamber.table_sigma = o.table_sigma * units::arcsec;
+  const std::string json_path = o.out_dir + "/diagnosis.json";
+  std::vector<std::pair<std::string, std::string>> inputs = {{"chamber", chamber_path}};
+  for (const auto& s : chamber.sessions) inputs.emplace_back("soak session", s);
+  if (!o.sensor.empty()) inputs.emplace_back("sensor profile", o.sensor);
+  refuse_overwrite(inputs, {{"diagnosis.json", json_path}});
+  std::vector<SoakEstimate> estimates;
+  std::vector<SoakRecord> records;
+  std::string profile_path = o.sensor;
+  std::printf("%-5s %-40s %10s %10s %8s\n", "soak", "session", "T accel", "T gyro", "NIS/dof");
+  for (std::size_t k = 0; k < chamber.sessions.size(); ++k) {
+    const SoakRun r = calibrate_soak(chamber.sessions[k], chamber);
+    if (profile_path.empty()) profile_path = r.session.sensor_file;
+    estimates.push_back(r.estimate);
+    records.push_back({chamber.sessions[k], "", r.temperature.accel_mean_c,
+                       r.temperature.gyro_mean_c, r.temperature.max_c - r.temperature.min_c,
+                       r.run.nis_per_dof});
+    std::printf("%-5zu %-40s %10.2f %10.2f %8.3f\n", k + 1, chamber.sessions[k].c_str(),
+                r.temperature.accel_mean_c, r.temperature.gyro_mean_c, r.run.nis_per_dof);
+  }
+  const SensorProfile profile = SensorProfile::load(profile_path);
+  ThermalDiagnosisOptions to;
+  to.alpha = o.alpha;
+  for (const auto& f : coefficient_families())
+    if (f.thermal() && profile.has(f.name)) to.model.push_back(f.name);
+  std::string model;
+  for (const auto& m : to.model) model += (model.empty() ? "" : ", ") + m;
+  std::printf("\nThermal model of %s (T0 = %g C): %s\n", profile_path.c_str(),
+              profile.reference_temperature_c, model.empty() ? "none" : model.c_str());
+  const ThermalDiagnosis d = diagnose_soaks(estimates, profile.reference_temperature_c, to);
+  print_thermal_findings(d);
+  std::filesystem::create_directories(o.out_dir);
+  std::printf("Written: %s\n",
+              write_thermal_diagnosis(d, chamber_path, records, o.out_dir).c_str());
+  return 0;
+}
+
+}  // namespace sinscal::cli

@@ -1,0 +1,237 @@
+#include "filter/diagnosis/thermal_diagnosis.hpp"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+#include "filter/diagnosis/diagnosis.hpp"
+#include "models/coefficient_families.hpp"
+
+namespace sinscal {
+
+namespace {
+
+bool contains(const std::vector<std::string>& v, const std::string& x) {
+  return std::find(v.begin(), v.end(), x) != v.end();
+}
+
+bool is_thermal_family(const std::string& name) {
+  const auto& all = coefficient_families();
+  return std::any_of(all.begin(), all.end(),
+                     [&](const auto& f) { return f.name == name && f.thermal(); });
+}
+
+// The fit's coefficients at T0 (not thermal ones).
+std::vector<int> base_catalog(const ThermalFit& fit) {
+  std::vector<int> out;
+  for (int c : fit.catalog)
+    if (!coefficient_family_info(coefficient_catalog()[static_cast<std::size_t>(c)].family)
+             .thermal())
+      out.push_back(c);
+  return out;
+}
+
+// Held-out soaks, and the RMS prediction error (SI) of the coefficients of `family` at T0.
+HeldoutSoaks heldout(const std::vector<SoakEstimate>& soaks,
+                     const std::vector<std::string>& families, double t0, const std::string& family,
+                     double* family_error) {
+  HeldoutSoaks out;
+  if (family_error != nullptr) *family_error = 0.0;
+  // The fit to the other soaks must be determined: at most soaks - 1 terms per coefficient.
+  std::map<std::string, int> terms;
+  for (const auto& f : families) ++terms[thermal_family_parts(f).first];
+  for (const auto& [base, n] : terms)
+    if (n + 1 > static_cast<int>(soaks.size()) - 1) return out;
+  if (soaks.size() < 3) return out;
+  double sum = 0.0, error = 0.0;
+  int errors = 0;
+  for (std::size_t k = 0; k < soaks.size(); ++k) {
+    std::vector<SoakEstimate> others;
+    for (std::size_t j = 0; j < soaks.size(); ++j)
+      if (j != k) others.push_back(soaks[j]);
+    const ThermalFit fit = fit_soaks_with(others, families, t0);
+    const std::vector<int> catalog = base_catalog(fit);
+    const auto [predicted, predicted_cov] = fit.predict(soaks[k], catalog);
+    const auto m = static_cast<Eigen::Index>(catalog.size());
+    Eigen::VectorXd r(m);
+    Eigen::MatrixXd S = predicted_cov;
+    const SoakEstimate& e = soaks[k];
+    std::vector<Eigen::Index> at(catalog.size());
+    for (Eigen::Index i = 0; i < m; ++i) {
+      const auto it =
+          std::find(e.catalog.begin(), e.catalog.end(), catalog[static_cast<std::size_t>(i)]);
+      if (it == e.catalog.end()) throw std::invalid_argument("a soak lacks a fitted coefficient");
+      at[static_cast<std::size_t>(i)] = it - e.catalog.begin();
+    }
+    for (Eigen::Index i = 0; i < m; ++i) {
+      r(i) = e.value(at[static_cast<std::size_t>(i)]) - predicted(i);
+      for (Eigen::Index j = 0; j < m; ++j)
+        S(i, j) += e.covariance(at[static_cast<std::size_t>(i)], at[static_cast<std::size_t>(j)]);
+      if (coefficient_catalog()[static_cast<std::size_t>(catalog[static_cast<std::size_t>(i)])]
+              .family == family) {
+        error += r(i) * r(i);
+        ++errors;
+      }
+    }
+    // Scaled to unit diagonal so that coefficients of very different units solve well.
+    const Eigen::VectorXd d = S.diagonal().cwiseSqrt().cwiseInverse();
+    const Eigen::MatrixXd Sn = d.asDiagonal() * S * d.asDiagonal();
+    const Eigen::VectorXd rn = r.cwiseProduct(d);
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(Sn);
+    const double d2 = rn.dot(ldlt.solve(rn));
+    const double per = std::sqrt(std::max(0.0, d2) / static_cast<double>(m));
+    out.per_soak.push_back(per);
+    out.temperature_c.push_back(e.gyro_temperature_c);
+    sum += per * per;
+  }
+  out.soaks = static_cast<int>(soaks.size());
+  out.sigmas = std::sqrt(sum / static_cast<double>(soaks.size()));
+  if (family_error != nullptr && errors > 0)
+    *family_error = std::sqrt(error / static_cast<double>(errors));
+  return out;
+}
+
+// Why the soaks cannot test `candidate` against `model` (empty: they can).
+std::string not_testable(const std::string& candidate, const std::vector<std::string>& model,
+                         const std::set<std::string>& estimated, std::size_t soaks) {
+  const auto [family, degree] = thermal_family_parts(candidate);
+  if (degree == 0)
+    return "a soak holds its temperature (dT/dt near 0): the rate of temperature change needs "
+           "a ramp";
+  if (estimated.count(family) == 0)
+    return "the soaks do not estimate " + family + " (its coefficient at T0)";
+  int terms = 2;  // the coefficient at T0 and the candidate
+  for (const auto& m : model)
+    if (thermal_family_parts(m).first == family) ++terms;
+  if (terms > static_cast<int>(soaks) - 1)
+    return std::to_string(soaks) + " soaks determine at most " + std::to_string(soaks - 2) +
+           " thermal terms of " + family + " with one degree of freedom left";
+  return "";
+}
+
+ThermalCandidateTest test_candidate(const std::string& candidate, const ThermalFit& now,
+                                    const ThermalFit& with, double alpha) {
+  ThermalCandidateTest t;
+  t.family = candidate;
+  t.dof = static_cast<int>(with.value.size() - now.value.size());
+  t.likelihood_ratio = std::max(0.0, now.chi2 - with.chi2);
+  if (with.dof > 0 && with.p_value < alpha) {
+    // The extended fit's residual rejects the soaks' covariance: tested against its scale.
+    t.test = "F";
+    t.dof2 = with.dof;
+    t.statistic = (t.likelihood_ratio / t.dof) / (with.chi2 / with.dof);
+    t.log10_p = log10_f_tail(t.statistic, t.dof, t.dof2);
+  } else {
+    t.test = "chi2";
+    t.statistic = t.likelihood_ratio;
+    t.log10_p = log10_chi2_tail(t.statistic, t.dof);
+  }
+  t.p_value = std::pow(10.0, t.log10_p);
+  return t;
+}
+
+std::vector<std::string> candidate_families(const ThermalDiagnosisOptions& o) {
+  for (const auto& m : o.model)
+    if (!is_thermal_family(m))
+      throw std::invalid_argument(m + " is not a thermal family of the family table");
+  std::vector<std::string> out;
+  for (const auto& c : o.candidates) {
+    if (!is_thermal_family(c))
+      throw std::invalid_argument(c + " is not a thermal family of the family table");
+    if (!contains(o.model, c)) out.push_back(c);
+  }
+  if (o.candidates.empty())
+    for (const auto& f : coefficient_families())
+      if (f.thermal() && !contains(o.model, f.name)) out.push_back(f.name);
+  return out;
+}
+
+}  // namespace
+
+HeldoutSoaks heldout_soaks(const std::vector<SoakEstimate>& soaks,
+                           const std::vector<std::string>& families, double t0) {
+  return heldout(soaks, families, t0, "", nullptr);
+}
+
+ThermalDiagnosis diagnose_soaks(const std::vector<SoakEstimate>& soaks, double t0,
+                                const ThermalDiagnosisOptions& options) {
+  ThermalDiagnosis d;
+  d.alpha = options.alpha;
+  d.reference_temperature_c = t0;
+  d.model = options.model;
+  std::vector<std::string> remaining = candidate_families(options);
+  // The model's families with a signature on soaks (not the gyro bias in dT/dt: a soak holds its
+  // temperature).
+  std::vector<std::string> model;
+  for (const auto& m : options.model)
+    if (thermal_family_parts(m).second > 0) model.push_back(m);
+  ThermalFit now = fit_soaks_with(soaks, model, t0);
+  std::set<std::string> estimated;
+  for (int c : base_catalog(now))
+    estimated.insert(coefficient_catalog()[static_cast<std::size_t>(c)].family);
+  d.initial_chi2 = now.chi2;
+  d.initial_dof = now.dof;
+  d.initial_heldout = heldout_soaks(soaks, model, t0);
+  HeldoutSoaks current = d.initial_heldout;
+  for (int round = 1; round <= options.max_findings; ++round) {
+    std::vector<ThermalCandidateTest> tests;
+    std::vector<ThermalFit> fits;
+    d.not_testable.clear();
+    for (const auto& c : remaining) {
+      const std::string why = not_testable(c, model, estimated, soaks.size());
+      if (!why.empty()) {
+        ThermalCandidateTest t;
+        t.family = c;
+        t.not_testable = why;
+        d.not_testable.push_back(t);
+        continue;
+      }
+      std::vector<std::string> extended = model;
+      extended.push_back(c);
+      fits.push_back(fit_soaks_with(soaks, extended, t0));
+      tests.push_back(test_candidate(c, now, fits.back(), options.alpha));
+    }
+    if (tests.empty()) break;
+    const double threshold = options.alpha / static_cast<double>(tests.size());
+    int best = -1;
+    for (std::size_t i = 0; i < tests.size(); ++i) {
+      tests[i].threshold = threshold;
+      tests[i].significant = tests[i].dof > 0 && tests[i].log10_p < std::log10(threshold);
+      if (tests[i].significant &&
+          (best < 0 || tests[i].log10_p < tests[static_cast<std::size_t>(best)].log10_p))
+        best = static_cast<int>(i);
+    }
+    if (best < 0) {
+      d.rounds.push_back(tests);
+      break;
+    }
+    tests[static_cast<std::size_t>(best)].named = true;
+    d.rounds.push_back(tests);
+    ThermalFinding f;
+    f.round = round;
+    f.test = tests[static_cast<std::size_t>(best)];
+    const std::string family = thermal_family_parts(f.test.family).first;
+    f.before = heldout(soaks, model, t0, family, &f.family_error_before);
+    model.push_back(f.test.family);
+    now = fits[static_cast<std::size_t>(best)];
+    f.after = heldout(soaks, model, t0, family, &f.family_error_after);
+    current = f.after;
+    d.findings.push_back(f);
+    remaining.erase(std::find(remaining.begin(), remaining.end(), f.test.family));
+  }
+  d.final_fit = now;
+  d.final_heldout = current;
+  for (auto& f : d.findings)
+    for (std::size_t i = 0; i < now.catalog.size(); ++i)
+      if (coefficient_catalog()[static_cast<std::size_t>(now.catalog[i])].family == f.test.family)
+        f.coefficients.push_back({now.catalog[i], now.value(static_cast<Eigen::Index>(i)),
+                                  std::sqrt(now.covariance(static_cast<Eigen::Index>(i),
+                                                           static_cast<Eigen::Index>(i)))});
+  return d;
+}
+
+}  // namespace sinscal

@@ -1,0 +1,109 @@
+// Model discovery over temperature, on a chamber's soaks: which thermal family the model (the
+// sensor profile's thermal families) lacks, its magnitude, and the gain of adding it measured on
+// held-out soaks.
+//
+// Each soak is one calibration at one temperature (filter/thermal/soak_run.hpp); the model is the
+// generalized least-squares fit of the soaks' coefficients against temperature with the model's
+// thermal families and the soaks' full covariance (filter/thermal/soak_fit.hpp). Each candidate
+// thermal family (a family of the family table the model lacks) is added in turn: twice the
+// log-likelihood ratio (the drop in chi-square) is chi-square with the candidate's size as its
+// degrees of freedom while the extended fit's chi-square holds the soaks' covariance; when it
+// rejects it (p below alpha), the drop is tested against the fit's residual scale, F(dof, dof2),
+// as the dwells' test does (filter/diagnosis/diagnosis.hpp). The most significant candidate at
+// the family-wise level (alpha over the round's candidates, Bonferroni) is named and joins the
+// model; the next round tests the rest against the extended model.
+//
+// The gain is held-out prediction: each soak left out in turn, the model fitted to the others
+// predicts the left-out soak's coefficients; the RMS of the Mahalanobis distance per coefficient
+// (sqrt(d^2 / m), with the soak's covariance plus the prediction's) is 1 when the model predicts
+// as its sigmas say. A finding reports it before and after, and its family's prediction error in
+// the family's units.
+//
+// Not testable on soaks, with the reason: the gyro bias in dT/dt (a soak holds its temperature:
+// a ramp separates it), a family whose coefficient at T0 the soaks do not estimate, and a degree
+// beyond what the soaks' temperatures determine (n soaks: at most n - 1 terms per coefficient).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "filter/thermal/soak_fit.hpp"
+
+namespace sinscal {
+
+struct ThermalDiagnosisOptions {
+  /// Family-wise false-alarm level of one round of tests (Bonferroni over the candidates).
+  double alpha = 0.01;
+  int max_findings = 4;
+  /// The thermal families of the model (the sensor profile's).
+  std::vector<std::string> model;
+  /// Candidate thermal families; empty: every thermal family of the family table not in `model`.
+  std::vector<std::string> candidates;
+};
+
+/// Held-out soaks: each left out of the fit in turn and its coefficients predicted.
+struct HeldoutSoaks {
+  int soaks = 0;
+  double sigmas = 0.0;                // RMS over the soaks of sqrt(d^2 / m)
+  std::vector<double> per_soak;       // sqrt(d^2 / m) of each
+  std::vector<double> temperature_c;  // each soak's gyro temperature (its label)
+};
+
+struct ThermalCandidateTest {
+  std::string family;
+  std::string not_testable;  // why the soaks cannot test it (empty: tested)
+  int dof = 0;               // parameters added
+  double likelihood_ratio = 0.0;
+  std::string test;  // "chi2" or "F"
+  double statistic = 0.0;
+  int dof2 = 0;  // F: the extended fit's degrees of freedom
+  double p_value = 1.0;
+  double log10_p = 0.0;
+  double threshold = 0.0;  // p below this is significant
+  bool significant = false;
+  bool named = false;
+};
+
+/// A coefficient of a finding: catalog index, value and sigma (SI) in the extended fit.
+struct ThermalFindingCoefficient {
+  int catalog = 0;
+  double value = 0.0;
+  double sigma = 0.0;
+};
+
+struct ThermalFinding {
+  int round = 0;  // 1-based
+  ThermalCandidateTest test;
+  /// The family's coefficients in the final fit (every finding in the model).
+  std::vector<ThermalFindingCoefficient> coefficients;
+  HeldoutSoaks before, after;
+  /// RMS over the held-out soaks and the components of the family's coefficient at the soak
+  /// ("accel.scale" for accel.scale_temp1) minus its prediction, SI: before and after.
+  double family_error_before = 0.0, family_error_after = 0.0;
+};
+
+struct ThermalDiagnosis {
+  double alpha = 0.0;
+  double reference_temperature_c = 0.0;
+  std::vector<std::string> model;  // the initial model's thermal families
+  double initial_chi2 = 0.0;
+  int initial_dof = 0;
+  HeldoutSoaks initial_heldout;
+  std::vector<std::vector<ThermalCandidateTest>> rounds;
+  std::vector<ThermalFinding> findings;
+  std::vector<ThermalCandidateTest> not_testable;
+  ThermalFit final_fit;  // the model with the findings
+  HeldoutSoaks final_heldout;
+};
+
+/// Held-out soaks of the model with `families`: needs at least 3 soaks, and the other soaks to
+/// determine the model (at most soaks - 1 terms per coefficient; else soaks = 0).
+HeldoutSoaks heldout_soaks(const std::vector<SoakEstimate>& soaks,
+                           const std::vector<std::string>& families, double t0);
+
+/// Diagnoses the soaks against the model. Throws std::invalid_argument for a model or candidate
+/// that is not a thermal family, and as fit_soaks_with.
+ThermalDiagnosis diagnose_soaks(const std::vector<SoakEstimate>& soaks, double t0,
+                                const ThermalDiagnosisOptions& options);
+
+}  // namespace sinscal

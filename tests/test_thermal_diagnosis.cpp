@@ -1,0 +1,314 @@
+// The thermal diagnosis on soaks (filter/diagnosis/thermal_diagnosis.hpp): its test's false-alarm
+// rate and power against theory on synthetic soaks, and hidden thermal families named first on
+// simulated chambers calibrated soak by soak (one seed here, 30 in the documented Monte Carlo).
+#include <boost/math/distributions/chi_squared.hpp>
+#include <boost/math/distributions/non_central_chi_squared.hpp>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "filter/diagnosis/thermal_diagnosis.hpp"
+#include "filter/thermal/soak_run.hpp"
+#include "helpers.hpp"
+#include "models/coefficient_families.hpp"
+#include "models/sensor_profile.hpp"
+#include "models/units.hpp"
+#include "rig/thermal.hpp"
+
+using namespace sinscal;
+
+namespace {
+
+int catalog_index(const std::string& name) {
+  return static_cast<int>(&coefficient_info(name) - coefficient_catalog().data());
+}
+
+// Synthetic soaks of gyro.bias.x/y/z and accel.scale.x/y/z at six temperatures: gyro bias
+// quadratic, accel scale linear plus `scale_quadratic` (SI per C^2) on each axis, with a
+// correlated covariance; `noise` false: the values exactly.
+std::vector<SoakEstimate> synthetic_soaks(std::mt19937_64& rng, double scale_quadratic,
+                                          bool noise = true) {
+  const double T0 = 20.0;
+  const std::vector<double> temps = {-40, -20, 0, 20, 40, 60};
+  std::vector<int> idx;
+  for (const char* n : {"gyro.bias.x", "gyro.bias.y", "gyro.bias.z", "accel.scale.x",
+                        "accel.scale.y", "accel.scale.z"})
+    idx.push_back(catalog_index(n));
+  const double sb = 0.01 * units::deg_per_h, ss = 2 * units::ppm;
+  Eigen::Matrix<double, 6, 6> C = Eigen::Matrix<double, 6, 6>::Zero();
+  for (int i = 0; i < 3; ++i) {
+    C(i, i) = sb * sb;
+    C(i + 3, i + 3) = ss * ss;
+    C(i, i + 3) = C(i + 3, i) = 0.4 * sb * ss;
+  }
+  C(3, 4) = C(4, 3) = 0.3 * ss * ss;
+  const Eigen::Matrix<double, 6, 6> L = C.llt().matrixL();
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<SoakEstimate> soaks;
+  for (double T : temps) {
+    const double d = T - T0;
+    SoakEstimate e;
+    e.accel_temperature_c = e.gyro_temperature_c = T;
+    e.catalog = idx;
+    Eigen::Matrix<double, 6, 1> x;
+    for (int i = 0; i < 3; ++i) {
+      x(i) = (0.2 + 0.01 * d + 2e-4 * d * d) * units::deg_per_h * (i + 1);
+      x(i + 3) = (30.0 - 10.0 * i + 1.0 * d) * units::ppm + scale_quadratic * d * d * (1 - i);
+    }
+    Eigen::Matrix<double, 6, 1> w;
+    for (int i = 0; i < 6; ++i) w(i) = n(rng);
+    e.value = noise ? Eigen::VectorXd(x + L * w) : Eigen::VectorXd(x);
+    e.covariance = C;
+    soaks.push_back(e);
+  }
+  return soaks;
+}
+
+const std::vector<std::string> kSyntheticModel = {"gyro.bias_temp1", "gyro.bias_temp2",
+                                                  "accel.scale_temp1"};
+
+}  // namespace
+
+TEST_CASE("Thermal diagnosis: false alarms at alpha, power as the noncentral chi-square says",
+          "[thermal][diagnosis]") {
+  // accel.scale_temp2 hidden at the size whose noncentrality (the model's chi-square on the
+  // noiseless soaks) gives a 60 % chance to beat the Bonferroni threshold: over 400 draws the
+  // share named must match the noncentral chi-square's power within 3 binomial sigmas; clean
+  // soaks (no quadratic) name a family in at most alpha plus 3 binomial sigmas of the draws.
+  std::mt19937_64 rng(5);
+  ThermalDiagnosisOptions o;
+  o.model = kSyntheticModel;
+  // Tested candidates: gyro.bias_temp3, accel.scale_temp2, accel.scale_temp3 (the others' base
+  // coefficients are not in the soaks, or need a ramp).
+  const ThermalDiagnosis probe = diagnose_soaks(synthetic_soaks(rng, 0.0), 20.0, o);
+  REQUIRE(probe.rounds.size() == 1);
+  const auto tested = probe.rounds.front().size();
+  CHECK(tested == 3);
+  const double threshold = o.alpha / static_cast<double>(tested);
+  // Hidden on two axes (x and z: the factor 1 - i); the test has the family's 3 dof.
+  const auto lambda_of = [&](double a) {
+    std::mt19937_64 r(1);
+    return fit_soaks_with(synthetic_soaks(r, a, false), kSyntheticModel, 20.0).chi2;
+  };
+  const double a1 = 1e-3 * units::ppm;  // per C^2
+  const double lambda1 = lambda_of(a1);
+  // lambda grows as a^2: the size at the aimed power.
+  const boost::math::chi_squared_distribution<double> null3(3);
+  const double q3 = boost::math::quantile(boost::math::complement(null3, threshold));
+  const auto power_at = [&](double l) {
+    return boost::math::cdf(boost::math::complement(
+        boost::math::non_central_chi_squared_distribution<double>(3, l), q3));
+  };
+  double lo = 1.0, hi = 200.0;
+  for (int it = 0; it < 60; ++it) (power_at(0.5 * (lo + hi)) < 0.6 ? lo : hi) = 0.5 * (lo + hi);
+  const double lambda = 0.5 * (lo + hi);
+  const double power = power_at(lambda);
+  const double a = a1 * std::sqrt(lambda / lambda1);
+  CAPTURE(q3, lambda, power, a / units::ppm);
+  const int draws = 400;
+  int named = 0, false_alarms = 0;
+  for (int k = 0; k < draws; ++k) {
+    const ThermalDiagnosis hidden = diagnose_soaks(synthetic_soaks(rng, a), 20.0, o);
+    if (!hidden.findings.empty() && hidden.findings.front().test.family == "accel.scale_temp2")
+      ++named;
+    const ThermalDiagnosis clean = diagnose_soaks(synthetic_soaks(rng, 0.0), 20.0, o);
+    if (!clean.findings.empty()) ++false_alarms;
+  }
+  const double share = static_cast<double>(named) / draws;
+  const double sd = std::sqrt(power * (1.0 - power) / draws);
+  CAPTURE(named, false_alarms, share, sd);
+  CHECK(std::abs(share - power) < 3.0 * sd + 0.02);  // + the F test's and the ranking's share
+  CHECK(false_alarms <= o.alpha * draws + 3.0 * std::sqrt(o.alpha * draws));
+}
+
+TEST_CASE("Thermal diagnosis: the held-out soaks and the family's error, before and after",
+          "[thermal][diagnosis]") {
+  std::mt19937_64 rng(9);
+  ThermalDiagnosisOptions o;
+  o.model = {"gyro.bias_temp1", "gyro.bias_temp2"};  // accel.scale_temp1 hidden (1 ppm/C)
+  const ThermalDiagnosis d = diagnose_soaks(synthetic_soaks(rng, 0.0), 20.0, o);
+  REQUIRE(!d.findings.empty());
+  const ThermalFinding& f = d.findings.front();
+  CHECK(f.test.family == "accel.scale_temp1");
+  // 1 ppm/C over soaks 20-60 C from T0: the held-out soaks miss by tens of ppm before, by about
+  // the soaks' 2 ppm sigma (and the extrapolation's) after.
+  CHECK(f.family_error_before / units::ppm > 20.0);
+  CHECK(f.family_error_after / units::ppm < 6.0);
+  CHECK(f.before.sigmas > 5.0);
+  CHECK(f.after.sigmas < 2.0);
+  REQUIRE(f.coefficients.size() == 3);
+  for (const auto& c : f.coefficients) {
+    CHECK(c.value == Approx(1.0 * units::ppm).margin(4.0 * c.sigma));
+  }
+  // The gyro bias in dT/dt is not testable on soaks; nor are families whose coefficient at T0
+  // the soaks lack.
+  bool rate = false, missing = false;
+  for (const auto& t : d.not_testable) {
+    rate = rate ||
+           (t.family == "gyro.bias_temp_rate" && t.not_testable.find("ramp") != std::string::npos);
+    missing = missing || (t.family == "accel.bias_temp1" &&
+                          t.not_testable.find("do not estimate accel.bias") != std::string::npos);
+  }
+  CHECK(rate);
+  CHECK(missing);
+}
+
+namespace {
+
+// A sensor profile: `base` with `drop` removed (key `family` without its triad, in the triad's
+// section) and `add` lines appended to their sections ({"accel", "scale_temp2 = 1 1 ppm/C^2"}).
+std::string profile_variant(const std::string& dir, const std::string& name,
+                            const std::vector<std::string>& drop,
+                            const std::vector<std::pair<std::string, std::string>>& add = {}) {
+  std::ifstream in(test::source_path("config/sensors/nav-fog-thermal.ini"));
+  std::ostringstream out;
+  std::string line, section;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.front() == '[') {
+      section = line.substr(1, line.find(']') - 1);
+      out << line << "\n";
+      for (const auto& [s, l] : add)
+        if (s == section) out << l << "\n";
+      continue;
+    }
+    bool dropped = false;
+    for (const auto& f : drop) {
+      const std::string key = f.substr(f.find('.') + 1);
+      dropped = dropped || (f.substr(0, f.find('.')) == section && line.rfind(key + " ", 0) == 0);
+    }
+    if (!dropped) out << line << "\n";
+  }
+  const std::string path = dir + "/" + name + ".ini";
+  std::ofstream(path) << out.str();
+  return path;
+}
+
+std::vector<std::string> model_of(const std::string& profile_path) {
+  const SensorProfile p = SensorProfile::load(profile_path);
+  std::vector<std::string> out;
+  for (const auto& f : coefficient_families())
+    if (f.thermal() && p.has(f.name)) out.push_back(f.name);
+  return out;
+}
+
+std::vector<SoakEstimate> chamber_soaks(const std::string& dir, const std::string& profile,
+                                        std::uint64_t seed) {
+  SessionSimulation spec;
+  spec.plan_path = test::source_path("config/plans/rot19.ini");
+  spec.data_sensor_path = profile;
+  spec.seed = seed;
+  const ChamberSimulation soaks = simulate_chamber(
+      dir, spec, ChamberProgram::load(test::source_path("config/chambers/soaks6.ini")));
+  ChamberSoaks chamber = ChamberSoaks::load(soaks.path);
+  chamber.table_sigma = 0.05 * units::arcsec;  // the simulated table (test_thermal.cpp)
+  std::vector<SoakEstimate> out;
+  for (const auto& s : chamber.sessions) out.push_back(calibrate_soak(s, chamber).estimate);
+  return out;
+}
+
+// The diagnosis of `soaks` with the model of `profile` minus `hidden`: the families named, in
+// order.
+std::vector<std::string> named(const std::vector<SoakEstimate>& soaks, const std::string& profile,
+                               const std::vector<std::string>& hidden) {
+  ThermalDiagnosisOptions o;
+  for (const auto& m : model_of(profile))
+    if (std::find(hidden.begin(), hidden.end(), m) == hidden.end()) o.model.push_back(m);
+  const ThermalDiagnosis d =
+      diagnose_soaks(soaks, SensorProfile::load(profile).reference_temperature_c, o);
+  std::vector<std::string> out;
+  for (const auto& f : d.findings) out.push_back(f.test.family);
+  return out;
+}
+
+struct Case {
+  std::string label;
+  std::vector<std::string> hidden;  // families left out of the model (empty: clean)
+};
+
+const std::vector<Case> kCases = {
+    {"clean", {}},
+    {"accel.scale_temp1 hidden", {"accel.scale_temp1"}},
+    {"gyro.bias_temp2 hidden (degree 1 in the model)", {"gyro.bias_temp2"}},
+    {"gyro.misalignment_temp1 hidden", {"gyro.misalignment_temp1"}},
+    {"two at once: accel.misalignment_temp1, gyro.scale_temp1",
+     {"accel.misalignment_temp1", "gyro.scale_temp1"}},
+};
+
+// Whether the diagnosis named the hidden families first (in any order), and nothing else first.
+bool right(const std::vector<std::string>& got, const std::vector<std::string>& hidden) {
+  if (got.size() < hidden.size()) return false;
+  for (std::size_t k = 0; k < hidden.size(); ++k)
+    if (std::find(hidden.begin(), hidden.end(), got[k]) == hidden.end()) return false;
+  return hidden.empty() ? got.empty() : true;
+}
+
+}  // namespace
+
+TEST_CASE("Thermal diagnosis: hidden thermal families named first on a simulated chamber",
+          "[thermal][diagnosis][long]") {
+  const std::string dir = test::temp_dir("thermal_diagnosis");
+  const std::string profile = test::source_path("config/sensors/nav-fog-thermal.ini");
+  const auto soaks = chamber_soaks(dir + "/soaks", profile, 4);
+  for (const auto& c : kCases) {
+    const auto got = named(soaks, profile, c.hidden);
+    std::string names;
+    for (const auto& g : got) names += g + " ";
+    CAPTURE(c.label, names);
+    CHECK(right(got, c.hidden));
+  }
+}
+
+TEST_CASE("Thermal diagnosis: Monte Carlo, hidden families named first, clean names none",
+          "[thermal][diagnosis][montecarlo][.]") {
+  // SINSCAL_THERMAL_SEEDS seeds (default 30) of nav-fog-thermal in six soaks: each case's
+  // share of seeds named right (issue 19: >= 95 %). Plus the case near the detection limit:
+  // accel.scale_temp2, absent from nav-fog-thermal, added to the truth at 3.5 times the sigma
+  // its fit gives per component (noncentrality about 37 on 3 dof: power about 0.98).
+  const char* seeds_env = std::getenv("SINSCAL_THERMAL_SEEDS");
+  const int seeds = seeds_env ? std::atoi(seeds_env) : 30;
+  const std::string dir = test::temp_dir("thermal_diagnosis_mc");
+  const std::string profile = test::source_path("config/sensors/nav-fog-thermal.ini");
+  std::vector<int> right_count(kCases.size(), 0);
+  int near_right = 0;
+  std::string near_profile;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    const auto soaks =
+        chamber_soaks(dir + "/" + std::to_string(seed), profile, static_cast<std::uint64_t>(seed));
+    for (std::size_t k = 0; k < kCases.size(); ++k)
+      if (right(named(soaks, profile, kCases[k].hidden), kCases[k].hidden)) ++right_count[k];
+    if (near_profile.empty()) {
+      // The candidate's sigma per component on these soaks sets the size near the limit.
+      std::vector<std::string> model;
+      for (const auto& f : model_of(profile))
+        if (thermal_family_parts(f).second > 0) model.push_back(f);  // not the rate's
+      model.push_back("accel.scale_temp2");
+      const ThermalFit fit = fit_soaks_with(soaks, model, 20.0);
+      double sigma = 0.0;
+      for (std::size_t i = 0; i < fit.catalog.size(); ++i)
+        if (coefficient_catalog()[static_cast<std::size_t>(fit.catalog[i])].family ==
+            "accel.scale_temp2")
+          sigma = std::max(sigma, std::sqrt(fit.covariance(static_cast<Eigen::Index>(i),
+                                                           static_cast<Eigen::Index>(i))));
+      const double m = 3.5 * sigma / units::ppm;
+      std::printf("near the limit: accel.scale_temp2 = %.4g ppm/C^2 (3.5 sigma)\n", m);
+      std::ostringstream key;
+      key.precision(6);
+      key << "scale_temp2 = " << m << " " << m << " ppm/C^2";
+      near_profile = profile_variant(dir, "near", {}, {{"accel", key.str()}});
+    }
+    const auto near = chamber_soaks(dir + "/" + std::to_string(seed) + "-near", near_profile,
+                                    static_cast<std::uint64_t>(seed));
+    if (right(named(near, profile, {}), {"accel.scale_temp2"})) ++near_right;
+  }
+  for (std::size_t k = 0; k < kCases.size(); ++k) {
+    std::printf("%-60s right in %d of %d seeds\n", kCases[k].label.c_str(), right_count[k], seeds);
+    CHECK(right_count[k] >= 0.95 * seeds);
+  }
+  std::printf("%-60s right in %d of %d seeds\n", "accel.scale_temp2 near the limit (3.5 sigma)",
+              near_right, seeds);
+  CHECK(near_right >= 0.95 * seeds);
+}
