@@ -61,8 +61,8 @@ int cmd_report(const std::vector<std::string>& args) {
   const std::string html = certificate_html(c);
   write_atomically(out_path, [&](std::ostream& out) { out << html; });
   std::printf("%s: calibration certificate of %s (%s; %zu coefficients, %zu sections)\n",
-              out_path.c_str(), result_path.c_str(), c.verdict_title.c_str(),
-              c.coefficients.size(), c.sections.size());
+              out_path.c_str(), result_path.c_str(), c.verdict_title.c_str(), c.coefficients.size(),
+              c.sections.size());
   if (pdf_path.empty()) return 0;
   try {
     print_pdf(out_path, pdf_path);

@@ -9,8 +9,8 @@
 #include "apps/commands.hpp"
 #include "filter/thermal/soak_run.hpp"
 #include "models/units.hpp"
-#include "report/provenance.hpp"
 #include "report/output.hpp"
+#include "report/provenance.hpp"
 #include "report/thermal_output.hpp"
 
 namespace sinscal::cli {

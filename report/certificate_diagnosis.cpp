@@ -38,12 +38,14 @@ CertificateSection diagnosis_section(const std::string& dir) {
   const std::string path = (fs::path(dir) / "diagnosis.json").string();
   std::error_code ec;
   if (!fs::is_directory(dir, ec))
-    throw std::runtime_error(dir + ": not a directory (--diagnosis takes the --out DIR of "
-                                   "sinscal diagnose)");
+    throw std::runtime_error(dir +
+                             ": not a directory (--diagnosis takes the --out DIR of "
+                             "sinscal diagnose)");
   std::ifstream in(path);
   if (!in)
-    throw std::runtime_error(path + ": cannot open (--diagnosis takes the --out DIR of sinscal "
-                                    "diagnose, which holds diagnosis.json)");
+    throw std::runtime_error(path +
+                             ": cannot open (--diagnosis takes the --out DIR of sinscal "
+                             "diagnose, which holds diagnosis.json)");
   Json j;
   try {
     j = Json::parse(in);
@@ -57,16 +59,17 @@ CertificateSection diagnosis_section(const std::string& dir) {
   const std::string session = j.value("session", "");
   const Json method = j.value("method", Json::object());
   s.facts.emplace_back("Diagnosis of", session.empty() ? std::string("-") : session);
-  s.facts.emplace_back("Test", method.value("name", std::string("-")) +
-                                   (method.contains("alpha")
-                                        ? " (family-wise level " + number(method, "alpha", "%g") + ")"
-                                        : ""));
+  s.facts.emplace_back(
+      "Test",
+      method.value("name", std::string("-")) +
+          (method.contains("alpha") ? " (family-wise level " + number(method, "alpha", "%g") + ")"
+                                    : ""));
   if (j["findings"].empty()) {
     s.paragraphs.push_back(
         "No finding: no effect outside the calibrated model is significant in this session.");
   } else {
-    s.table.header = {"round", "effect", "from", "log10 p", "residual RMS before",
-                      "residual RMS after"};
+    s.table.header = {
+        "round", "effect", "from", "log10 p", "residual RMS before", "residual RMS after"};
     for (const auto& f : j["findings"]) {
       const Json st = f.value("statistic", Json::object());
       s.table.rows.push_back({f.contains("round") ? f["round"].dump() : "-",

@@ -13,20 +13,30 @@ std::string html_escaped(const std::string& text) {
   out.reserve(text.size());
   for (char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
 }
 
 std::string base64(const std::string& bytes) {
-  static const char* alphabet =
-      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  static const char* alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   std::string out;
   out.reserve((bytes.size() + 2) / 3 * 4);
   std::size_t i = 0;
@@ -140,11 +150,10 @@ void identity(std::ostringstream& h, const Certificate& c) {
          "<th class=\"num\">bytes</th><th>SHA-256 (at calibration)</th><th>now</th></tr>"
          "</thead>\n<tbody>\n";
     for (const auto& f : c.files) {
-      h << "<tr><td>" << html_escaped(f.role) << "</td><td class=\"mono\">"
-        << html_escaped(f.path) << "</td><td class=\"num\">"
-        << (f.bytes ? std::to_string(*f.bytes) : "-") << "</td><td class=\"mono\">"
-        << html_escaped(f.sha256.empty() ? "not available" : f.sha256) << "</td><td"
-        << (f.state.rfind("CHANGED", 0) == 0 ? " class=\"changed\"" : "") << ">"
+      h << "<tr><td>" << html_escaped(f.role) << "</td><td class=\"mono\">" << html_escaped(f.path)
+        << "</td><td class=\"num\">" << (f.bytes ? std::to_string(*f.bytes) : "-")
+        << "</td><td class=\"mono\">" << html_escaped(f.sha256.empty() ? "not available" : f.sha256)
+        << "</td><td" << (f.state.rfind("CHANGED", 0) == 0 ? " class=\"changed\"" : "") << ">"
         << html_escaped(f.state) << "</td></tr>\n";
     }
     h << "</tbody></table>\n";
@@ -182,8 +191,8 @@ void section(std::ostringstream& h, const CertificateSection& s) {
   const bool keep = s.table.rows.size() < 12 && s.png.empty();
   h << "<section" << (keep ? " class=\"keep\"" : "") << "><h2>" << html_escaped(s.title)
     << "</h2>\n";
-  for (const auto& p : s.paragraphs) h << "<p class=\"note\">" << html_escaped(p) << "</p>\n";
   if (!s.facts.empty()) facts(h, s.facts);
+  for (const auto& p : s.paragraphs) h << "<p class=\"note\">" << html_escaped(p) << "</p>\n";
   table(h, s.table);
   if (!s.png.empty())
     h << "<figure><img alt=\"" << html_escaped(s.png_alt) << "\" src=\"data:image/png;base64,"

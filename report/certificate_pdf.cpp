@@ -50,13 +50,15 @@ void print_pdf(const std::string& html_path, const std::string& pdf_path,
   if (err != 0) {
     std::remove(log.c_str());
     if (err == ENOENT)
-      throw ChromiumMissing(chromium + " is not installed (the Debian package chromium prints "
-                                       "the PDF)");
+      throw ChromiumMissing(chromium +
+                            " is not installed (the Debian package chromium prints "
+                            "the PDF)");
     throw std::runtime_error("cannot run " + chromium + ": " + std::strerror(err));
   }
   int status = 0;
   while (waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR) throw std::runtime_error("waiting for chromium: " + std::string(std::strerror(errno)));
+    if (errno != EINTR)
+      throw std::runtime_error("waiting for chromium: " + std::string(std::strerror(errno)));
   std::string messages;
   {
     std::ifstream in(log);

@@ -64,9 +64,10 @@ std::string plot_script(const MonitorSeries& s, const std::vector<FamilyCurve>& 
     << "set logscale y\nset grid\nset format y '%g'\n"
     << "set key outside right top vertical samplen 2\n"
     << "set xlabel 'time [s]'\n"
-    << "set ylabel " << gnuplot_quoted(by_target ? "largest sigma / target" : "largest sigma / first")
-    << "\n";
-  if (by_target) g << "set arrow from graph 0, first 1 to graph 1, first 1 nohead dt 2 lw 2 lc rgb '#c00000'\n";
+    << "set ylabel "
+    << gnuplot_quoted(by_target ? "largest sigma / target" : "largest sigma / first") << "\n";
+  if (by_target)
+    g << "set arrow from graph 0, first 1 to graph 1, first 1 nohead dt 2 lw 2 lc rgb '#c00000'\n";
   if (converged_at_t >= 0.0)
     g << "set arrow from " << gnuplot_number(converged_at_t) << ", graph 0 to "
       << gnuplot_number(converged_at_t) << ", graph 1 nohead dt 3 lc rgb '#2e7d32'\n";
@@ -78,8 +79,8 @@ std::string plot_script(const MonitorSeries& s, const std::vector<FamilyCurve>& 
   }
   g << "EOD\nplot ";
   for (std::size_t i = 0; i < curves.size(); ++i)
-    g << (i ? ", \\\n     " : "") << "$data using 1:" << i + 2 << " with lines lw 2 title "
-      << gnuplot_quoted(curves[i].family);
+    g << (i ? ", \\\n     " : "") << "$data using 1:" << i + 2 << " with lines lw 2 dt "
+      << (i < 8 ? 1 : 2) << " title " << gnuplot_quoted(curves[i].family);
   g << "\n";
   return g.str();
 }

@@ -77,8 +77,8 @@ void identity_and_files(const Json& j, const std::string& result_path, Certifica
                 {"Command line", p.value("command_line", na)},
                 {"Working directory", p.value("working_directory", na)}};
   std::uintmax_t bytes = 0;
-  c.identity.emplace_back("Result file", result_path + " (SHA-256 " +
-                                             sha256_file(result_path, &bytes) + ")");
+  c.identity.emplace_back("Result file",
+                          result_path + " (SHA-256 " + sha256_file(result_path, &bytes) + ")");
   if (!p.contains("inputs")) {
     c.files_note =
         "The result records no input files (it was written before sinscal recorded its inputs, "
@@ -100,8 +100,7 @@ void identity_and_files(const Json& j, const std::string& result_path, Certifica
     } else if (!fs::is_regular_file(now, ec)) {
       file.state = "not found now (recorded hash only)";
     } else {
-      file.state = sha256_file(now) == file.sha256 ? "unchanged"
-                                                   : "CHANGED since the calibration";
+      file.state = sha256_file(now) == file.sha256 ? "unchanged" : "CHANGED since the calibration";
     }
     c.files.push_back(file);
   }
@@ -159,13 +158,14 @@ void verdict(const Json& j, Certificate& c) {
   } else if (name == "thermal" && j.contains("thermal")) {
     const Json& fit = j["thermal"].value("fit", Json::object());
     c.verdict_reasons.push_back("fit over " + at(method, "soaks") + " soaks: chi2 " +
-                                at(fit, "chi2") + " on " + at(fit, "dof") + " dof, p = " +
-                                at(fit, "p_value"));
+                                at(fit, "chi2") + " on " + at(fit, "dof") +
+                                " dof, p = " + at(fit, "p_value"));
   }
   if (j.contains("plausibility") && !truthy(j["plausibility"], "passed")) {
     set(Verdict::Fail, "Plausibility gate failed (calibrated with --force)");
     for (const auto& ch : j["plausibility"].value("checks", Json::array()))
-      if (!truthy(ch, "passed")) c.verdict_reasons.push_back(at(ch, "check") + ": " + at(ch, "detail"));
+      if (!truthy(ch, "passed"))
+        c.verdict_reasons.push_back(at(ch, "check") + ": " + at(ch, "detail"));
   }
   if (j.contains("stopped")) {
     set(Verdict::Fail, "Stopped before the end of the data");
@@ -210,9 +210,9 @@ std::optional<CertificateSection> installation_section(const Json& j) {
     s.facts.emplace_back("Table base", "not estimated");
   }
   if (truthy(mount, "estimated")) {
-    s.facts.emplace_back("Mounting rotation x, y, z [arcsec]",
-                         at(mount, "rotation_vector_arcsec") + " (± " +
-                             at(mount, "sigma_arcsec", 2) + ")");
+    s.facts.emplace_back(
+        "Mounting rotation x, y, z [arcsec]",
+        at(mount, "rotation_vector_arcsec") + " (± " + at(mount, "sigma_arcsec", 2) + ")");
     s.facts.emplace_back("Mounting angle [deg]", at(mount, "angle_deg"));
     s.facts.emplace_back("Mounting from", at(mount, "from"));
   } else {
@@ -237,24 +237,30 @@ std::vector<CertificateSection> residual_sections(const Json& j) {
     for (const auto& e : j[key]) s.table.rows.push_back(row(e));
     out.push_back(s);
   };
-  table("stage1", "Residuals per dwell (stage 1)",
-        {"dwell", "label", "duration [s]", "RMS velocity [m/s]", "RMS attitude [arcsec]",
-         "chi2/dof"},
-        [](const Json& e) {
-          const Json r = e.value("residuals", Json::object());
-          return std::vector<std::string>{at(e, "dwell"), at(e, "label"), at(e, "duration_s"),
-                                          at(r, "rms_velocity_m_per_s", 3),
-                                          at(r, "rms_attitude_arcsec", 3), at(r, "chi2_per_dof", 3)};
-        });
+  table(
+      "stage1", "Residuals per dwell (stage 1)",
+      {"dwell", "label", "duration [s]", "RMS velocity [m/s]", "RMS attitude [arcsec]", "chi2/dof"},
+      [](const Json& e) {
+        const Json r = e.value("residuals", Json::object());
+        return std::vector<std::string>{at(e, "dwell"),
+                                        at(e, "label"),
+                                        at(e, "duration_s"),
+                                        at(r, "rms_velocity_m_per_s", 3),
+                                        at(r, "rms_attitude_arcsec", 3),
+                                        at(r, "chi2_per_dof", 3)};
+      });
   table("poses", "Residuals per pose",
         {"pose", "start [s]", "duration [s]", "|f| - g [m/s²]", "accel RMS [m/s²]",
          "gyro RMS [deg/s]", "turn error [deg]"},
         [](const Json& e) {
           const Json f = e.value("fit", Json::object());
-          return std::vector<std::string>{at(e, "pose"), at(e, "t_start"), at(e, "duration_s"),
+          return std::vector<std::string>{at(e, "pose"),
+                                          at(e, "t_start"),
+                                          at(e, "duration_s"),
                                           at(f, "gravity_error_m_per_s2", 3),
                                           at(f, "accel_rms_m_per_s2", 3),
-                                          at(f, "gyro_rms_deg_per_s", 3), at(f, "turn_error_deg", 3)};
+                                          at(f, "gyro_rms_deg_per_s", 3),
+                                          at(f, "turn_error_deg", 3)};
         });
   table("faces", "Residuals per face",
         {"face", "duration [s]", "tilt [deg]", "tilt sigma [deg]", "|f| - g [m/s²]"},
