@@ -65,7 +65,7 @@ void identity_and_files(const Json& j, const std::string& result_path, Certifica
   if (c.unit_name.empty()) c.unit_name = session.value("name", "");
   const std::string na = "not recorded";
   auto named = [&](const Json& o) {
-    if (!o.contains("file")) return na;
+    if (!o.contains("file")) return std::string(na);
     const std::string name = o.value("name", "");
     return (name.empty() ? "" : name + " (") + o.value("file", "") + (name.empty() ? "" : ")");
   };
