@@ -63,6 +63,11 @@ SessionSummary calibrate_six_face_session(const CalibrateOptions& o,
 /// The gate's report as the result's "plausibility" section (nothing when no check ran).
 void record_gate(nlohmann::ordered_json& sections, const PlausibilityReport& report);
 
+/// Where the result came from as its "provenance" section (docs/formats.md): version, date,
+/// command line, the session's files with their SHA-256 (a log read from standard input: none).
+void record_provenance(nlohmann::ordered_json& sections, const Session& session,
+                       const std::string& monitor_path = "", bool stdin_log = false);
+
 /// One session by the options' method: the result file, the monitor file (kf, may be empty);
 /// `verbose`: tables and verdicts on standard output (a single session); `live`: the live table
 /// on the terminal. Returns the session's summary row (status by the run-status rules).

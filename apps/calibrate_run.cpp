@@ -12,6 +12,7 @@
 #include "models/units.hpp"
 #include "report/monitor.hpp"
 #include "report/output.hpp"
+#include "report/provenance.hpp"
 
 namespace sinscal::cli {
 
@@ -103,6 +104,7 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
   const ResultCoefficients coefficients = result_coefficients(kr);
   auto sections = result_sections(kr);
   record_gate(sections, gate);
+  record_provenance(sections, session, monitor_path, o.stream);
   write_result_json(out_path, coefficients, sections);
   const ResultCoefficients truth = load_truth(session, kr.accel_triad_frame, o.lever_arm_reference);
   SessionSummary row{session.path,
@@ -150,6 +152,7 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
   const ResultCoefficients coefficients = result_coefficients(r);
   auto sections = result_sections(r);
   record_gate(sections, gate);
+  record_provenance(sections, session);
   write_result_json(out_path, coefficients, sections);
   const ResultCoefficients truth = load_truth(session);
   SessionSummary row{session.path, session.name,
@@ -177,6 +180,21 @@ void record_gate(nlohmann::ordered_json& sections, const PlausibilityReport& rep
   for (const auto& c : report.checks)
     checks.push_back({{"check", c.name}, {"passed", c.passed}, {"detail", c.detail}});
   sections["plausibility"] = {{"passed", report.passed()}, {"checks", checks}};
+}
+
+void record_provenance(nlohmann::ordered_json& sections, const Session& session,
+                       const std::string& monitor_path, bool stdin_log) {
+  ProvenanceInput in;
+  in.command_line = g_command_line;
+  in.session = session.path;
+  in.session_name = session.name;
+  in.sensor_profile = session.sensor_file;
+  if (!session.sensor_file.empty())
+    in.sensor_profile_name = SensorProfile::load(session.sensor_file).name;
+  in.files = session_inputs(session);
+  in.stdin_log = stdin_log;
+  in.monitor = monitor_path;
+  sections["provenance"] = provenance_section(in);
 }
 
 SessionSummary calibrate_session(const CalibrateOptions& o, const std::string& session_path,

@@ -53,6 +53,7 @@ SessionSummary calibrate_six_face_session(const CalibrateOptions& o,
   const ResultCoefficients coefficients = result_coefficients(r);
   auto sections = result_sections(r, so, session.log);
   record_gate(sections, gate);
+  record_provenance(sections, session);
   write_result_json(out_path, coefficients, sections);
   const ResultCoefficients truth = load_truth(session);
   SessionSummary row{session.path, session.name,

@@ -126,6 +126,7 @@ SessionSummary calibrate_table_free_session(const CalibrateOptions& o,
   const ResultCoefficients coefficients = result_coefficients(run);
   auto sections = result_sections(run);
   record_gate(sections, gate);
+  record_provenance(sections, session);
   write_result_json(out_path, coefficients, sections);
   if (!validation_error.empty()) throw std::runtime_error(validation_error);
   const ResultCoefficients truth = load_truth(session, true);

@@ -66,6 +66,7 @@ std::string fmt(const char* format, double v) {
 }
 
 std::atomic<bool> g_stop{false};
+std::string g_command_line;
 namespace {
 extern "C" void on_stop_signal(int) { g_stop.store(true); }
 }  // namespace

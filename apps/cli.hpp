@@ -22,6 +22,7 @@ namespace po = boost::program_options;
 constexpr int kUsageError = 1;
 constexpr int kDataError = 2;
 constexpr int kDisagree = 3;       // compare: the results differ beyond the given tolerance
+constexpr int kPartial = 4;        // report: the HTML page written, the PDF not
 constexpr int kInterrupted = 130;  // SIGINT / SIGTERM: stopped, what was computed written
 
 struct UsageError : std::runtime_error {
@@ -49,6 +50,8 @@ std::string fmt(const char* format, double v);
 /// Set by SIGINT / SIGTERM once install_stop_handlers() ran: a calibration stops reading,
 /// finishes and writes its results.
 extern std::atomic<bool> g_stop;
+/// The command line of this run as a shell would take it back (set by main; results record it).
+extern std::string g_command_line;
 void install_stop_handlers();
 
 /// An option whose value is one of a few names (--method kf): the names and their values.

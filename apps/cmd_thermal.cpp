@@ -10,6 +10,7 @@
 #include "filter/thermal/soak_run.hpp"
 #include "models/units.hpp"
 #include "report/output.hpp"
+#include "report/provenance.hpp"
 #include "report/thermal_output.hpp"
 
 namespace sinscal::cli {
@@ -75,6 +76,8 @@ int cmd_thermal(const std::vector<std::string>& args) {
                         {"soaks", estimates.size()},
                         {"body_frame", "table"}};
   sections["thermal"] = thermal_section(fit, records);
+  ProvenanceInput prov{g_command_line, "", "", "", "", {{"chamber", chamber_path}}, false, ""};
+  sections["provenance"] = provenance_section(prov);
   write_result_json(out_dir + "/result.json", thermal_coefficients(fit), sections);
   const double from = std::floor(t_lo / grid_step) * grid_step;
   const double to = std::ceil(t_hi / grid_step) * grid_step;

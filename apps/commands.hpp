@@ -16,5 +16,6 @@ int cmd_allan(const std::vector<std::string>& args);
 int cmd_design(const std::vector<std::string>& args);
 int cmd_export(const std::vector<std::string>& args);
 int cmd_thermal(const std::vector<std::string>& args);
+int cmd_report(const std::vector<std::string>& args);
 
 }  // namespace sinscal::cli

@@ -6,6 +6,7 @@
 
 #include "apps/cli.hpp"
 #include "apps/commands.hpp"
+#include "report/provenance.hpp"
 
 namespace {
 const char* kUsage =
@@ -24,7 +25,8 @@ const char* kUsage =
     "             magnitude and the gain of adding it (model discovery)\n"
     "  allan      Allan deviation of a static record or pose, fitted noise terms, plot\n"
     "  design     the accuracy a plan will give, predicted without data (table, targets)\n"
-    "  thermal    thermal calibration from a chamber's soaks: coefficients against temperature\n";
+    "  thermal    thermal calibration from a chamber's soaks: coefficients against temperature\n"
+    "  report     the calibration certificate of a result: one HTML page (and PDF)\n";
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -35,6 +37,7 @@ int main(int argc, char** argv) {
   }
   const std::string command = argv[1];
   const std::vector<std::string> args(argv + 2, argv + argc);
+  g_command_line = sinscal::shell_command_line(std::vector<std::string>(argv, argv + argc));
   try {
     if (command == "simulate") return cmd_simulate(args);
     if (command == "navigate") return cmd_navigate(args);
@@ -46,6 +49,7 @@ int main(int argc, char** argv) {
     if (command == "allan") return cmd_allan(args);
     if (command == "design") return cmd_design(args);
     if (command == "thermal") return cmd_thermal(args);
+    if (command == "report") return cmd_report(args);
     std::cerr << "sinscal: unknown command '" << command << "'\n" << kUsage;
     return kUsageError;
   } catch (const po::error& e) {

@@ -7,6 +7,7 @@
 #include "apps/cli.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/units.hpp"
+#include "report/coefficient_table.hpp"
 
 namespace sinscal::cli {
 
@@ -15,25 +16,14 @@ void print_coefficient_table(const ResultCoefficients& coefficients,
   std::printf("\n%-24s %12s %10s %-7s", "coefficient", "estimate", "sigma", "unit");
   if (!truth.empty()) std::printf(" %12s %10s %7s", "truth", "error", "err/sig");
   std::printf("\n");
-  for (const auto& info : coefficient_catalog()) {
-    const auto it = coefficients.find(info.name);
-    if (it == coefficients.end()) continue;
-    const ResultCoefficient& c = it->second;
-    const bool estimated = c.observable && !c.fixed_by_convention;
-    if (c.fixed_by_convention)
-      std::printf("%-24s %23s %-7s", info.name.c_str(), "0 (convention)", c.unit.c_str());
-    else if (!c.observable)
-      std::printf("%-24s %23s %-7s", info.name.c_str(), "unobservable", c.unit.c_str());
+  for (const CoefficientRow& r : coefficient_rows(coefficients, truth)) {
+    if (r.kind == CoefficientRow::Kind::Estimated)
+      std::printf("%-24s %12s %10s %-7s", r.name.c_str(), r.value.c_str(), r.sigma.c_str(),
+                  r.unit.c_str());
     else
-      std::printf("%-24s %12.4f %10.4f %-7s", info.name.c_str(), c.value, *c.sigma, c.unit.c_str());
-    const auto t = truth.find(info.name);
-    if (t != truth.end()) {
-      if (estimated)
-        std::printf(" %12.4f %10.4f %7.2f", t->second.value, c.value - t->second.value,
-                    (c.value - t->second.value) / *c.sigma);
-      else
-        std::printf(" %12.4f", t->second.value);
-    }
+      std::printf("%-24s %23s %-7s", r.name.c_str(), r.value.c_str(), r.unit.c_str());
+    if (r.truth) std::printf(" %12s", r.truth->c_str());
+    if (r.error) std::printf(" %10s %7s", r.error->c_str(), r.error_over_sigma->c_str());
     std::printf("\n");
   }
 }

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The bad-input corpus, end to end: every command (simulate, navigate, calibrate --method
-# closed-form, kf and table-free, compare, export, plot-convergence, allan) and every input file
+# closed-form, kf and table-free, compare, export, report, plot-convergence, allan) and every input file
 # type (plan, sensor profile, session.ini with or without a plan, native log, custom log, split,
 # one file per dwell, NovAtel, result JSON, monitor JSONL). Each case is one bad input, made in its
 # own folder from small bundled ones, and must end with the documented exit code (2: data, 1:
@@ -652,6 +652,38 @@ new export-unknown-format; cp "$base/s8/cf.json" "$d/r.json"
 fixed 1 "--format: export format must be json | yaml | c-header, not 'xml'" S export --result r.json --format xml
 new export-no-format; cp "$base/s8/cf.json" "$d/r.json"
 fixed 1 "'--format' is required" S export --result r.json
+
+# --- report (result JSON and a diagnosis directory to a certificate) ---------------------------
+new control-report; cp "$base/s8/cf.json" "$d/r.json"
+POST='grep -q "<td>gyro.bias.x</td>" out/r.html'
+control 0 "" S report --result r.json --out out/r.html
+new report-missing-file
+POST='! test -e out/r.html'
+fixed 2 "nope.json: cannot open" S report --result nope.json --out out/r.html
+new report-not-json; echo "not json" > "$d/r.json"
+fixed 2 "r.json: not a sinscal result file (not JSON" S report --result r.json --out out/r.html
+new report-no-coefficients-key; echo '{"method": {"name": "kf"}}' > "$d/r.json"
+fixed 2 "r.json: not a sinscal result file (no \"coefficients\" object)" S report --result r.json --out out/r.html
+new report-truth-file; cp "$base/s8/truth.json" "$d/"
+fixed 2 "truth.json: a truth file (simulate's), not a calibration result" S report --result truth.json --out out/r.html
+new report-unknown-coefficient; sed 's/"gyro.bias.x"/"gyro.wobble.x"/' "$base/s8/cf.json" > "$d/r.json"
+fixed 2 "r.json: unknown coefficient 'gyro.wobble.x'" S report --result r.json --out out/r.html
+new report-value-not-a-number; sed '0,/"value": [-0-9.e]*/s//"value": "abc"/' "$base/s8/cf.json" > "$d/r.json"
+fixed 2 "r.json: not a sinscal result file" S report --result r.json --out out/r.html
+new report-diagnosis-without-json; cp "$base/s8/cf.json" "$d/r.json"; mkdir -p "$d/diag"
+POST='! test -e out/r.html'
+fixed 2 "diag/diagnosis.json: cannot open|sinscal diagnose" S report --result r.json --diagnosis diag --out out/r.html
+new report-diagnosis-not-a-diagnosis; cp "$base/s8/cf.json" "$d/r.json"; mkdir -p "$d/diag"; echo '{"session": "s"}' > "$d/diag/diagnosis.json"
+fixed 2 "diag/diagnosis.json: not a sinscal diagnosis (no \"findings\" array)" S report --result r.json --diagnosis diag --out out/r.html
+new report-diagnosis-not-json; cp "$base/s8/cf.json" "$d/r.json"; mkdir -p "$d/diag"; echo 'findings' > "$d/diag/diagnosis.json"
+fixed 2 "diag/diagnosis.json: not a sinscal diagnosis (not JSON" S report --result r.json --diagnosis diag --out out/r.html
+new report-diagnosis-is-a-file; cp "$base/s8/cf.json" "$d/r.json"; cp "$base/s8/cf.json" "$d/diag"
+fixed 2 "diag: not a directory" S report --result r.json --diagnosis diag --out out/r.html
+new report-out-exists; cp "$base/s8/cf.json" "$d/r.json"; echo "kept" > "$d/out/r.html"
+POST='grep -q kept out/r.html'
+fixed 1 "--out out/r.html: exists|--force" S report --result r.json --out out/r.html
+new report-out-is-the-input; cp "$base/s8/cf.json" "$d/r.json"
+fixed 1 "is the result: an output never replaces an input" S report --result r.json --out r.json --force
 
 # --- plot-convergence (monitor JSONL) -----------------------------------------------------------
 new plot-monitor-missing

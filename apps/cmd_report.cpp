@@ -1,0 +1,82 @@
+// sinscal report: the calibration certificate of a result, one self-contained HTML page (and a
+// PDF printed by headless Chromium); report/certificate.hpp.
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "apps/cli.hpp"
+#include "apps/commands.hpp"
+#include "report/certificate.hpp"
+#include "report/output.hpp"
+
+namespace sinscal::cli {
+
+int cmd_report(const std::vector<std::string>& args) {
+  po::options_description d("sinscal report options");
+  std::string result_path, diagnosis_dir, out_path, pdf_path, monitor_path;
+  // clang-format off
+  d.add_options()
+      ("help,h", "this help")
+      ("result", po::value(&result_path)->required(),
+       "result JSON of calibrate (any method) or thermal (also positional)")
+      ("diagnosis", po::value(&diagnosis_dir),
+       "the --out DIR of sinscal diagnose on the same session: its summary on the page")
+      ("monitor", po::value(&monitor_path),
+       "the monitor file of the run (default: the one the result records)")
+      ("out", po::value(&out_path)->required(), "the HTML page to write")
+      ("pdf", po::value(&pdf_path), "also print the page to this PDF (needs Debian's chromium)")
+      ("force", "replace existing output files");
+  // clang-format on
+  po::positional_options_description pos;
+  pos.add("result", 1);
+  const auto vm = parse(
+      args, d,
+      "Usage: sinscal report --result result.json [--diagnosis DIR] --out report.html "
+      "[--pdf report.pdf] [--force]\n"
+      "The calibration certificate: the unit and its data (SHA-256 of the logs), the\n"
+      "coefficients with sigma and unit, the verdict, the installation, the convergence plot,\n"
+      "the residuals and the noise when the result has them, the diagnosis summary; one HTML\n"
+      "page that prints to A4 (docs/formats.md \"Calibration certificate\"). Exit 4: the page\n"
+      "was written but not the PDF (chromium missing or failed).",
+      &pos);
+  if (!vm) return 0;
+  std::vector<std::pair<std::string, std::string>> inputs = {{"result", result_path},
+                                                             {"monitor file", monitor_path}};
+  if (!diagnosis_dir.empty())
+    for (const char* f : {"diagnosis.json", "residuals.png", "report.md"})
+      inputs.emplace_back("diagnosis", (std::filesystem::path(diagnosis_dir) / f).string());
+  refuse_overwrite(inputs, {{"--out", out_path}, {"--pdf", pdf_path}});
+  if (vm->count("force") == 0) {
+    std::error_code ec;
+    for (const auto& [option, path] : {std::pair{"--out", out_path}, std::pair{"--pdf", pdf_path}})
+      if (!path.empty() && std::filesystem::exists(path, ec))
+        throw UsageError(std::string(option) + " " + path +
+                         ": exists; sinscal report does not replace a file without --force");
+  }
+  CertificateOptions o;
+  o.result_path = result_path;
+  o.diagnosis_dir = diagnosis_dir;
+  o.monitor_path = monitor_path;
+  const Certificate c = read_certificate(o);
+  const std::string html = certificate_html(c);
+  write_atomically(out_path, [&](std::ostream& out) { out << html; });
+  std::printf("%s: calibration certificate of %s (%s; %zu coefficients, %zu sections)\n",
+              out_path.c_str(), result_path.c_str(), c.verdict_title.c_str(), c.coefficients.size(),
+              c.sections.size());
+  if (pdf_path.empty()) return 0;
+  try {
+    print_pdf(out_path, pdf_path);
+  } catch (const ChromiumMissing& e) {
+    std::cerr << "sinscal report: error: no PDF: " << e.what() << "; the HTML page was written to "
+              << out_path << "\n";
+    return kPartial;
+  } catch (const std::runtime_error& e) {
+    std::cerr << "sinscal report: error: no PDF: " << e.what() << "; the HTML page was written to "
+              << out_path << "\n";
+    return kPartial;
+  }
+  std::printf("%s: the certificate printed to PDF\n", pdf_path.c_str());
+  return 0;
+}
+
+}  // namespace sinscal::cli
