@@ -157,7 +157,7 @@ int cmd_diagnose(const std::vector<std::string>& args) {
   s1.min_dwell = min_dwell;
   const PlausibilityLimits limits = PlausibilityLimits::from_profile(profile ? &*profile : nullptr);
   const bool force = vm->count("force") > 0;
-  check_log_temperature(session, force);
+  o.thermal = log_temperature_varies(session);
   PlausibilityReport gate = check_plausibility(session, limits);
   enforce(gate, force);
   const TableAttitudeError table{table_sigma * units::arcsec};
@@ -183,8 +183,10 @@ int cmd_diagnose(const std::vector<std::string>& args) {
   enforce(gate, force);
   TableDiagnosisOptions to;
   to.dwells = o;
-  const TableDiagnosis diagnosis = diagnose_table(
-      calibration.stage1, session.site, calibration.stage2_options, to, turns ? &*turns : nullptr);
+  Stage2Options s2 = calibration.stage2_options;
+  if (profile) s2.reference_temperature_c = profile->reference_temperature_c;
+  const TableDiagnosis diagnosis =
+      diagnose_table(calibration.stage1, session.site, s2, to, turns ? &*turns : nullptr);
   print_diagnosis(diagnosis);
   std::filesystem::create_directories(out_dir);
   const DiagnosisFiles written =

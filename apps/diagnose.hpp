@@ -35,10 +35,9 @@ struct ChamberDiagnoseOptions {
 };
 int diagnose_chamber(const std::string& chamber_path, const ChamberDiagnoseOptions& o);
 
-/// A table session's log with a temperature column: one temperature (span below 2 C) is said
-/// and the diagnosis goes on; a moving temperature throws LogError (the dwells' test has no
-/// temperature), or with `force` is said as a warning.
-void check_log_temperature(const Session& session, bool force);
+/// Whether a table session's log has temperature columns that move by 2 C or more (the thermal
+/// families are then candidates); said on the terminal either way.
+bool log_temperature_varies(const Session& session);
 
 /// The table session's findings on the terminal (apps/print_diagnosis.cpp).
 void print_diagnosis(const TableDiagnosis& d);

@@ -1,7 +1,6 @@
 // sinscal diagnose on a chamber session (apps/cmd_diagnose.cpp): each soak calibrated by the
 // Kalman filter, then the thermal families the model lacks tested against the soaks
 // (filter/diagnosis/thermal_diagnosis.hpp).
-#include <array>
 #include <cstdio>
 #include <filesystem>
 
@@ -76,11 +75,11 @@ constexpr double kConstantTemperatureSpan = 2.0;  // deg C
 
 }  // namespace
 
-void check_log_temperature(const Session& session, bool force) {
+bool log_temperature_varies(const Session& session) {
   {
     LogReader reader(session.log);
     ImuSample s;
-    if (!reader.next(s) || !s.has_temperature) return;
+    if (!reader.next(s) || !s.has_temperature) return false;
   }
   const SoakTemperature T = measure_soak_temperature(session.log);
   const double span = T.max_c - T.min_c;
@@ -90,19 +89,13 @@ void check_log_temperature(const Session& session, bool force) {
         "temperature, the thermal families are not tested (a chamber's soaks test them: "
         "diagnose --session chamber.ini)\n",
         T.min_c, T.max_c, span, kConstantTemperatureSpan);
-    return;
+    return false;
   }
-  std::array<char, 800> buf{};
-  std::snprintf(
-      buf.data(), buf.size(),
-      "the log's temperature moves by %.1f C (%.2f C at t = %.1f s, line %zu; %.2f C at t = "
-      "%.1f s, line %zu): the dwells' test has no temperature and would take thermal effects for "
-      "others (a ramp's named accel.bias_drift); diagnose the chamber's soaks (diagnose --session "
-      "chamber.ini), or calibrate the ramp with the thermal model (calibrate --method kf)",
-      span, T.min_c, T.t_min, T.line_min, T.max_c, T.t_max, T.line_max);
-  const std::string what = buf.data();
-  if (!force) throw LogError(session.log.file, T.line_max, what);
-  std::printf("Warning (--force): %s\n", what.c_str());
+  std::printf(
+      "Temperature: %.2f ... %.2f C over the log (span %.1f C): the thermal families are "
+      "candidates, each dwell at its mean temperature and rate\n",
+      T.min_c, T.max_c, span);
+  return true;
 }
 
 int diagnose_chamber(const std::string& chamber_path, const ChamberDiagnoseOptions& o) {

@@ -343,3 +343,35 @@ TEST_CASE("Closed form Monte Carlo: spread of the errors matches the predicted s
     CHECK(std::abs(mean) < 3.0 * sigma(i) / std::sqrt(static_cast<double>(runs)));
   }
 }
+
+TEST_CASE("Stage 1 records each dwell's mean temperatures and the gyros' rate", "[closed_form]") {
+  // The seed8 session's samples given temperatures linear in time (accelerometers 2 C above the
+  // gyros): each dwell's means are those at its middle, its rate the slope. A thermal family's
+  // column in the dwells' map is its coefficient's column times T - T0.
+  const Case c;
+  auto samples = test::simulate(c.motion);
+  for (auto& s : samples) {
+    s.has_temperature = true;
+    s.gyro_temperature_c = 10.0 + 0.01 * s.t;
+    s.accel_temperature_c = s.gyro_temperature_c + 2.0;
+  }
+  const auto in = stage1(c, samples, default_stage1(&c.profile));
+  REQUIRE(in.size() == 8);
+  for (const auto& e : in) {
+    REQUIRE(e.has_temperature);
+    // The samples' mean over (t_start, t_end]: the middle, within half a sample interval.
+    const double mid = 0.5 * (e.dwell.t_start + e.dwell.t_end);
+    CHECK(e.gyro_temperature_c == Approx(10.0 + 0.01 * mid).margin(0.01 * 0.01));
+    CHECK(e.accel_temperature_c == Approx(12.0 + 0.01 * mid).margin(0.01 * 0.01));
+    CHECK(e.gyro_temperature_rate == Approx(0.01).epsilon(1e-9));
+  }
+  const auto& cat = coefficient_catalog();
+  const int bias = static_cast<int>(&coefficient_info("accel.bias.x") - cat.data());
+  const int slope = static_cast<int>(&coefficient_info("accel.bias_temp1.x") - cat.data());
+  const int quad = static_cast<int>(&coefficient_info("accel.bias_temp2.x") - cat.data());
+  const EquivalentInputs& e = in[3];
+  const auto H = equivalent_input_map(e, c.plan.site, {bias, slope, quad}, 20.0);
+  const double dT = e.accel_temperature_c - 20.0;
+  CHECK(H.col(1).isApprox(H.col(0) * dT, 1e-12));
+  CHECK(H.col(2).isApprox(H.col(0) * dT * dT, 1e-12));
+}

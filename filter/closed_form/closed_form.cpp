@@ -50,7 +50,24 @@ struct DwellAccumulator {
   double point_distance = 1e300;
   std::size_t steps = 0;
   std::map<int, RowSums> rows;
+  // The samples' temperatures (deg C): sums for the means, first and last for the rate.
+  std::size_t temperatures = 0;
+  double sum_accel_c = 0.0, sum_gyro_c = 0.0;
+  double t_first = 0.0, gyro_first_c = 0.0, t_last = 0.0, gyro_last_c = 0.0;
 };
+
+void add_temperature(DwellAccumulator& a, const ImuSample& s) {
+  if (!s.has_temperature) return;
+  if (a.temperatures == 0) {
+    a.t_first = s.t;
+    a.gyro_first_c = s.gyro_temperature_c;
+  }
+  ++a.temperatures;
+  a.sum_accel_c += s.accel_temperature_c;
+  a.sum_gyro_c += s.gyro_temperature_c;
+  a.t_last = s.t;
+  a.gyro_last_c = s.gyro_temperature_c;
+}
 
 std::vector<int> rows_of(const ChannelSet& c) {
   std::vector<int> r;
@@ -113,6 +130,7 @@ std::map<int, DwellAccumulator> accumulate_dwells(SampleSource& source,
   DwellNavigation nav(dwells, site, nav_opt);
   nav.run(source, [&](const DwellNavRow& r) {
     DwellAccumulator& a = acc[r.dwell];
+    if (r.sample != nullptr) add_temperature(a, *r.sample);
     if (!a.started) {
       a.started = true;
       a.dwell = *r.info;
@@ -270,6 +288,14 @@ std::vector<EquivalentInputs> run_stage1(SampleSource& source, const std::vector
     e.duration = a.prev.t;
     e.samples = a.steps;
     e.estimated = o.channels.inputs();
+    if (a.temperatures > 0) {
+      const auto n = static_cast<double>(a.temperatures);
+      e.has_temperature = true;
+      e.accel_temperature_c = a.sum_accel_c / n;
+      e.gyro_temperature_c = a.sum_gyro_c / n;
+      e.gyro_temperature_rate =
+          a.t_last > a.t_first ? (a.gyro_last_c - a.gyro_first_c) / (a.t_last - a.t_first) : 0.0;
+    }
     if (o.method == Stage1Method::Point)
       point_inputs(a, o, site, e);
     else
@@ -290,9 +316,15 @@ std::vector<int> stage2_parameters() {
 Eigen::Matrix<double, 6, Eigen::Dynamic> equivalent_input_map(const Eigen::Matrix3d& C,
                                                               const Site& site,
                                                               const std::vector<int>& parameters,
-                                                              double t) {
+                                                              double t,
+                                                              const KinematicSample* temperature) {
   const Earth& earth = Earth::wgs84();
   KinematicSample k;
+  if (temperature != nullptr) {
+    k.accel_dtemp = temperature->accel_dtemp;
+    k.gyro_dtemp = temperature->gyro_dtemp;
+    k.gyro_dtemp_rate = temperature->gyro_dtemp_rate;
+  }
   k.f_ib_b = -(C.transpose() * earth.gravity_n(site.lat_rad, site.h_m));
   k.omega_ib_b = C.transpose() * earth.omega_ie_n(site.lat_rad);
   k.t = t;
@@ -302,6 +334,20 @@ Eigen::Matrix<double, 6, Eigen::Dynamic> equivalent_input_map(const Eigen::Matri
   H.middleRows<3>(ins_input::kAccel.index) = C * J.bottomRows<3>();
   H.middleRows<3>(ins_input::kGyro.index) = C * J.topRows<3>();
   return H;
+}
+
+Eigen::Matrix<double, 6, Eigen::Dynamic> equivalent_input_map(const EquivalentInputs& in,
+                                                              const Site& site,
+                                                              const std::vector<int>& parameters,
+                                                              double reference_temperature_c) {
+  KinematicSample temperature;
+  if (in.has_temperature) {
+    temperature.accel_dtemp = in.accel_temperature_c - reference_temperature_c;
+    temperature.gyro_dtemp = in.gyro_temperature_c - reference_temperature_c;
+    temperature.gyro_dtemp_rate = in.gyro_temperature_rate;
+  }
+  return equivalent_input_map(in.dwell.C_b_n_known, site, parameters,
+                              0.5 * (in.dwell.t_start + in.dwell.t_end), &temperature);
 }
 
 Matrix6d stage2_input_covariance(const EquivalentInputs& in, const Site& site,
@@ -343,8 +389,7 @@ NormalEquations stage2_normal_equations(const std::vector<EquivalentInputs>& inp
   const Earth& earth = Earth::wgs84();
   for (const auto& in : inputs) {
     Eigen::Matrix<double, 6, Eigen::Dynamic> H(6, n);
-    H.leftCols(nc) = equivalent_input_map(in.dwell.C_b_n_known, site, o.parameters,
-                                          0.5 * (in.dwell.t_start + in.dwell.t_end));
+    H.leftCols(nc) = equivalent_input_map(in, site, o.parameters, o.reference_temperature_c);
     // The base's error aliases as the table's does: df_n += f_n x d_base, dw_n += omega_ie_n x
     // d_base (f_n = -g_n).
     if (o.base_attitude) {

@@ -26,6 +26,7 @@
 #include "filter/installation/installation.hpp"
 #include "filter/strapdown/ins_error_model.hpp"
 #include "filter/strapdown/strapdown.hpp"
+#include "models/imu_error_model.hpp"
 #include "rig/imu_sample.hpp"
 #include "rig/session.hpp"
 #include "rig/table.hpp"
@@ -71,6 +72,10 @@ struct EquivalentInputs {
   double rms_velocity = 0.0;        // m/s: RMS one-step residual of the velocity rows (fit)
   double rms_attitude = 0.0;        // rad: of the attitude rows (fit)
   double chi2_per_dof = 0.0;  // residual chi-square per degree of freedom under the noise model
+  /// The log's temperatures over the dwell (a log with temperature columns): the means (deg C)
+  /// and the gyros' mean rate of change (deg C/s, last minus first over the time between).
+  bool has_temperature = false;
+  double accel_temperature_c = 0.0, gyro_temperature_c = 0.0, gyro_temperature_rate = 0.0;
 };
 
 /// The command line's stage 1: the coupled model, all four channels, and the white-noise
@@ -91,11 +96,16 @@ std::vector<int> stage2_parameters();
 /// u = H theta at a static attitude (theta in SI, `parameters` catalog indices): the error
 /// model's Jacobian (models/imu_error_model.hpp) at the static inputs f_b = -C^T g_n and
 /// omega_ib_b = C^T omega_ie_n, rotated to NED: df_n = C J_accel theta, dw_n = C J_gyro theta.
-/// `t` (s since the start of the plan; a dwell's middle) for the time-dependent terms.
-Eigen::Matrix<double, 6, Eigen::Dynamic> equivalent_input_map(const Eigen::Matrix3d& C_b_n,
+/// `t` (s since the start of the plan; a dwell's middle) for the time-dependent terms,
+/// `temperature` (its accel_dtemp, gyro_dtemp, gyro_dtemp_rate; null: zero) for the thermal ones.
+Eigen::Matrix<double, 6, Eigen::Dynamic> equivalent_input_map(
+    const Eigen::Matrix3d& C_b_n, const Site& site, const std::vector<int>& parameters,
+    double t = 0.0, const KinematicSample* temperature = nullptr);
+/// The map at a dwell: its known attitude, its middle, its temperatures from T0 (deg C).
+Eigen::Matrix<double, 6, Eigen::Dynamic> equivalent_input_map(const EquivalentInputs& in,
                                                               const Site& site,
                                                               const std::vector<int>& parameters,
-                                                              double t = 0.0);
+                                                              double reference_temperature_c);
 /// The covariance stage 2 gives a dwell's equivalent inputs: stage 1's plus the table's attitude
 /// error aliased into them (df_n += f_n x eps, dw_n += omega_ie_n x eps).
 Matrix6d stage2_input_covariance(const EquivalentInputs& in, const Site& site,
@@ -114,6 +124,8 @@ struct Stage2Options {
   /// vector, NED, true minus the dwells' known attitudes' base; docs/conventions.md "Table base
   /// and mounting"), aliasing into every dwell as the table's attitude error does.
   bool base_attitude = false;
+  /// T0 of the thermal coefficients (deg C): the dwells' temperatures enter as T - T0.
+  double reference_temperature_c = 25.0;
 };
 
 struct Stage2Result {

@@ -39,14 +39,17 @@ struct WhiteDwell {
 class StaticDesign {
  public:
   StaticDesign(const std::vector<EquivalentInputs>& inputs, const Site& site,
-               const TableAttitudeError& table, bool base_attitude)
-      : inputs_(inputs), site_(site), table_(table), base_attitude_(base_attitude) {}
+               const Stage2Options& base)
+      : inputs_(inputs),
+        site_(site),
+        table_(base.table),
+        base_attitude_(base.base_attitude),
+        reference_temperature_c_(base.reference_temperature_c) {}
 
   std::vector<WhiteDwell> whiten(const std::vector<int>& parameters) const {
     std::vector<WhiteDwell> out;
     for (const auto& in : inputs_) {
-      const auto Hc = equivalent_input_map(in.dwell.C_b_n_known, site_, parameters,
-                                           0.5 * (in.dwell.t_start + in.dwell.t_end));
+      const auto Hc = equivalent_input_map(in, site_, parameters, reference_temperature_c_);
       // The table base's error (closed form's stage 2 with a base): three more columns.
       Eigen::Matrix<double, 6, Eigen::Dynamic> H6(6, Hc.cols() + (base_attitude_ ? 3 : 0));
       H6.leftCols(Hc.cols()) = Hc;
@@ -92,6 +95,7 @@ class StaticDesign {
   const Site& site_;
   const TableAttitudeError& table_;
   bool base_attitude_ = false;
+  double reference_temperature_c_ = 25.0;
 };
 
 // The families' default priors (SI) of the parameters: a weak prior that makes every fit
@@ -266,11 +270,11 @@ double log10_f_tail(double f, int dof1, int dof2) {
 namespace diagnosis_detail {
 
 std::vector<int> candidate_components(const std::vector<std::string>& candidates,
-                                      const std::vector<int>& current) {
+                                      const std::vector<int>& current, bool thermal) {
   std::vector<std::string> families = candidates;
   if (families.empty())
     for (const auto& f : coefficient_families())
-      if (!f.base && !f.thermal()) families.push_back(f.name);  // thermal: not tested yet
+      if (!f.base && (thermal || !f.thermal())) families.push_back(f.name);
   const auto& cat = coefficient_catalog();
   std::vector<int> out;
   for (std::size_t k = 0; k < cat.size(); ++k) {
@@ -449,7 +453,7 @@ namespace {
 std::vector<CandidateTest> run_round(const StaticDesign& design, const std::vector<int>& current,
                                      const FitFigures& now, const DiagnosisOptions& o) {
   std::vector<CandidateTest> round;
-  for (int component : diagnosis_detail::candidate_components(o.candidates, current)) {
+  for (int component : diagnosis_detail::candidate_components(o.candidates, current, o.thermal)) {
     CandidateTest c = separability(design, current, component, o);
     if (!c.separable.empty()) test_candidate(design, current, now, c);
     round.push_back(std::move(c));
@@ -491,18 +495,17 @@ DwellTests::DwellTests(std::vector<EquivalentInputs> inputs, const Site& site,
 }
 
 FitFigures DwellTests::fit(const std::vector<int>& parameters) const {
-  return figures(StaticDesign(inputs_, site_, base_.table, base_.base_attitude), parameters);
+  return figures(StaticDesign(inputs_, site_, base_), parameters);
 }
 
 std::vector<CandidateTest> DwellTests::round(const std::vector<int>& current,
                                              const FitFigures& now) const {
-  return run_round(StaticDesign(inputs_, site_, base_.table, base_.base_attitude), current, now,
-                   options_);
+  return run_round(StaticDesign(inputs_, site_, base_), current, now, options_);
 }
 
 std::vector<DwellResidual> DwellTests::residuals(const std::vector<int>& initial,
                                                  const std::vector<int>& final) const {
-  const StaticDesign design(inputs_, site_, base_.table, base_.base_attitude);
+  const StaticDesign design(inputs_, site_, base_);
   std::vector<DwellResidual> out;
   for (const auto& in : inputs_) out.push_back(residual_of(in, site_, base_.table));
   fill_residuals(design, initial, out, false);

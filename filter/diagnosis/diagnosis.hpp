@@ -39,6 +39,9 @@ struct DiagnosisOptions {
   /// Families the user picks out of an ambiguous set (the first of them in the set extends the
   /// model; none: the data's pick, the member with the best fit).
   std::vector<std::string> prefer;
+  /// The thermal families among the default candidates: the dwells' temperatures vary (a
+  /// ramp's log; each dwell's inputs at its mean temperature and rate). Set by the caller.
+  bool thermal = false;
 };
 
 /// Residuals of one dwell, measured minus model: df_n (m/s^2) and dw_n (rad/s), NED.
@@ -159,9 +162,9 @@ CandidateTest* choose(std::vector<CandidateTest>& round, double alpha);
 /// What could not be separated (aliased components), one entry per family.
 std::vector<CandidateTest> not_separable(const std::vector<CandidateTest>& last_round);
 /// Catalog indices of the components of `families` (empty: every extended family of the family
-/// table) not yet in `current`.
+/// table, the thermal ones with `thermal`) not yet in `current`.
 std::vector<int> candidate_components(const std::vector<std::string>& families,
-                                      const std::vector<int>& current);
+                                      const std::vector<int>& current, bool thermal = false);
 /// Tests every candidate against the model `current` whose fit is `now`.
 using RoundRunner = std::function<std::vector<CandidateTest>(const std::vector<int>& current,
                                                              const FitFigures& now)>;

@@ -16,7 +16,7 @@ std::vector<std::string> candidate_families(const DiagnosisOptions& o) {
   std::vector<std::string> out = o.candidates;
   if (out.empty())
     for (const auto& f : coefficient_families())
-      if (!f.base && !f.thermal()) out.push_back(f.name);  // thermal: not tested yet
+      if (!f.base && (o.thermal || !f.thermal())) out.push_back(f.name);
   for (const auto& f : out)
     if (coefficient_family_info(f).base)
       throw std::invalid_argument("diagnosis: " + f + " is a base family, not a candidate");

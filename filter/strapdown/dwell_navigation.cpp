@@ -18,8 +18,9 @@ void DwellNavigation::run(SampleSource& source,
   double next_output = 0.0;
   const double eps = 1e-6;
   const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
-  auto emit = [&](double t_log) {
+  auto emit = [&](double t_log, const ImuSample* sample) {
     DwellNavRow row;
+    row.sample = sample;
     row.dwell = dwells_[d].index;
     row.info = &dwells_[d];
     row.t_log = t_log;
@@ -27,13 +28,13 @@ void DwellNavigation::run(SampleSource& source,
     sink(row);
     return row.error;
   };
+  ImuSample s;
   auto finish = [&](double t_log) {
-    current.final_error = emit(t_log);
+    current.final_error = emit(t_log, nullptr);
     summaries_.push_back(current);
     active = false;
     ++d;
   };
-  ImuSample s;
   double t_last = -1e300;
   while (d < dwells_.size() && source.next(s)) {
     t_last = s.t;
@@ -52,7 +53,7 @@ void DwellNavigation::run(SampleSource& source,
       current = DwellNavSummary{};
       current.dwell = dwells_[d];
       active = true;
-      emit(s.t - s.dt);
+      emit(s.t - s.dt, nullptr);
       next_output = options_.output_interval;
     }
     if (active) {
@@ -60,9 +61,12 @@ void DwellNavigation::run(SampleSource& source,
       ++current.samples;
       const bool last = end > dwells_[d].t_end - 0.5 * s.dt;
       if (last) {
-        finish(s.t);
+        current.final_error = emit(s.t, &s);
+        summaries_.push_back(current);
+        active = false;
+        ++d;
       } else if (nav.state().t >= next_output - eps) {
-        emit(s.t);
+        emit(s.t, &s);
         next_output += options_.output_interval;
       }
     }

@@ -30,8 +30,9 @@ struct DwellNavOptions {
 struct DwellNavRow {
   int dwell = 0;
   const PlanDwell* info = nullptr;
-  double t_log = 0.0;  // s, log time of the row
-  NavError error;      // error.t: time since the dwell's navigation started
+  double t_log = 0.0;                 // s, log time of the row
+  NavError error;                     // error.t: time since the dwell's navigation started
+  const ImuSample* sample = nullptr;  // the sample the row ends with (null: the dwell's start)
 };
 
 struct DwellNavSummary {
