@@ -248,7 +248,7 @@ TEST_CASE("Plan search: a searched plan is a plan file, and its incremental pass
   CHECK(e.worst_family == f.worst_family);
 }
 
-TEST_CASE("Plan search: the beam against every plan of four turns", "[design][search]") {
+TEST_CASE("Plan search: the beam against every plan of four turns", "[design][search][long]") {
   // Turns of 90 deg about the 6 axes after a 10 s start with body x up, 2.5 s dwells: 6^4 =
   // 1296 plans of four turns, all of one duration (so the beam's gain per second ranks as J).
   const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
@@ -278,7 +278,8 @@ TEST_CASE("Plan search: the beam against every plan of four turns", "[design][se
   }
 }
 
-TEST_CASE("Plan search: the shortest plan meeting reachable targets", "[design][search]") {
+TEST_CASE("Plan search: the shortest plan meeting reachable targets",
+          "[design][search][long]") {
   // Targets a few minutes reach: the search meets them, and the refined plan still does.
   const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
   const Plan rot19 = test::load_plan("rot19.ini");
@@ -352,7 +353,7 @@ TEST_CASE("Plan search: --require, the shortest plan that determines a family",
 }
 
 TEST_CASE("Design robustness: the nominal world as predicted, twice the noise twice the errors",
-          "[design][robustness]") {
+          "[design][robustness][long]") {
   // rot19 at 20 Hz, 8 sessions per perturbation. Nominal: the RMS of error / predicted sigma of
   // a family of n errors has a relative spread of 1/sqrt(2 n) (n >= 24: 14 %), so 0.6-1.45 is
   // beyond 2.5 of them. Twice the white noise: the families the noise limits (scale factors,
@@ -381,7 +382,7 @@ TEST_CASE("Design robustness: the nominal world as predicted, twice the noise tw
 }
 
 TEST_CASE("Design advice: the turn that separates a family the plan does not observe",
-          "[design][advice]") {
+          "[design][advice][long]") {
   // Turns about y only: the accelerometer misalignments and bias, with x and z never turned,
   // are not observed; a turn about z is what separates them. rot19 observes every family.
   const Plan rot19 = test::load_plan("rot19.ini");
@@ -413,7 +414,7 @@ TEST_CASE("Design advice: the turn that separates a family the plan does not obs
 }
 
 TEST_CASE("Design advice: the orientation that separates a family an orientation plan misses",
-          "[design][advice]") {
+          "[design][advice][long]") {
   // Four orientations with body z up or down: gravity never along x or y in a dwell, so the
   // accelerometers' x and y scale factors are not observed; the advice appends an orientation
   // of the table's reach that determines them. seed8 observes every family of nav-fog.

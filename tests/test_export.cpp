@@ -609,7 +609,7 @@ void check_round_trip(const RoundTrip& rt, const std::string& what) {
 }  // namespace
 
 TEST_CASE("Export: a unit calibrated by the Kalman filter, exported and applied matches the truth",
-          "[export][cli]") {
+          "[export][cli][long]") {
   const std::string dir = test::temp_dir("export_roundtrip_kf");
   SessionSimulation spec;
   spec.plan_path = test::source_path("config/plans/rot19.ini");
@@ -638,7 +638,7 @@ TEST_CASE("Export: a unit calibrated by the Kalman filter, exported and applied 
 }
 
 TEST_CASE("Export: a unit calibrated by the closed form, exported and applied matches the truth",
-          "[export][cli]") {
+          "[export][cli][long]") {
   const std::string dir = test::temp_dir("export_roundtrip_cf");
   SessionSimulation spec;
   spec.plan_path = test::source_path("config/plans/seed8.ini");
@@ -655,7 +655,7 @@ TEST_CASE("Export: a unit calibrated by the closed form, exported and applied ma
 }
 
 TEST_CASE("Export: a hand-held unit calibrated table-free, exported and applied matches the truth",
-          "[export][cli]") {
+          "[export][cli][long]") {
   // A MEMS unit (percent scale factors, degrees of misalignment, tens of mg of bias) turned by
   // hand between 37 poses, logged in SI; the result's frame is the accelerometer triad's.
   const std::string dir = test::temp_dir("export_roundtrip_table_free");
