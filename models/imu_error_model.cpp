@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <Eigen/QR>
+#include <cmath>
 #include <stdexcept>
 
 #include "models/coefficient_families.hpp"
@@ -129,7 +130,26 @@ namespace {
 struct CoefficientSlot {
   std::ptrdiff_t offset;
   enum class Output { Gyro, Accel, Delay } output;
+  // A thermal coefficient's column in closed form (TriadErrors::linear(dT), thermal_bias):
+  // e_row times the input along `input` (-1: none, a bias) times dT^power (power 0: the rate).
+  bool thermal = false;
+  int row = 0, input = -1, power = 0;
 };
+
+// Where a unit value of a thermal coefficient lands in its triad's thermal terms.
+void locate_thermal(const TriadErrors& t, CoefficientSlot& slot) {
+  Eigen::Index i = 0, j = 0;
+  if (t.bias_temp.maxCoeff(&i, &j) > 0.0) {
+    slot = {slot.offset, slot.output, true, static_cast<int>(i), -1, static_cast<int>(j) + 1};
+  } else if (t.scale_temp.maxCoeff(&i, &j) > 0.0) {
+    slot = {slot.offset,         slot.output,         true,
+            static_cast<int>(i), static_cast<int>(i), static_cast<int>(j) + 1};
+  } else if (t.misalignment_temp.maxCoeff(&i, &j) > 0.0) {
+    slot = {slot.offset, slot.output, true, static_cast<int>(i), static_cast<int>(j), 1};
+  } else if (t.bias_temp_rate.maxCoeff(&i) > 0.0) {
+    slot = {slot.offset, slot.output, true, static_cast<int>(i), -1, 0};
+  }
+}
 const std::vector<CoefficientSlot>& coefficient_slots() {
   static const std::vector<CoefficientSlot> slots = [] {
     ImuErrorModel m;
@@ -142,7 +162,14 @@ const std::vector<CoefficientSlot>& coefficient_slots() {
       const auto output = family_output == FamilyOutput::Delay  ? CoefficientSlot::Output::Delay
                           : family_output == FamilyOutput::Gyro ? CoefficientSlot::Output::Gyro
                                                                 : CoefficientSlot::Output::Accel;
-      out.push_back({reinterpret_cast<const char*>(ptr) - base, output});
+      CoefficientSlot slot{reinterpret_cast<const char*>(ptr) - base, output};
+      if (coefficient_family_info(info.family).thermal()) {
+        *ptr = 1.0;
+        locate_thermal(family_output == FamilyOutput::Gyro ? m.gyro : m.accel, slot);
+        *ptr = 0.0;
+        if (!slot.thermal) throw std::logic_error(info.name + ": not a thermal term");
+      }
+      out.push_back(slot);
     }
     return out;
   }();
@@ -172,6 +199,14 @@ void ImuErrorModel::jacobian(const KinematicSample& s, const Eigen::Vector3d& f_
   for (std::size_t k = 0; k < columns.size(); ++k) {
     const auto col = static_cast<Eigen::Index>(k);
     const CoefficientSlot& slot = slots.at(static_cast<std::size_t>(columns[k]));
+    if (slot.thermal) {  // linear in the input: its column in closed form
+      const bool is_gyro = slot.output == CoefficientSlot::Output::Gyro;
+      const double dT = is_gyro ? s.gyro_dtemp : s.accel_dtemp;
+      double c = slot.power == 0 ? s.gyro_dtemp_rate : std::pow(dT, slot.power);
+      if (slot.input >= 0) c *= (is_gyro ? s.omega_ib_b : s.f_ib_b)(slot.input);
+      J(slot.row + (is_gyro ? 0 : 3), col) = c;
+      continue;
+    }
     double* value = reinterpret_cast<double*>(base + slot.offset);
     switch (slot.output) {
       case CoefficientSlot::Output::Delay:
