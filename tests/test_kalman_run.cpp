@@ -155,6 +155,20 @@ TEST_CASE("Kalman filter: bad samples are skipped (reported) or stop the run, es
     CAPTURE(name, c.value, k.value, *c.sigma);
     CHECK(std::abs(k.value - c.value) < 0.1 * *c.sigma);
   }
+  // Streamed: the NaN (t = 200 s) falls among the samples held for the stream's alignment (its
+  // first 9 dwells, 302 s). The same stop, the same skips, the same estimates (no alignment
+  // applied in either: the unit is not mounted).
+  LogReader stream_stop(s.log);
+  const KalmanRun stopped_stream = run_kalman(s, o, &stream_stop);
+  CHECK(stopped_stream.stopped == stopped.stopped);
+  CHECK(stopped_stream.samples == 19999);
+  LogReader stream_skip(s.log);
+  const KalmanRun skipped_stream = run_kalman(s, o, &stream_skip, skip);
+  CHECK(skipped_stream.installation.alignment_streamed);
+  CHECK(skipped_stream.skipped_examples == skipped.skipped_examples);
+  CHECK(skipped_stream.samples == skipped.samples);
+  for (const auto& [name, c] : result_coefficients(skipped))
+    CHECK(result_coefficients(skipped_stream).at(name).value == c.value);
 }
 
 TEST_CASE("Kalman filter: divergence alarm on an unmodelled effect, none on a clean run",
