@@ -40,8 +40,11 @@ check "... and still calibrates right (every estimate within 3 sigma of the trut
   > "$work/tilt-known.txt" 2>&1
 check "a tilted base taken as known does not calibrate right" \
   grep -qE "beyond 3 sigma|filter diverging" "$work/tilt-known.txt"
+check "... the alignment's base is not taken (its mounting, zero, not significant)" \
+  json "$work/tilt-known.json" "not r['installation']['alignment']['applied']"
 "$bin" calibrate --method kf --session "$work/tilt/session.ini" --out "$work/tilt-est.json" > "$work/tilt-est.txt"
 check "... estimated, it does" grep -qE "within [0-2]\.[0-9]+ sigma \(the errors" "$work/tilt-est.txt"
+check "... starting from the alignment's base" json "$work/tilt-est.json" "r['installation']['alignment']['applied']"
 # Bad values: usage errors (exit 1) naming the option.
 "$bin" calibrate --method kf --base surveyed --session "$work/r19/session.ini" --out "$work/x.json" 2> "$work/bad.err"
 check "--base surveyed exits 1" test $? -eq 1
