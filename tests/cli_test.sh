@@ -378,5 +378,17 @@ sed "s|sensor = sensor.ini|sensor = $src/config/sensors/nav-fog.ini|" "$work/ram
 check "the ramp calibrated without thermal terms is flagged (exit 2)" test $? -eq 2
 check "... as a diverging filter" contains "$work/room.err" "filter diverging"
 
+# A MEMS chamber soak at -40 C: the alignment came out at a 14 deg mounting and a 50 deg heading,
+# "significant" by its own sigmas, and the filter started there diverged at the first turn
+# (t = 80 s). An alignment beyond what the filter admits is not taken (issue 20.3).
+"$bin" simulate --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/mems-thermal.ini" \
+  --chamber "$src/config/chambers/soaks6.ini" --out "$work/mems-soaks" > /dev/null
+"$bin" calibrate --method kf --session "$work/mems-soaks/soak-1/session.ini" --out "$work/mems-soak.json" \
+  > /dev/null 2> "$work/mems-soak.err"
+check "a MEMS soak's implausible alignment is not taken" python3 -c "
+import json,sys; a=json.load(open('$work/mems-soak.json'))['installation']['alignment']
+sys.exit(not (a['valid'] and not a['applied'] and abs(a['base_arcsec'][2]) > 5 * 3600))"
+check "... and the filter passes the first turn" test "$(grep -c 'at t = 80\.' "$work/mems-soak.err")" -eq 0
+
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0

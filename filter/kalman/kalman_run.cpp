@@ -369,7 +369,19 @@ std::vector<AlignmentDwell> held_dwell_means(HeldStream& held, const Session& se
   return {};
 }
 
-// The alignment from the dwells' means; the options start from it when it is significant. With
+// Whether an alignment is a starting point the filter admits: a mounting up to kAdmittedMounting,
+// a base within 3 of its prior sigmas. MEMS gyros at -40 C (mems-thermal, a chamber soak) gave a
+// 14 deg mounting and a 50 deg heading, "significant" by their own sigmas (the gyros' g-sensitivity
+// and thermal bias, unmodelled, are 100 times the Earth rate the heading comes from): the filter
+// started there diverged at the first turn (t = 80 s).
+bool admissible(const Alignment& a) {
+  return a.mounting_b.norm() <= kAdmittedMounting &&
+         a.base_n.head<2>().norm() <= 3.0 * kBaseLevelPriorSigma &&
+         std::abs(a.base_n.z()) <= 3.0 * kBaseHeadingPriorSigma;
+}
+
+// The alignment from the dwells' means; the options start from it when it is significant and
+// admissible. With
 // the base known (CalibratorOptions::base_attitude off) only its mounting is taken: the base
 // stays the plan's. A stream's alignment from its first dwells is judged with its sigmas times
 // sqrt(dwells) (stream_alignment_judged).
@@ -382,7 +394,7 @@ CalibratorOptions aligned(const Session& session, const CalibratorOptions& optio
       kAlignmentThreshold, kAlignmentPriorMultiple * largest_prior(options, "accel.misalignment"));
   CalibratorOptions o = options;
   const Alignment judged = streamed ? stream_alignment_judged(a) : a;
-  if (!judged.significant(threshold, options.base_attitude)) return o;
+  if (!judged.significant(threshold, options.base_attitude) || !admissible(a)) return o;
   in.alignment_applied = true;
   if (options.base_attitude) o.initial_base_n = a.base_n;
   if (o.attitude == CalibratorOptions::AttitudeUpdates::None) {
