@@ -30,10 +30,9 @@ namespace sinscal {
 /// about it apart undetermined; the eighth determines them, the ninth settles them.)
 constexpr std::size_t kStreamAlignmentMinDwells = 3;
 constexpr double kStreamAlignmentSigma = 0.05 * units::deg;
-/// Samples held at most (rot19 at 100 Hz: the first 9 dwells end at 302 s, 30,200 samples, 3.6
-/// MB).
-/// Beyond (longer dwells, a higher rate) the stream is not aligned: it runs as before, from the
-/// plan.
+/// Samples held at most (3.9 MB; rot19 at 100 Hz: the first 9 dwells end at 302 s, 30,200
+/// samples). Beyond (longer dwells, a higher rate) the stream is not aligned: it runs as before,
+/// from the plan.
 constexpr std::size_t kStreamAlignmentCapacity = 32768;
 
 /// Whether a stream's alignment from its first dwells is determined well enough to start from.

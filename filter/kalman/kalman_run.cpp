@@ -381,10 +381,9 @@ bool admissible(const Alignment& a) {
 }
 
 // The alignment from the dwells' means; the options start from it when it is significant and
-// admissible. With
-// the base known (CalibratorOptions::base_attitude off) only its mounting is taken: the base
-// stays the plan's. A stream's alignment from its first dwells is judged with its sigmas times
-// sqrt(dwells) (stream_alignment_judged).
+// admissible. With the base known (CalibratorOptions::base_attitude off) only its mounting is
+// taken: the base stays the plan's. A stream's alignment from its first dwells is judged with its
+// sigmas times sqrt(dwells) (stream_alignment_judged).
 CalibratorOptions aligned(const Session& session, const CalibratorOptions& options,
                           const std::vector<AlignmentDwell>& means, bool streamed,
                           InstallationResult& in) {

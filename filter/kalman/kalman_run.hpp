@@ -50,7 +50,8 @@ struct KalmanRunOptions {
   /// samples are held (at most `stream_alignment_capacity`) and given to the filter again
   /// (filter/installation/stream_alignment.hpp). The alignment's mounting and base become the
   /// filter's starting point when either is beyond kAlignmentThreshold and 3 times the
-  /// accelerometer misalignments' largest prior.
+  /// accelerometer misalignments' largest prior, and both within what the filter admits (a
+  /// mounting up to kAdmittedMounting, a base within 3 of its prior sigmas).
   bool align = true;
   std::size_t stream_alignment_capacity = kStreamAlignmentCapacity;  // samples
   /// Set (e.g. from a signal handler) to stop reading: the run ends as if the log ended there,
