@@ -103,9 +103,11 @@ void print_installation(const InstallationResult& in) {
         "mounting %.4f deg)\n",
         in.alignment->base_n.norm() / units::deg, in.base_known ? " not taken, known" : "",
         in.alignment->mounting_b.norm() / units::deg);
-  if (in.alignment && in.alignment_streamed)
-    std::printf("  (aligned from the stream's first %d dwells%s)\n", in.alignment->dwells,
-                in.alignment->dwells > 0 ? "" : ": they did not fit in the buffer, not aligned");
+  if (in.alignment && in.alignment_streamed && in.alignment->dwells > 0)
+    std::printf("  (the stream's alignment: from its first %d dwells, held)\n",
+                in.alignment->dwells);
+  else if (in.alignment_streamed)
+    std::printf("  (the stream's first dwells did not fit in the samples held: not aligned)\n");
 }
 }  // namespace
 
