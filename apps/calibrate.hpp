@@ -31,6 +31,7 @@ struct CalibrateOptions {
   bool no_motion_zero_velocity = false, stream = false;
   bool force = false;  // run even when the plausibility gate fails (recorded in the result)
   int passes = 1;
+  std::string base = "estimated";  // the table base: estimated | known (the plan's)
   std::string terms;
   // table-free (apps/calibrate_table_free.cpp)
   double gravity = 0.0;                      // m/s^2, 0: the session's
@@ -42,6 +43,9 @@ struct CalibrateOptions {
   /// [table_free]); filled by check_table_free_options.
   std::vector<std::string> table_free_given;
 };
+
+/// The Kalman filter's option values (UsageError naming the option), before any session runs.
+void check_kf_values(const CalibrateOptions& o);
 
 /// The table-free options (--gravity, --pose-window, ...) added to `d`.
 void add_table_free_options(po::options_description& d, CalibrateOptions& o);

@@ -28,6 +28,7 @@ CalibratorOptions kalman_options(const CalibrateOptions& o, const Session& sessi
   ko.time_offset = session.time_offset;
   ko.use_table_angles = !o.no_table_angles;
   ko.zero_velocity = !o.no_zero_velocity;
+  ko.base_attitude = o.base != "known";
   try {
     apply_terms(ko.layout, o.terms);
   } catch (const std::invalid_argument& e) {
@@ -173,6 +174,32 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
 }
 
 }  // namespace
+
+// The Kalman filter's option values (--method kf), checked before any session runs.
+void check_kf_values(const CalibrateOptions& o) {
+  if (o.base != "estimated" && o.base != "known")
+    throw UsageError("--base must be estimated or known, not '" + o.base + "'");
+  if (!(o.static_window > 0.0) || !(o.static_min >= o.static_window) || !(o.static_rate > 0.0))
+    throw UsageError(
+        "--static-window must be positive, --static-min at least the window, "
+        "--static-rate-threshold positive");
+  if (o.passes < 1 || o.passes > 20) throw UsageError("--passes must be 1 to 20");
+  if (o.passes > 1 && o.stream) throw UsageError("--passes reads the log again: not with --stream");
+  if (!o.lever_arm_reference.empty() && o.lever_arm_reference != "x" &&
+      o.lever_arm_reference != "y" && o.lever_arm_reference != "z")
+    throw UsageError("--lever-arm-reference must be x, y or z");
+  if (!o.lever_arm_reference.empty() && !(o.no_motion_zero_velocity && o.no_position))
+    throw UsageError(
+        "--lever-arm-reference is for zero velocity at rest only (--no-motion-zero-velocity "
+        "--no-position), where a common shift of the lever arms is unobservable; otherwise the "
+        "arms are observable and fixing one would bias the others");
+  if (!o.terms.empty()) try {
+      StateLayoutOptions check;
+      apply_terms(check, o.terms);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--terms: ") + e.what());
+    }
+}
 
 void record_gate(nlohmann::ordered_json& sections, const PlausibilityReport& report) {
   if (report.checks.empty()) return;

@@ -54,6 +54,8 @@ void add_options(po::options_description& d, CalibrateOptions& o) {
        "point at its proof mass)")
       ("no-motion-zero-velocity", "kf: no zero-velocity updates while the table turns")
       ("no-table-angles", "kf: ignore the log's table-angle columns (attitude from the plan)")
+      ("base", po::value(&o.base)->default_value("estimated"),
+       "kf: the table base's attitude: estimated (3 states) | known (the plan's: not estimated)")
       ("passes", po::value(&o.passes)->default_value(1),
        "kf: passes over the log, each from the previous pass's coefficients (large errors: MEMS)")
       ("static-from", po::value(&o.static_from)->default_value(CalibratorOptions::StaticFrom::Plan,
@@ -79,7 +81,7 @@ void check_method_options(const po::variables_map& vm, CalibrateOptions& o) {
   static const std::vector<std::string> kf_only = {
       "stream", "monitor", "monitor-interval", "attitude", "no-position", "no-zero-velocity",
       "terms", "prior-scale", "lever-arm-reference", "no-motion-zero-velocity", "no-table-angles",
-      "passes", "static-from", "static-window", "static-min", "static-rate-threshold",
+      "passes", "base", "static-from", "static-window", "static-min", "static-rate-threshold",
       "on-bad-sample"};
   // clang-format on
   check_table_free_options(vm, o, {closed_form_only, kf_only, {"table-sigma"}});
@@ -96,26 +98,7 @@ void check_method_options(const po::variables_map& vm, CalibrateOptions& o) {
   if (!(o.min_dwell > 0.0 && o.monitor_interval > 0.0 && o.prior_scale > 0.0 &&
         o.prior_scale < 1e6))
     throw UsageError("--min-dwell, --monitor-interval and --prior-scale must be positive");
-  if (!(o.static_window > 0.0) || !(o.static_min >= o.static_window) || !(o.static_rate > 0.0))
-    throw UsageError(
-        "--static-window must be positive, --static-min at least the window, "
-        "--static-rate-threshold positive");
-  if (o.passes < 1 || o.passes > 20) throw UsageError("--passes must be 1 to 20");
-  if (o.passes > 1 && o.stream) throw UsageError("--passes reads the log again: not with --stream");
-  if (!o.lever_arm_reference.empty() && o.lever_arm_reference != "x" &&
-      o.lever_arm_reference != "y" && o.lever_arm_reference != "z")
-    throw UsageError("--lever-arm-reference must be x, y or z");
-  if (!o.lever_arm_reference.empty() && !(o.no_motion_zero_velocity && o.no_position))
-    throw UsageError(
-        "--lever-arm-reference is for zero velocity at rest only (--no-motion-zero-velocity "
-        "--no-position), where a common shift of the lever arms is unobservable; otherwise the "
-        "arms are observable and fixing one would bias the others");
-  if (!o.terms.empty()) try {  // checked before any session runs
-      StateLayoutOptions check;
-      apply_terms(check, o.terms);
-    } catch (const std::invalid_argument& e) {
-      throw UsageError(std::string("--terms: ") + e.what());
-    }
+  check_kf_values(o);
 }
 
 int calibrate_batch(const CalibrateOptions& o, const std::vector<std::string>& sessions,

@@ -76,6 +76,8 @@ void print_installation(const InstallationResult& in) {
         "Table base: level %.1f +- %.1f arcsec (North), %.1f +- %.1f arcsec (East), "
         "heading %.1f +- %.1f arcsec\n",
         b.x(), s.x(), b.y(), s.y(), b.z(), s.z());
+  } else if (in.base_known) {
+    std::printf("Table base: known (--base known): the plan's, not estimated\n");
   }
   if (in.mounting_estimated) {
     const Eigen::Vector3d m = v(in.mounting_b), s = v(in.mounting_sigma_b);
@@ -87,9 +89,15 @@ void print_installation(const InstallationResult& in) {
   }
   if (in.alignment && in.alignment->valid && in.alignment_applied)
     std::printf(
-        "  (the filter started from the alignment of the dwells: base %.4f deg, "
+        "  (the filter started from the alignment of the dwells: base %.4f deg%s, "
         "mounting %.4f deg)\n",
-        in.alignment->base_n.norm() / units::deg, in.alignment->mounting_b.norm() / units::deg);
+        in.alignment->base_n.norm() / units::deg, in.base_known ? " not taken, known" : "",
+        in.alignment->mounting_b.norm() / units::deg);
+  if (in.alignment && in.alignment_streamed && in.alignment->dwells > 0)
+    std::printf("  (the stream's alignment: from its first %d dwells, held)\n",
+                in.alignment->dwells);
+  else if (in.alignment_streamed)
+    std::printf("  (the stream's first dwells did not fit in the samples held: not aligned)\n");
 }
 }  // namespace
 

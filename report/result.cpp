@@ -77,6 +77,7 @@ nlohmann::ordered_json kalman_method(const KalmanRun& r) {
       {"zero_velocity_in_motion", o.zero_velocity_in_motion},
       {"position", o.position},
       {"attitude", attitude_name(o.attitude)},
+      {"base", o.base_attitude ? "estimated" : "known"},
       {"body_frame", r.accel_triad_frame ? "accelerometer triad" : "table"},
       {"static_from", r.detected ? "data" : "plan"},
       {"attitude_from", r.table_attitude_updates > 0 ? "table angles" : "plan"},
@@ -105,6 +106,7 @@ nlohmann::ordered_json installation_section(const InstallationResult& in) {
     base["heading_arcsec"] = in.base_n.z() / units::arcsec;
     base["sigma_arcsec"] = angles_arcsec(in.base_sigma_n);
   }
+  if (in.base_known) base["known"] = true;  // --base known: the plan's, not estimated
   j["base"] = base;
   nlohmann::ordered_json mounting = {{"estimated", in.mounting_estimated}};
   if (in.mounting_estimated) {
@@ -118,6 +120,7 @@ nlohmann::ordered_json installation_section(const InstallationResult& in) {
     const Alignment& a = *in.alignment;
     nlohmann::ordered_json al = {
         {"valid", a.valid}, {"dwells", a.dwells}, {"applied", in.alignment_applied}};
+    if (in.alignment_streamed) al["streamed"] = true;  // a stream's first dwells, held
     if (a.valid) {
       al["base_arcsec"] = angles_arcsec(a.base_n);
       al["base_sigma_arcsec"] = angles_arcsec(a.base_sigma_n);

@@ -60,13 +60,14 @@ std::vector<AlignmentDwell> dwell_means(SampleSource& source, const PlanTimeline
 
 struct Alignment {
   bool valid = false;  // enough dwells of different attitudes to determine it
-  /// Whether the estimators start from it: valid, and its mounting or base angle beyond
-  /// `threshold` (rad) and beyond kAlignmentSignificance of its sigma.
-  bool significant(double threshold) const {
+  /// Whether the estimators start from it: valid, and its mounting or (`with_base`) base angle
+  /// beyond `threshold` (rad) and beyond kAlignmentSignificance of its sigma.
+  bool significant(double threshold, bool with_base = true) const {
     const auto beyond = [threshold](const Eigen::Vector3d& v, const Eigen::Vector3d& s) {
       return v.norm() > threshold && v.norm() > kAlignmentSignificance * s.norm();
     };
-    return valid && (beyond(mounting_b, mounting_sigma_b) || beyond(base_n, base_sigma_n));
+    return valid &&
+           (beyond(mounting_b, mounting_sigma_b) || (with_base && beyond(base_n, base_sigma_n)));
   }
   Eigen::Vector3d base_n = Eigen::Vector3d::Zero();  // rad, rotation vector (N, E level; D)
   Eigen::Vector3d base_sigma_n = Eigen::Vector3d::Zero();
@@ -77,9 +78,11 @@ struct Alignment {
 
 /// The installation estimates of a run, either method (docs/formats.md "Installation").
 struct InstallationResult {
-  std::optional<Alignment> alignment;                // batch runs with KalmanRunOptions::align
-  bool alignment_applied = false;                    // the filter started from it
-  bool base_estimated = false;                       // base states in the filter (attitude updates)
+  std::optional<Alignment> alignment;  // runs with KalmanRunOptions::align
+  bool alignment_applied = false;      // the filter started from it
+  bool alignment_streamed = false;     // from a stream's first dwells (stream_alignment.hpp)
+  bool base_estimated = false;         // base states in the filter (attitude updates)
+  bool base_known = false;  // not estimated on request (CalibratorOptions::base_attitude off)
   Eigen::Vector3d base_n = Eigen::Vector3d::Zero();  // rad, rotation vector (N, E, D)
   Eigen::Vector3d base_sigma_n = Eigen::Vector3d::Zero();
   bool mounting_estimated = false;                       // body frame = platform (attitude updates)

@@ -35,6 +35,17 @@ CalibratorOptions calibrator_options_from_profile(const SensorProfile& profile,
   return o;
 }
 
+bool gyros_find_north(const CalibratorOptions& o) {
+  const auto& cat = coefficient_catalog();
+  for (std::size_t c = 0; c < cat.size(); ++c) {
+    if (cat[c].family != "gyro.bias") continue;
+    double sigma = o.initial_sigma.size() > c ? o.initial_sigma[c] : 0.0;
+    if (!(sigma > 0.0)) sigma = coefficient_family_info(cat[c].family).default_prior;
+    if (!(sigma < kNorthSeekingBiasRatio * Earth::wgs84().rate())) return false;
+  }
+  return true;
+}
+
 double initial_attitude_sigma(const CalibratorOptions& o) {
   if (o.initial_attitude_sigma > 0.0) return o.initial_attitude_sigma;
   return kDefaultStartAttitudeSigma;
@@ -81,7 +92,10 @@ void Calibrator::initialize_covariance() {
   if (StateLayout::on(layout_.base)) {
     // The navigation starts from the base's estimate: its error is the start attitude's too
     // (phi_n = -d_base + the table's own start error).
-    const Eigen::Vector3d sigma(kBaseLevelPriorSigma, kBaseLevelPriorSigma, kBaseHeadingPriorSigma);
+    // Gyros that cannot find North (MEMS) leave the base heading to the plan, to the table's
+    // accuracy: estimated from 5 deg, it wandered by degrees and passes did not settle.
+    const Eigen::Vector3d sigma(kBaseLevelPriorSigma, kBaseLevelPriorSigma,
+                                gyros_find_north(o_) ? kBaseHeadingPriorSigma : o_.attitude_sigma);
     const Eigen::Matrix3d P_base = sigma.array().square().matrix().asDiagonal();
     const int a = layout_.attitude.index, b = layout_.base.index;
     P_.block<3, 3>(b, b) = P_base;

@@ -147,6 +147,9 @@ CalibratorOptions calibrator_options_from_profile(const SensorProfile& profile,
 /// The state layout the options imply: without table-attitude updates the body frame is the
 /// accelerometer triad's (docs/conventions.md), whatever `layout.accel_triad_frame` says.
 StateLayoutOptions effective_layout(const CalibratorOptions& options);
+/// Whether the gyros find North: every gyro-bias prior below kNorthSeekingBiasRatio of the Earth
+/// rate (otherwise the base heading's prior is the table's attitude sigma: the plan's heading).
+bool gyros_find_north(const CalibratorOptions& options);
 /// The start-attitude sigma the options imply.
 double initial_attitude_sigma(const CalibratorOptions& options);
 

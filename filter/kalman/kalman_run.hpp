@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "filter/installation/installation.hpp"
+#include "filter/installation/stream_alignment.hpp"
 #include "filter/kalman/kalman_calibrator.hpp"
 #include "rig/io/log_io.hpp"
 #include "rig/session.hpp"
@@ -43,11 +44,16 @@ struct KalmanRunOptions {
   /// the profile's prior sigmas, so the last is linearized about a close estimate (large errors:
   /// MEMS). The monitor, the divergence alarm and the verdicts are those of the last pass.
   int passes = 1;
-  /// Align from the plan's dwells before the first pass (filter/installation/installation.hpp; from
-  /// the log with the plan's timing only: not a stream, read once, nor dwells found in the data):
-  /// the alignment's mounting and base become the filter's starting point when either is beyond
-  /// kAlignmentThreshold and 3 times the accelerometer misalignments' largest prior.
+  /// Align from the plan's dwells before the first pass (filter/installation/installation.hpp;
+  /// not for dwells found in the data, whose timing is not the plan's): from the log, all its
+  /// dwells; from a stream, read once, as many of its first dwells as settle the alignment, whose
+  /// samples are held (at most `stream_alignment_capacity`) and given to the filter again
+  /// (filter/installation/stream_alignment.hpp). The alignment's mounting and base become the
+  /// filter's starting point when either is beyond kAlignmentThreshold and 3 times the
+  /// accelerometer misalignments' largest prior, and both within what the filter admits (a
+  /// mounting up to kAdmittedMounting, a base within 3 of its prior sigmas).
   bool align = true;
+  std::size_t stream_alignment_capacity = kStreamAlignmentCapacity;  // samples
   /// Set (e.g. from a signal handler) to stop reading: the run ends as if the log ended there,
   /// with `interrupted` and the estimates so far.
   const std::atomic<bool>* stop = nullptr;
