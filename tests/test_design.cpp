@@ -278,8 +278,7 @@ TEST_CASE("Plan search: the beam against every plan of four turns", "[design][se
   }
 }
 
-TEST_CASE("Plan search: the shortest plan meeting reachable targets",
-          "[design][search][long]") {
+TEST_CASE("Plan search: the shortest plan meeting reachable targets", "[design][search][long]") {
   // Targets a few minutes reach: the search meets them, and the refined plan still does.
   const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
   const Plan rot19 = test::load_plan("rot19.ini");
