@@ -106,8 +106,18 @@ int cmd_diagnose(const std::vector<std::string>& args) {
   if (!(o.alpha > 0.0 && o.alpha < 0.5)) throw UsageError("--alpha must be in (0, 0.5)");
   if (!(table_sigma > 0.0 && table_sigma < 3600.0))
     throw UsageError("--table-sigma must be above 0 and below 3600 arcsec");
-  if (ChamberSoaks::is_chamber(session_path))
+  if (ChamberSoaks::is_chamber(session_path)) {
+    for (const auto& name : {"min-dwell", "prefer", "passes", "no-kalman", "force"})
+      if (given(*vm, name))
+        throw UsageError(
+            std::string("--") + name + " acts on table sessions; " + session_path +
+            " is a chamber (its soaks are tested with --alpha, --table-sigma, --sensor)");
+    for (const auto& name : kHandheldOnly)
+      if (given(*vm, name))
+        throw UsageError("--" + name + " acts on hand-held sessions; " + session_path +
+                         " is a chamber");
     return diagnose_chamber(session_path, {out_dir, o.alpha, table_sigma, sensor});
+  }
   if (!sensor.empty())
     throw UsageError("--sensor acts on chamber sessions; " + session_path + " is not one");
   const Session any = Session::load(session_path, Session::PlanNeed::Optional);

@@ -1035,6 +1035,8 @@ new diagnose-sensor-on-a-table-session; mini
 fixed 1 "--sensor acts on chamber sessions" S diagnose --session session.ini --out out/d --sensor "$therm"
 new diagnose-chamber-sensor-missing; cp -r "$base/soaks" "$d/soaks"
 fixed 2 "nope.ini" S diagnose --session soaks/chamber.ini --out out/d --sensor nope.ini
+new diagnose-chamber-table-option; cp -r "$base/soaks" "$d/soaks"
+fixed 1 "--no-kalman acts on table sessions|is a chamber" S diagnose --session soaks/chamber.ini --out out/d --no-kalman
 new control-diagnose-chamber; cp -r "$base/soaks" "$d/soaks"
 POST='test -s out/d/diagnosis.json'
 control 0 "" S diagnose --session soaks/chamber.ini --out out/d
