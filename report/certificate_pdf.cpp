@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "report/certificate.hpp"
+#include "report/gnuplot.hpp"
 
 extern char** environ;
 
@@ -56,18 +57,8 @@ void print_pdf(const std::string& html_path, const std::string& pdf_path,
                             "the PDF)");
     throw std::runtime_error("cannot run " + chromium + ": " + std::strerror(err));
   }
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR)
-      throw std::runtime_error("waiting for chromium: " + std::string(std::strerror(errno)));
   std::string messages;
-  {
-    std::ifstream in(log);
-    std::ostringstream text;
-    text << in.rdbuf();
-    messages = text.str();
-  }
-  std::remove(log.c_str());
+  const int status = wait_for_program(pid, "chromium", log, messages);
   fs::remove_all(profile, ec);
   std::string head;
   {

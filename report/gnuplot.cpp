@@ -45,6 +45,21 @@ std::string gnuplot_script_path(const std::string& png_path) {
          ".gp";
 }
 
+int wait_for_program(pid_t pid, const std::string& what, const std::string& log,
+                     std::string& messages) {
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR)
+      throw std::runtime_error("waiting for " + what + ": " + std::string(std::strerror(errno)));
+  std::ifstream in(log);
+  std::ostringstream text;
+  text << in.rdbuf();
+  messages = text.str();
+  in.close();
+  std::remove(log.c_str());
+  return status;
+}
+
 void run_gnuplot(const std::string& program, const std::string& script_path,
                  const std::string& png_path) {
   const std::string temp_png = png_path + ".tmp-" + std::to_string(::getpid());
@@ -66,18 +81,8 @@ void run_gnuplot(const std::string& program, const std::string& script_path,
                              " (install the Debian package gnuplot-nox; the script is " +
                              script_path + ")");
   }
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR)
-      throw std::runtime_error("waiting for gnuplot: " + std::string(std::strerror(errno)));
   std::string messages;
-  {
-    std::ifstream in(log);
-    std::ostringstream text;
-    text << in.rdbuf();
-    messages = text.str();
-  }
-  std::remove(log.c_str());
+  const int status = wait_for_program(pid, "gnuplot", log, messages);
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
     std::remove(temp_png.c_str());
     throw std::runtime_error(program + " failed on " + script_path + ": " + messages);

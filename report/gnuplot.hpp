@@ -3,6 +3,8 @@
 // renamed over the target only when it succeeded.
 #pragma once
 
+#include <sys/types.h>
+
 #include <string>
 
 namespace sinscal {
@@ -20,6 +22,10 @@ std::string gnuplot_script_path(const std::string& png_path);
 
 /// Runs `program` on `script_path` with the variable `output` set to a temporary PNG, then
 /// renames that over `png_path` (the script must draw to `output`). Throws std::runtime_error if
+/// Waits for a spawned program (`what` names it in errors; EINTR retried), reads its message
+/// log into `messages` and removes the log; returns waitpid's status word.
+int wait_for_program(pid_t pid, const std::string& what, const std::string& log,
+                     std::string& messages);
 /// gnuplot cannot be run (naming the Debian package gnuplot-nox) or fails (with its messages).
 void run_gnuplot(const std::string& program, const std::string& script_path,
                  const std::string& png_path);
