@@ -16,6 +16,7 @@
 #include "filter/diagnosis/diagnosis_kalman.hpp"
 #include "filter/diagnosis/diagnosis_table.hpp"
 #include "filter/diagnosis/handheld_diagnosis.hpp"
+#include "filter/kalman/error_propagation.hpp"
 #include "filter/kalman/kalman_calibrator.hpp"
 #include "filter/six_face/six_face.hpp"
 #include "filter/strapdown/strapdown.hpp"
@@ -259,6 +260,87 @@ double bench_thermal(const std::string& src) {
   return sink;
 }
 
+// The Kalman filter's cost per sample by stage, from memory on rot19 (each stage alone, the
+// best of three passes, in microseconds per sample): navigation, compensation with the filter's
+// model, the error model's Jacobian, the propagator's step (the transition and the coefficient
+// coupling, the Jacobian inside), and the whole filter (the rest: covariance propagation and
+// updates once per second, the supervision).
+double bench_kalman_stages(const Plan& rot, const Motion& rot_motion,
+                           const std::vector<ImuSample>& samples, const SensorProfile& profile,
+                           const ImuErrorModel& errors) {
+  double sink = 0.0;
+  const double n = static_cast<double>(samples.size());
+  auto best = [&](auto&& body) {
+    double t = 1e300;
+    for (int pass = 0; pass < 3; ++pass) {
+      const auto t0 = Clock::now();
+      body();
+      t = std::min(t, seconds_since(t0));
+    }
+    return 1e6 * t / n;
+  };
+  const Eigen::Matrix3d C0 = rot_motion.dwells()[0].C_b_n_known;
+  const ImuErrorModel::LinearInverses inverses = errors.linear_inverses();
+  const double t_nav = best([&] {
+    Strapdown nav;
+    nav.reset(NavState::at_rest(C0, rot.site));
+    for (const auto& s : samples) nav.step(s.dtheta_b, s.dv_b, s.dt);
+    sink += nav.state().v_n.norm();
+  });
+  const double t_comp = best([&] {
+    KinematicSample k;
+    for (const auto& s : samples) {
+      errors.compensate(s.dtheta_b / s.dt, s.dv_b / s.dt, Eigen::Vector3d::Zero(), k.omega_ib_b,
+                        k.f_ib_b, s.t, &k, &inverses);
+      sink += k.f_ib_b(0);
+    }
+  });
+  const CalibratorOptions options = calibrator_options_from_profile(profile);
+  const StateLayout layout = StateLayout::make(effective_layout(options));
+  std::vector<int> catalog;
+  for (const auto& cb : layout.coefficients)
+    for (int c : cb.catalog) catalog.push_back(c);
+  const double t_jac = best([&] {
+    ImuErrorModel::JacobianColumns J;
+    KinematicSample k;
+    for (const auto& s : samples) {
+      k.omega_ib_b = s.dtheta_b / s.dt;
+      k.f_ib_b = s.dv_b / s.dt;
+      k.t = s.t;
+      errors.jacobian(k, Eigen::Vector3d::Zero(), catalog, J);
+      sink += J(0, 0);
+    }
+  });
+  const double t_step = best([&] {
+    ErrorPropagator propagator(layout, InsSiteTerms::at(rot.site), profile.noise);
+    KinematicSample k;
+    for (const auto& s : samples) {
+      k.omega_ib_b = s.dtheta_b / s.dt;
+      k.f_ib_b = s.dv_b / s.dt;
+      k.t = s.t;
+      propagator.step(C0, k, Eigen::Vector3d::Zero(), errors, inverses, s.dt);
+      if (propagator.accumulated() >= 1.0) {
+        sink += propagator.Q_nn()(0, 0);
+        propagator = ErrorPropagator(layout, InsSiteTerms::at(rot.site), profile.noise);
+      }
+    }
+  });
+  const double t_kf = best([&] {
+    Calibrator kf(PlanTimeline::of(rot, rot.site), rot.site, options);
+    for (const auto& s : samples) kf.push(s);
+    kf.finish();
+    sink += kf.estimate()[0].value;
+  });
+  std::printf(
+      "Kalman filter by stage on rot19 (%d states, us per sample): navigation %.3f, "
+      "compensation %.3f, Jacobian (%zu columns) %.3f, propagator step (Jacobian included) "
+      "%.3f, the rest (covariance propagation and updates, supervision) %.3f; whole filter "
+      "%.3f\n",
+      layout.size, t_nav, t_comp, catalog.size(), t_jac, t_step, t_kf - t_nav - t_comp - t_step,
+      t_kf);
+  return sink;
+}
+
 int main(int argc, char** argv) {
   const std::string src = argc > 1 ? argv[1] : ".";
   const Plan plan = Plan::load(src + "/config/plans/seed8.ini");
@@ -432,6 +514,7 @@ int main(int argc, char** argv) {
       "filter costs %.1fx reading and navigating\n",
       static_cast<double>(rot_samples.size()) / t_read_nav,
       static_cast<double>(rot_samples.size()) / t_kf_log, t_kf_log / t_read_nav);
+  sink += bench_kalman_stages(rot, rot_motion, rot_samples, profile, errors);
   sink += bench_kalman_diagnosis(src);
   sink += bench_design(src);
   bench_handheld(src);

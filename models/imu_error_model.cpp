@@ -38,10 +38,6 @@ Eigen::Vector3d TriadErrors::apply(const Eigen::Vector3d& x, const Eigen::Vector
          bias + extra + thermal_bias(dT, dT_rate);
 }
 
-Eigen::Vector3d TriadErrors::input_rate(const Eigen::Vector3d& output_rate) const {
-  return linear().partialPivLu().solve(output_rate);
-}
-
 Eigen::Vector3d TriadErrors::apply(const Eigen::Vector3d& x, const Eigen::Vector3d& extra) const {
   return linear() * x + scale_asym.cwiseProduct(x.cwiseAbs()) + k2.cwiseProduct(x.cwiseAbs2()) +
          bias + extra;
@@ -88,16 +84,32 @@ bool ImuErrorModel::has_thermal() const {
   return false;
 }
 
+ImuErrorModel::LinearInverses ImuErrorModel::linear_inverses() const {
+  return {gyro.linear().inverse(), accel.linear().inverse()};
+}
+
+namespace {
+// Whether the triad's linear part moves with the temperature.
+bool thermal_linear(const TriadErrors& t) {
+  return !t.scale_temp.isZero(0.0) || !t.misalignment_temp.isZero(0.0);
+}
+}  // namespace
+
 void ImuErrorModel::compensate(const Eigen::Vector3d& y_gyro, const Eigen::Vector3d& y_accel,
                                const Eigen::Vector3d& omega_dot_ib_b, Eigen::Vector3d& omega_ib_b,
                                Eigen::Vector3d& f_ib_b, double t,
-                               const KinematicSample* temperature) const {
+                               const KinematicSample* temperature,
+                               const LinearInverses* inverses) const {
   Eigen::Vector3d w = y_gyro, f = y_accel;
   const double dTa = temperature ? temperature->accel_dtemp : 0.0;
   const double dTg = temperature ? temperature->gyro_dtemp : 0.0;
   const double dTg_rate = temperature ? temperature->gyro_dtemp_rate : 0.0;
-  const Eigen::Matrix3d gyro_inverse = gyro.linear(dTg).inverse();
-  const Eigen::Matrix3d accel_inverse = accel.linear(dTa).inverse();
+  const Eigen::Matrix3d gyro_inverse = inverses && (dTg == 0.0 || !thermal_linear(gyro))
+                                           ? inverses->gyro
+                                           : gyro.linear(dTg).inverse();
+  const Eigen::Matrix3d accel_inverse = inverses && (dTa == 0.0 || !thermal_linear(accel))
+                                            ? inverses->accel
+                                            : accel.linear(dTa).inverse();
   const Eigen::Vector3d accel_fixed = accel.bias_drift * t + accel.thermal_bias(dTa, 0.0);
   const Eigen::Vector3d gyro_fixed = gyro.bias_drift * t + gyro.thermal_bias(dTg, dTg_rate);
   for (int iter = 0; iter < 60; ++iter) {
@@ -125,31 +137,70 @@ void ImuErrorModel::compensate(const Eigen::Vector3d& y_gyro, const Eigen::Vecto
 }
 
 namespace {
-// Where each coefficient lives in an ImuErrorModel (byte offset, catalog order) and which output
-// it enters: found once, so the per-sample Jacobian builds no names.
+// Where each coefficient lives in an ImuErrorModel (byte offset, catalog order), which output it
+// enters and how: found once, so the per-sample Jacobian builds no names. Every term of the
+// error model is linear in its coefficient, so each column is written in closed form from the
+// place a unit value of the coefficient lands in the model's fields (`locate`); a coefficient
+// found in none of them keeps the column by perturbation of the whole model.
 struct CoefficientSlot {
   std::ptrdiff_t offset;
   enum class Output { Gyro, Accel, Delay } output;
-  // A thermal coefficient's column in closed form (TriadErrors::linear(dT), thermal_bias):
-  // e_row times the input along `input` (-1: none, a bias) times dT^power (power 0: the rate).
-  bool thermal = false;
+  // The column's form: e_row times
+  enum class Form {
+    Perturb,   // (not located: the difference of the model's outputs)
+    Bias,      // 1
+    Linear,    // x_input (+ the size effect's v_row(input) for an accelerometer)
+    Abs,       // |x_input|
+    Square,    // x_input^2
+    Time,      // t
+    GSens,     // f_input (a gyro output)
+    LeverArm,  // A_row . (omega_dot x e_input + omega x (omega x e_input))
+    Thermal,   // x_input (or 1 when input < 0) times dT^power (power 0: the gyros' dT/dt)
+  } form = Form::Perturb;
   int row = 0, input = -1, power = 0;
 };
 
-// Where a unit value of a thermal coefficient lands in its triad's thermal terms.
-void locate_thermal(const TriadErrors& t, CoefficientSlot& slot) {
+// Where a unit value of the coefficient at `slot` lands in `m` (otherwise zero).
+void locate(const ImuErrorModel& m, CoefficientSlot& slot) {
+  using Form = CoefficientSlot::Form;
   Eigen::Index i = 0, j = 0;
-  if (t.bias_temp.maxCoeff(&i, &j) > 0.0) {
-    slot = {slot.offset, slot.output, true, static_cast<int>(i), -1, static_cast<int>(j) + 1};
+  auto set = [&slot](Form form, Eigen::Index row, Eigen::Index input, Eigen::Index power) {
+    slot.form = form;
+    slot.row = static_cast<int>(row);
+    slot.input = static_cast<int>(input);
+    slot.power = static_cast<int>(power);
+  };
+  if (slot.output == CoefficientSlot::Output::Delay) return;
+  const TriadErrors& t = slot.output == CoefficientSlot::Output::Gyro ? m.gyro : m.accel;
+  if (t.bias.maxCoeff(&i) > 0.0) {
+    set(Form::Bias, i, -1, 0);
+  } else if (t.scale.maxCoeff(&i) > 0.0) {
+    set(Form::Linear, i, i, 0);
+  } else if (t.misalignment.maxCoeff(&i, &j) > 0.0) {
+    set(Form::Linear, i, j, 0);
+  } else if (t.scale_asym.maxCoeff(&i) > 0.0) {
+    set(Form::Abs, i, i, 0);
+  } else if (t.k2.maxCoeff(&i) > 0.0) {
+    set(Form::Square, i, i, 0);
+  } else if (t.bias_drift.maxCoeff(&i) > 0.0) {
+    set(Form::Time, i, -1, 0);
+  } else if (t.bias_temp.maxCoeff(&i, &j) > 0.0) {
+    set(Form::Thermal, i, -1, j + 1);
   } else if (t.scale_temp.maxCoeff(&i, &j) > 0.0) {
-    slot = {slot.offset,         slot.output,         true,
-            static_cast<int>(i), static_cast<int>(i), static_cast<int>(j) + 1};
+    set(Form::Thermal, i, i, j + 1);
   } else if (t.misalignment_temp.maxCoeff(&i, &j) > 0.0) {
-    slot = {slot.offset, slot.output, true, static_cast<int>(i), static_cast<int>(j), 1};
+    set(Form::Thermal, i, j, 1);
   } else if (t.bias_temp_rate.maxCoeff(&i) > 0.0) {
-    slot = {slot.offset, slot.output, true, static_cast<int>(i), -1, 0};
+    set(Form::Thermal, i, -1, 0);
+  } else if (slot.output == CoefficientSlot::Output::Gyro &&
+             m.gyro_g_sensitivity.maxCoeff(&i, &j) > 0.0) {
+    set(Form::GSens, i, j, 0);
+  } else if (slot.output == CoefficientSlot::Output::Accel &&
+             m.accel_lever_arm_b.maxCoeff(&j, &i) > 0.0) {
+    set(Form::LeverArm, i, j, 0);  // column i is accelerometer i's arm, j its component
   }
 }
+
 const std::vector<CoefficientSlot>& coefficient_slots() {
   static const std::vector<CoefficientSlot> slots = [] {
     ImuErrorModel m;
@@ -163,12 +214,12 @@ const std::vector<CoefficientSlot>& coefficient_slots() {
                           : family_output == FamilyOutput::Gyro ? CoefficientSlot::Output::Gyro
                                                                 : CoefficientSlot::Output::Accel;
       CoefficientSlot slot{reinterpret_cast<const char*>(ptr) - base, output};
-      if (coefficient_family_info(info.family).thermal()) {
-        *ptr = 1.0;
-        locate_thermal(family_output == FamilyOutput::Gyro ? m.gyro : m.accel, slot);
-        *ptr = 0.0;
-        if (!slot.thermal) throw std::logic_error(info.name + ": not a thermal term");
-      }
+      *ptr = 1.0;
+      locate(m, slot);
+      *ptr = 0.0;
+      if (coefficient_family_info(info.family).thermal() &&
+          slot.form != CoefficientSlot::Form::Thermal)
+        throw std::logic_error(info.name + ": not a thermal term");
       out.push_back(slot);
     }
     return out;
@@ -179,48 +230,89 @@ const std::vector<CoefficientSlot>& coefficient_slots() {
 
 void ImuErrorModel::jacobian(const KinematicSample& s, const Eigen::Vector3d& f_dot,
                              const std::vector<int>& columns, JacobianColumns& J) const {
-  // Each coefficient's column: its unit perturbation applied through the same formula, taking
-  // the difference to the model without it. Exact (linear) and written once: the formula lives
-  // only in TriadErrors::apply, size_effect and the g-sensitivity product. A gyro coefficient
-  // enters only the gyro outputs, an accelerometer one only the accelerometer outputs (the
-  // finite-difference test of the Jacobian checks this too).
+  // Each coefficient's column: the derivative of the outputs (TriadErrors::apply, size_effect,
+  // the g-sensitivity product) in its coefficient, in closed form (every term is linear in its
+  // coefficient; the finite-difference test of the Jacobian checks each column against the
+  // formula). A gyro coefficient enters only the gyro outputs, an accelerometer one only the
+  // accelerometer outputs.
   // The accelerometers' linear part and lever arms stay the model's: the size effect is measured
   // along each accelerometer's sensitive axis (row i of the linear part), bilinear in the two, so
   // a lever arm's column carries the row (a mounting makes it a rotation of degrees) and a linear
   // column the size effect. Every other term is additive: its column does not depend on them.
-  ImuErrorModel zero;
-  zero.accel.scale = accel.scale;
-  zero.accel.misalignment = accel.misalignment;
-  zero.accel_lever_arm_b = accel_lever_arm_b;
+  using Form = CoefficientSlot::Form;
   const auto& slots = coefficient_slots();
   J.setZero(6, static_cast<Eigen::Index>(columns.size()));
-  const Eigen::Vector3d g0 = zero.gyro_output(s), a0 = zero.accel_output(s);
-  char* base = reinterpret_cast<char*>(&zero);
+  // The size effect's lever-arm vectors v_i = omega_dot x r_i + omega x (omega x r_i), per
+  // accelerometer (zero where its arm is).
+  Eigen::Matrix3d v = Eigen::Matrix3d::Zero();
+  const Eigen::Matrix3d A = accel.linear();
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d r = accel_lever_arm_b.col(i);
+    if (!r.isZero(0.0))
+      v.col(i) = s.omega_dot_ib_b.cross(r) + s.omega_ib_b.cross(s.omega_ib_b.cross(r));
+  }
+  ImuErrorModel zero;  // for the columns by perturbation (none in the catalog today)
+  bool zero_ready = false;
   for (std::size_t k = 0; k < columns.size(); ++k) {
     const auto col = static_cast<Eigen::Index>(k);
     const CoefficientSlot& slot = slots.at(static_cast<std::size_t>(columns[k]));
-    if (slot.thermal) {  // linear in the input: its column in closed form
-      const bool is_gyro = slot.output == CoefficientSlot::Output::Gyro;
-      const double dT = is_gyro ? s.gyro_dtemp : s.accel_dtemp;
-      double c = slot.power == 0 ? s.gyro_dtemp_rate : std::pow(dT, slot.power);
-      if (slot.input >= 0) c *= (is_gyro ? s.omega_ib_b : s.f_ib_b)(slot.input);
-      J(slot.row + (is_gyro ? 0 : 3), col) = c;
-      continue;
-    }
-    double* value = reinterpret_cast<double*>(base + slot.offset);
-    switch (slot.output) {
-      case CoefficientSlot::Output::Delay:
-        J.col(col).tail<3>() = -f_dot;
+    const bool is_gyro = slot.output == CoefficientSlot::Output::Gyro;
+    const Eigen::Vector3d& x = is_gyro ? s.omega_ib_b : s.f_ib_b;
+    const Eigen::Index row = slot.row + (is_gyro ? 0 : 3);
+    switch (slot.form) {
+      case Form::Bias:
+        J(row, col) = 1.0;
         break;
-      case CoefficientSlot::Output::Gyro:
-        *value = 1.0;
-        J.col(col).head<3>() = zero.gyro_output(s) - g0;
-        *value = 0.0;
+      case Form::Linear:
+        J(row, col) = x(slot.input) + (is_gyro ? 0.0 : v(slot.input, slot.row));
         break;
-      case CoefficientSlot::Output::Accel: {
+      case Form::Abs:
+        J(row, col) = std::abs(x(slot.input));
+        break;
+      case Form::Square:
+        J(row, col) = x(slot.input) * x(slot.input);
+        break;
+      case Form::Time:
+        J(row, col) = s.t;
+        break;
+      case Form::GSens:
+        J(row, col) = s.f_ib_b(slot.input);
+        break;
+      case Form::LeverArm: {
+        const Eigen::Vector3d e = Eigen::Vector3d::Unit(slot.input);
+        J(row, col) = A.row(slot.row).dot(s.omega_dot_ib_b.cross(e) +
+                                          s.omega_ib_b.cross(s.omega_ib_b.cross(e)));
+        break;
+      }
+      case Form::Thermal: {
+        const double dT = is_gyro ? s.gyro_dtemp : s.accel_dtemp;
+        double c = slot.power == 0 ? s.gyro_dtemp_rate : std::pow(dT, slot.power);
+        if (slot.input >= 0) c *= x(slot.input);
+        J(row, col) = c;
+        break;
+      }
+      case Form::Perturb: {
+        if (slot.output == CoefficientSlot::Output::Delay) {
+          J.col(col).tail<3>() = -f_dot;
+          break;
+        }
+        if (!zero_ready) {
+          zero.accel.scale = accel.scale;
+          zero.accel.misalignment = accel.misalignment;
+          zero.accel_lever_arm_b = accel_lever_arm_b;
+          zero_ready = true;
+        }
+        double* value = reinterpret_cast<double*>(reinterpret_cast<char*>(&zero) + slot.offset);
         const double held = *value;
-        *value = held + 1.0;
-        J.col(col).tail<3>() = zero.accel_output(s) - a0;
+        if (is_gyro) {
+          const Eigen::Vector3d g0 = zero.gyro_output(s);
+          *value = held + 1.0;
+          J.col(col).head<3>() = zero.gyro_output(s) - g0;
+        } else {
+          const Eigen::Vector3d a0 = zero.accel_output(s);
+          *value = held + 1.0;
+          J.col(col).tail<3>() = zero.accel_output(s) - a0;
+        }
         *value = held;
         break;
       }

@@ -64,9 +64,6 @@ struct TriadErrors {
   /// The model formula at a temperature (dT = T - T0, deg C; dT/dt in C/s).
   Eigen::Vector3d apply(const Eigen::Vector3d& x, const Eigen::Vector3d& extra, double dT,
                         double dT_rate) const;
-  /// The rate of change of the input from that of the output, to first order in the errors:
-  /// linear()^-1 y_dot (the rates of change of the nonlinear terms are of second order).
-  Eigen::Vector3d input_rate(const Eigen::Vector3d& output_rate) const;
   /// The model formula (truth to output).
   Eigen::Vector3d apply(const Eigen::Vector3d& x, const Eigen::Vector3d& extra) const;
   /// One fixed-point step of the inverse: the input x that gives output y, from a guess of x;
@@ -113,6 +110,14 @@ class ImuErrorModel {
   double reference_temperature_c = 25.0;  // deg C
   /// Whether any thermal coefficient is non-zero.
   bool has_thermal() const;
+  /// The inverses of both triads' linear parts at the reference temperature (constant while the
+  /// coefficients are: a filter computes them once per change of its estimate). The rate of
+  /// change of an input from its output's, to first order in the errors, is the inverse times it
+  /// (the rates of change of the nonlinear terms are of second order).
+  struct LinearInverses {
+    Eigen::Matrix3d gyro = Eigen::Matrix3d::Identity(), accel = Eigen::Matrix3d::Identity();
+  };
+  LinearInverses linear_inverses() const;
 
   /// Gyro output for the kinematics at the gyro sampling instant.
   Eigen::Vector3d gyro_output(const KinematicSample& s) const;
@@ -127,11 +132,13 @@ class ImuErrorModel {
   /// the errors, ~1e-3 or less). Throws std::runtime_error if it does not converge.
   /// `t` is the time of the outputs since the start of the plan (time-dependent terms).
   /// `temperature` (optional) carries the thermal deviations (KinematicSample's accel_dtemp,
-  /// gyro_dtemp, gyro_dtemp_rate); its other fields are not read.
+  /// gyro_dtemp, gyro_dtemp_rate); its other fields are not read. `inverses` (optional) are
+  /// this model's linear_inverses(), used where the temperature leaves the linear parts alone.
   void compensate(const Eigen::Vector3d& y_gyro, const Eigen::Vector3d& y_accel,
                   const Eigen::Vector3d& omega_dot_ib_b, Eigen::Vector3d& omega_ib_b,
                   Eigen::Vector3d& f_ib_b, double t = 0.0,
-                  const KinematicSample* temperature = nullptr) const;
+                  const KinematicSample* temperature = nullptr,
+                  const LinearInverses* inverses = nullptr) const;
 
   /// Sensitivity of the sensor errors (y - x) to every coefficient, in the order of
   /// coefficient_refs(): rows 0-2 gyro outputs (rad/s), rows 3-5 accelerometer outputs (m/s^2),

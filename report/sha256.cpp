@@ -28,17 +28,19 @@ class Sha256 {
  public:
   void update(const unsigned char* data, std::size_t n) {
     length_ += n;
-    while (n > 0) {
+    if (fill_ > 0) {  // complete the held block first
       const std::size_t take = std::min(n, block_.size() - fill_);
       std::memcpy(block_.data() + fill_, data, take);
       fill_ += take;
       data += take;
       n -= take;
-      if (fill_ == block_.size()) {
-        compress();
-        fill_ = 0;
-      }
+      if (fill_ < block_.size()) return;
+      compress(block_.data());
+      fill_ = 0;
     }
+    for (; n >= 64; data += 64, n -= 64) compress(data);  // whole blocks in place
+    std::memcpy(block_.data(), data, n);
+    fill_ = n;
   }
 
   std::string hex() {
@@ -57,27 +59,48 @@ class Sha256 {
   }
 
  private:
-  void compress() {
-    std::array<std::uint32_t, 64> w{};
+  // FIPS 180-4, 6.2.2, with the eight working variables in registers: each round renames them
+  // instead of shifting an array.
+  void compress(const unsigned char* block) {
+    std::uint32_t w[64];
     for (std::size_t i = 0; i < 16; ++i)
-      w[i] = (std::uint32_t{block_[4 * i]} << 24) | (std::uint32_t{block_[4 * i + 1]} << 16) |
-             (std::uint32_t{block_[4 * i + 2]} << 8) | std::uint32_t{block_[4 * i + 3]};
+      w[i] = (std::uint32_t{block[4 * i]} << 24) | (std::uint32_t{block[4 * i + 1]} << 16) |
+             (std::uint32_t{block[4 * i + 2]} << 8) | std::uint32_t{block[4 * i + 3]};
     for (std::size_t i = 16; i < 64; ++i) {
       const std::uint32_t s0 = rotr(w[i - 15], 7) ^ rotr(w[i - 15], 18) ^ (w[i - 15] >> 3);
       const std::uint32_t s1 = rotr(w[i - 2], 17) ^ rotr(w[i - 2], 19) ^ (w[i - 2] >> 10);
       w[i] = w[i - 16] + s0 + w[i - 7] + s1;
     }
-    std::array<std::uint32_t, 8> v = h_;
-    for (std::size_t i = 0; i < 64; ++i) {
-      const std::uint32_t s1 = rotr(v[4], 6) ^ rotr(v[4], 11) ^ rotr(v[4], 25);
-      const std::uint32_t ch = (v[4] & v[5]) ^ (~v[4] & v[6]);
-      const std::uint32_t t1 = v[7] + s1 + ch + kRound[i] + w[i];
-      const std::uint32_t s0 = rotr(v[0], 2) ^ rotr(v[0], 13) ^ rotr(v[0], 22);
-      const std::uint32_t maj = (v[0] & v[1]) ^ (v[0] & v[2]) ^ (v[1] & v[2]);
-      const std::uint32_t t2 = s0 + maj;
-      v = {t1 + t2, v[0], v[1], v[2], v[3] + t1, v[4], v[5], v[6]};
+    std::uint32_t a = h_[0], b = h_[1], c = h_[2], d = h_[3], e = h_[4], f = h_[5], g = h_[6],
+                  h = h_[7];
+    auto round = [&w](std::uint32_t ra, std::uint32_t rb, std::uint32_t rc, std::uint32_t& rd,
+                      std::uint32_t re, std::uint32_t rf, std::uint32_t rg, std::uint32_t& rh,
+                      std::size_t i) {
+      const std::uint32_t t1 = rh + (rotr(re, 6) ^ rotr(re, 11) ^ rotr(re, 25)) +
+                               ((re & rf) ^ (~re & rg)) + kRound[i] + w[i];
+      const std::uint32_t t2 =
+          (rotr(ra, 2) ^ rotr(ra, 13) ^ rotr(ra, 22)) + ((ra & rb) ^ (ra & rc) ^ (rb & rc));
+      rd += t1;
+      rh = t1 + t2;
+    };
+    for (std::size_t i = 0; i < 64; i += 8) {
+      round(a, b, c, d, e, f, g, h, i);
+      round(h, a, b, c, d, e, f, g, i + 1);
+      round(g, h, a, b, c, d, e, f, i + 2);
+      round(f, g, h, a, b, c, d, e, i + 3);
+      round(e, f, g, h, a, b, c, d, i + 4);
+      round(d, e, f, g, h, a, b, c, i + 5);
+      round(c, d, e, f, g, h, a, b, i + 6);
+      round(b, c, d, e, f, g, h, a, i + 7);
     }
-    for (std::size_t i = 0; i < 8; ++i) h_[i] += v[i];
+    h_[0] += a;
+    h_[1] += b;
+    h_[2] += c;
+    h_[3] += d;
+    h_[4] += e;
+    h_[5] += f;
+    h_[6] += g;
+    h_[7] += h;
   }
 
   std::array<std::uint32_t, 8> h_ = {0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a,

@@ -38,30 +38,32 @@ ErrorPropagator::ErrorPropagator(const StateLayout& layout, const InsSiteTerms& 
     }
   }
   A_.setZero();
-  B_.setZero(kMaxNavStates, m_);
-  work_nc_.setZero(kMaxNavStates, m_);
+  Phi_nc_[1 - current_].setZero(kMaxNavStates, m_);
+  B_sum_.setZero(kMaxNavStates, m_);
+  half_nc_.setZero(kMaxNavStates, m_);
+  if (const auto* delay = layout_.block("time_delay")) delay_column_ = delay->block.index - n_;
   reset();
 }
 
 template <class Matrix>
-void ErrorPropagator::step_product(const Matrix& in, Matrix& out) const {
+void ErrorPropagator::step_product(const Matrix& in, Matrix& out, double scale) const {
   out = in;
-  for (int k = 0; k < nonzero_; ++k) out.row(nz_row_[k]) += nz_value_[k] * in.row(nz_col_[k]);
+  for (int k = 0; k < nonzero_; ++k)
+    out.row(nz_row_[k]) += (scale * nz_value_[k]) * in.row(nz_col_[k]);
 }
 
 void ErrorPropagator::reset() {
   Phi_nn_.setIdentity();
-  Phi_nc_.setZero(kMaxNavStates, m_);
+  Phi_nc_[current_].setZero(kMaxNavStates, m_);
   Q_nn_.setZero();
   accumulated_ = 0.0;
 }
 
 void ErrorPropagator::step(const Eigen::Matrix3d& C, const KinematicSample& k,
-                           const Eigen::Vector3d& f_dot, const ImuErrorModel& model, double dt) {
+                           const Eigen::Vector3d& f_dot, const ImuErrorModel& model,
+                           const ImuErrorModel::LinearInverses& inverses, double dt) {
   const Block& a = layout_.attitude;
   const Block& v = layout_.velocity;
-  A_.setZero();
-  ins_error_matrix(site_, C * k.f_ib_b, ErrorModelKind::Coupled, layout_.nav(), A_);
   model.jacobian(k, f_dot, coefficient_catalog_, J_);
   // Coefficient coupling: gyro errors rotate the attitude (phi' = -C dw_b), accelerometer errors
   // add to the velocity (dv' = C df_b).
@@ -69,49 +71,103 @@ void ErrorPropagator::step(const Eigen::Matrix3d& C, const KinematicSample& k,
   // An output error J dtheta is an error A^-1 J dtheta of the compensated input (A the triad's
   // linear part as estimated: a mounting makes it a rotation of up to degrees); the time delay
   // acts on the compensated input already.
-  const Eigen::Matrix3d C_gyro = C * model.gyro.linear().inverse();
-  const Eigen::Matrix3d C_accel = C * model.accel.linear().inverse();
-  B_.block(a.index, 0, 3, coefficients_).noalias() = -(C_gyro.lazyProduct(J_.topRows<3>()));
-  B_.block(v.index, 0, v.size, coefficients_).noalias() =
-      (C_accel.lazyProduct(J_.bottomRows<3>())).topRows(v.size);
-  if (const auto* delay = layout_.block("time_delay"))
-    B_.block(v.index, delay->block.index - n_, v.size, 1).noalias() =
-        (C * J_.bottomRows<3>().col(delay->block.index - n_)).topRows(v.size);
+  const Eigen::Matrix3d C_gyro = C * inverses.gyro;
+  const Eigen::Matrix3d C_accel = C * inverses.accel;
+  // B dt, a column per coefficient: the Jacobian's columns are sparse (most have one output), so
+  // each non-zero entry adds one column of C_gyro or C_accel.
+  const int ai = a.index, vi = v.index, vn = v.size;
+  for (int c = 0; c < coefficients_; ++c) {
+    double* column = B_sum_.col(c).data();
+    for (int r = 0; r < 3; ++r) {
+      const double g = J_(r, c);
+      if (g == 0.0) continue;
+      for (int i = 0; i < 3; ++i) column[ai + i] -= C_gyro(i, r) * (g * dt);
+    }
+    const Eigen::Matrix3d& C_out = c == delay_column_ ? C : C_accel;
+    for (int r = 0; r < 3; ++r) {
+      const double f = J_(3 + r, c);
+      if (f == 0.0) continue;
+      for (int i = 0; i < vn; ++i) column[vi + i] += C_out(i, r) * (f * dt);
+    }
+  }
+  f_n_sum_ += C * k.f_ib_b * dt;
+  substep_ += dt;
+  accumulated_ += dt;
+  if (substep_ >= kTransitionSubstep - 1e-9) flush();
+}
+
+void ErrorPropagator::flush() {
+  if (!(substep_ > 0.0)) return;
+  const double h = substep_;
+  const Block& a = layout_.attitude;
+  const Block& v = layout_.velocity;
+  A_.setZero();
+  ins_error_matrix(site_, f_n_sum_ / h, ErrorModelKind::Coupled, layout_.nav(), A_);
   nonzero_ = 0;
   for (int j = 0; j < kMaxNavStates; ++j)
     for (int i = 0; i < kMaxNavStates; ++i)
       if (A_(i, j) != 0.0) {
         nz_row_[nonzero_] = i;
         nz_col_[nonzero_] = j;
-        nz_value_[nonzero_++] = A_(i, j) * dt;
+        nz_value_[nonzero_++] = A_(i, j) * h;
       }
-  // Phi <- (I + A dt) Phi, Phi_nc <- (I + A dt) Phi_nc + B dt.
-  step_product(Phi_nn_, work_nn_);
+  // Phi <- Phi_h Phi: X + A h (X + A h / 2 X).
+  step_product(Phi_nn_, half_nn_, 0.5);
+  step_product(half_nn_, work_nn_);
+  work_nn_ += Phi_nn_ - half_nn_;  // step_product copied half_nn_: the first X is Phi_nn_
   Phi_nn_ = work_nn_;
-  step_product(Phi_nc_, work_nc_);
-  Phi_nc_ = work_nc_ + B_ * dt;
-  // Noise entered earlier in the interval is carried by the later steps (into position, and from
-  // attitude into velocity): Q <- (I + A dt) Q (I + A dt)^T + q dt.
-  step_product(Q_nn_, work_nn_);
-  const NavMatrix left_transposed = work_nn_.transpose();
-  step_product(left_transposed, work_nn_);
-  Q_nn_ = work_nn_.transpose();
-  Q_nn_.diagonal().segment(a.index, 3).array() += noise_.gyro.white * noise_.gyro.white * dt;
-  Q_nn_.diagonal().segment(v.index, v.size).array() += noise_.accel.white * noise_.accel.white * dt;
-  accumulated_ += dt;
+  // Phi_nc <- Phi_h Phi_nc + (I + A h / 2) int B = X + S + A h (X + S / 2 + A h / 2 X).
+  NavCoefficientMatrix& X = Phi_nc_[current_];
+  NavCoefficientMatrix& out = Phi_nc_[1 - current_];
+  step_product(X, half_nc_, 0.5);
+  half_nc_ += 0.5 * B_sum_;
+  step_product(half_nc_, out);
+  out += X + B_sum_ - half_nc_;
+  current_ = 1 - current_;
+  B_sum_.setZero();
+  // Q <- Phi_h Q Phi_h^T + (I + A h / 2) q h (I + A h / 2)^T.
+  auto both_sides = [this](NavMatrix& M, bool second_order) {
+    // M <- T M T^T with T = Phi_h (second order) or I + A h / 2.
+    for (int side = 0; side < 2; ++side) {
+      if (second_order) {
+        step_product(M, half_nn_, 0.5);
+        step_product(half_nn_, work_nn_);
+        work_nn_ += M - half_nn_;
+      } else {
+        step_product(M, work_nn_, 0.5);
+      }
+      M = work_nn_.transpose();
+    }
+  };
+  NavMatrix q = NavMatrix::Zero();
+  q.diagonal().segment(a.index, 3).array() = noise_.gyro.white * noise_.gyro.white * h;
+  q.diagonal().segment(v.index, v.size).array() = noise_.accel.white * noise_.accel.white * h;
+  both_sides(Q_nn_, true);
+  both_sides(q, false);
+  Q_nn_ += q;
+  f_n_sum_.setZero();
+  substep_ = 0.0;
 }
 
 void ErrorPropagator::propagate(Eigen::MatrixXd& P) {
+  flush();
   const int n = n_, m = m_;
-  // P <- Phi P Phi^T + Q with Phi = [[Phi_nn, Phi_nc], [0, I]].
-  Eigen::MatrixXd T = P;
-  const Eigen::MatrixXd Phi_nn = Phi_nn_.topLeftCorner(n, n), Phi_nc = Phi_nc_.topRows(n);
-  T.topRows(n) = Phi_nn * P.topRows(n) + Phi_nc * P.bottomRows(m);
-  Eigen::MatrixXd Pn = T;
-  Pn.leftCols(n) = T.leftCols(n) * Phi_nn.transpose() + T.rightCols(m) * Phi_nc.transpose();
-  Pn.topLeftCorner(n, n) += Q_nn_.topLeftCorner(n, n);
-  Pn.diagonal().tail(m) += wander_ * accumulated_;
-  P = 0.5 * (Pn + Pn.transpose());
+  // P <- Phi P Phi^T + Q with Phi = [[Phi_nn, Phi_nc], [0, I]]: the block after the navigation
+  // states is unchanged (but for the wander), the navigation rows become T = Phi [P_n; P_c]
+  // (top rows), and their block with themselves T_n Phi_nn^T + T_c Phi_nc^T.
+  const auto Phi_nn = Phi_nn_.topLeftCorner(n, n);
+  const auto Phi_nc = Phi_nc_[current_].topRows(n);
+  work_T_.noalias() = Phi_nn * P.topRows(n);
+  work_T_.noalias() += Phi_nc * P.bottomRows(m);
+  Eigen::MatrixXd& T = work_T_;
+  P.topRightCorner(n, m) = T.rightCols(m);
+  P.bottomLeftCorner(m, n) = T.rightCols(m).transpose();
+  NavMatrix top;
+  top.topLeftCorner(n, n).noalias() = T.leftCols(n) * Phi_nn.transpose();
+  top.topLeftCorner(n, n).noalias() += T.rightCols(m) * Phi_nc.transpose();
+  top.topLeftCorner(n, n) += Q_nn_.topLeftCorner(n, n);
+  P.topLeftCorner(n, n) = 0.5 * (top.topLeftCorner(n, n) + top.topLeftCorner(n, n).transpose());
+  P.diagonal().tail(m) += wander_ * accumulated_;
   reset();
 }
 

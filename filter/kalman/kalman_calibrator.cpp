@@ -70,6 +70,7 @@ Calibrator::Calibrator(PlanTimeline timeline, const Site& site, const Calibrator
   if (dwells_.empty()) throw std::invalid_argument("the Kalman calibrator needs the plan's dwells");
   initialize_covariance();
   if (o_.initial_model) model_ = *o_.initial_model;
+  inverses_ = model_.linear_inverses();
   model_.reference_temperature_c = o_.reference_temperature_c;
   for (const auto& f : coefficient_families())
     if (f.thermal() && layout_.block(f.name)) thermal_ = true;
@@ -154,6 +155,7 @@ void Calibrator::finish() {
                                  : Eigen::Vector3d::Zero();
   process(cur, wd, fd, Eigen::Vector3d::Zero());
   held_.clear();
+  propagator_.flush();
 }
 
 void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot_raw,
@@ -186,9 +188,9 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot_ra
   }
   // The rates of change are differences of the outputs: the inputs' are the model's linear part
   // inverted (without it, the delay correction below would carry tau (A - I) f_dot).
-  const Eigen::Vector3d omega_dot = model_.gyro.input_rate(omega_dot_raw);
-  const Eigen::Vector3d f_dot = model_.accel.input_rate(f_dot_raw);
-  const Eigen::Vector3d f_ddot = model_.accel.input_rate(f_ddot_raw);
+  const Eigen::Vector3d omega_dot = inverses_.gyro * omega_dot_raw;
+  const Eigen::Vector3d f_dot = inverses_.accel * f_dot_raw;
+  const Eigen::Vector3d f_ddot = inverses_.accel * f_ddot_raw;
   // Compensate with the current estimate (mean rates over the interval, at its middle).
   KinematicSample k;
   k.omega_dot_ib_b = omega_dot;
@@ -198,7 +200,8 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot_ra
     k.gyro_dtemp = s.gyro_temperature_c - model_.reference_temperature_c;
     k.gyro_dtemp_rate = temperature_rate_.add(s.t, s.gyro_temperature_c);
   }
-  model_.compensate(s.dtheta_b / dt, s.dv_b / dt, omega_dot, k.omega_ib_b, k.f_ib_b, k.t, &k);
+  model_.compensate(s.dtheta_b / dt, s.dv_b / dt, omega_dot, k.omega_ib_b, k.f_ib_b, k.t, &k,
+                    &inverses_);
   // Accelerometers late by tau: f(t) = f_meas(t + tau), to second order.
   const double tau = model_.time_delay;
   k.f_ib_b += tau * f_dot + 0.5 * tau * tau * f_ddot;
@@ -208,7 +211,7 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot_ra
   // end attitude would rotate the specific force by half the interval's turn, a spurious
   // heading-velocity coupling of g omega dt / 2 while the table turns).
   const Eigen::Quaterniond q_mid = q_before.slerp(0.5, nav_.state().q_b_n);
-  propagator_.step(q_mid.toRotationMatrix(), k, f_dot, model_, dt);
+  propagator_.step(q_mid.toRotationMatrix(), k, f_dot, model_, inverses_, dt);
   if (propagator_.accumulated() >= o_.update_interval - 1e-9) {
     propagator_.propagate(P_);
     update(s.t - o_.time_offset);
@@ -225,6 +228,7 @@ void Calibrator::inject_error(const Eigen::VectorXd& dx) {
   }
   NavState x = nav_.state();
   sinscal::inject_error(layout_, site_terms_, dx, x, model_);
+  inverses_ = model_.linear_inverses();
   inject_base_error(layout_, dx, C_base_);
   nav_.correct(x);
   pending_error_.resize(0);
@@ -353,6 +357,7 @@ void Calibrator::apply(const Measurement& m) {
   NavState x = nav_.state();
   const Eigen::VectorXd dx = K * z;
   feed_back(layout_, site_terms_, dx, x, model_);
+  inverses_ = model_.linear_inverses();
   feed_back_base(layout_, dx, C_base_);
   // Keep the coning/sculling memory: the correction is tiny and the increments unchanged.
   nav_.correct(x);

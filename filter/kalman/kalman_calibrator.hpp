@@ -233,6 +233,7 @@ class Calibrator {
   CalibratorOptions o_;
   StateLayout layout_;
   ImuErrorModel model_;
+  ImuErrorModel::LinearInverses inverses_;  // model_'s, refreshed with each change of it
   Eigen::Matrix3d C_base_ = Eigen::Matrix3d::Identity();  // the base attitude's estimate
   Strapdown nav_;
   ErrorPropagator propagator_;
