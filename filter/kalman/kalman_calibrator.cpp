@@ -347,13 +347,13 @@ void Calibrator::apply(const Measurement& m) {
   // Prediction-error decomposition: log N(z; 0, S) summed over the updates (log 2 pi dropped).
   log_likelihood_ -= 0.5 * (last_nis_ + 2.0 * llt.matrixLLT().diagonal().array().log().sum());
   ++updates_;
-  // Joseph form (I - K H) P (I - K H)^T + K R K^T, symmetrized: (I - K H) P = P - K (H P), and
-  // X (I - K H)^T = X - (X H^T) K^T.
-  const Eigen::MatrixXd IKH_P = P_ - K * HP;
-  Eigen::MatrixXd IKH_P_Ht(n, r);
-  columns_of(IKH_P, IKH_P_Ht);
-  P_ = IKH_P - IKH_P_Ht * K.transpose() + K * R.asDiagonal() * K.transpose();
-  P_ = 0.5 * (P_ + P_.transpose());
+  // Joseph form (I - K H) P (I - K H)^T + K R K^T = P - K (H P) - (K (H P))^T + K S K^T (P
+  // symmetric), symmetrized: two products of n x r by r x n.
+  work_KHP_.noalias() = K * HP;
+  work_KSK_.noalias() = (K * S) * K.transpose();
+  work_KSK_ -= work_KHP_;
+  work_KSK_ -= work_KHP_.transpose();
+  P_ += 0.5 * (work_KSK_ + work_KSK_.transpose());
   NavState x = nav_.state();
   const Eigen::VectorXd dx = K * z;
   feed_back(layout_, site_terms_, dx, x, model_);

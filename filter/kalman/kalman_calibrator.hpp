@@ -234,6 +234,7 @@ class Calibrator {
   StateLayout layout_;
   ImuErrorModel model_;
   ImuErrorModel::LinearInverses inverses_;  // model_'s, refreshed with each change of it
+  Eigen::MatrixXd work_KHP_, work_KSK_;     // apply(): n x n products, kept between updates
   Eigen::Matrix3d C_base_ = Eigen::Matrix3d::Identity();  // the base attitude's estimate
   Strapdown nav_;
   ErrorPropagator propagator_;
