@@ -11,10 +11,11 @@
 // states, and dtheta = true - estimated coefficients. The transition has the structure
 // [[Phi_nn, Phi_nc], [0, I]].
 //
-// Two rates. The coefficient coupling B = [-C_b_n A_g^-1 J_g; C_b_n A_a^-1 J_a] follows every
-// IMU sample (the table's turns change it within a sample's time): its integral over a substep
-// of about kTransitionSubstep is summed per sample. The INS error matrix A (Earth rate, gravity,
-// the specific force in n) changes slowly; per substep h its mean is applied to second order:
+// Two rates. The error model's Jacobian J follows every IMU sample (the table's turns change it
+// within a sample's time): its integral over a substep of about kTransitionSubstep is summed per
+// sample, and with the substep's mean attitude gives the integral of the coefficient coupling
+// B = [-C_b_n A_g^-1 J_g; C_b_n A_a^-1 J_a]. The INS error matrix A (Earth rate, gravity, the
+// specific force in n) changes slowly; per substep h its mean is applied to second order:
 //   Phi    <- Phi_h Phi,           Phi_h = I + A h + (A h)^2 / 2,
 //   Phi_nc <- Phi_h Phi_nc + (I + A h / 2) int B,
 //   Q      <- Phi_h Q Phi_h^T + (I + A h / 2) q h (I + A h / 2)^T,
@@ -41,7 +42,7 @@ using NavCoefficientMatrix = Eigen::Matrix<double, kMaxNavStates, Eigen::Dynamic
 
 /// The transition's substep (s): the INS error matrix's mean over it is applied to second
 /// order (a sample interval longer than it is one substep).
-constexpr double kTransitionSubstep = 0.1;
+constexpr double kTransitionSubstep = 0.2;
 
 class ErrorPropagator {
  public:
@@ -79,10 +80,11 @@ class ErrorPropagator {
   // The transition from the coefficients: two buffers, the current one and the next product's;
   // the substep's integral of B, and a work buffer.
   NavCoefficientMatrix Phi_nc_[2], half_nc_;
-  // Summed per sample a column at a time: column-major, so each column's entries are adjacent.
-  Eigen::Matrix<double, kMaxNavStates, Eigen::Dynamic, Eigen::ColMajor, kMaxNavStates,
-                kMaxCoefficients>
-      B_sum_;
+  NavCoefficientMatrix B_sum_;
+  // The substep's integrals of the Jacobian and of the attitude, and the model's inverses.
+  ImuErrorModel::JacobianColumns J_sum_;
+  Eigen::Matrix3d C_sum_ = Eigen::Matrix3d::Zero();
+  ImuErrorModel::LinearInverses inverses_;
   Eigen::MatrixXd work_T_;  // propagate(): the navigation rows of Phi P
   int current_ = 0;
   int delay_column_ = -1;  // the time delay's coefficient state (after n_), or -1
