@@ -57,11 +57,12 @@ void ErrorPropagator::reset() {
 }
 
 void ErrorPropagator::step(const Eigen::Matrix3d& C, const KinematicSample& k,
-                           const Eigen::Vector3d& f_dot, const ImuErrorModel& model, double dt) {
+                           const Eigen::Vector3d& f_dot, const ImuErrorModel& model, double dt,
+                           const Eigen::Vector3d& f_n) {
   const Block& a = layout_.attitude;
   const Block& v = layout_.velocity;
   A_.setZero();
-  ins_error_matrix(site_, C * k.f_ib_b, ErrorModelKind::Coupled, layout_.nav(), A_);
+  ins_error_matrix(site_, f_n, ErrorModelKind::Coupled, layout_.nav(), A_);
   model.jacobian(k, f_dot, coefficient_catalog_, J_);
   // Coefficient coupling: gyro errors rotate the attitude (phi' = -C dw_b), accelerometer errors
   // add to the velocity (dv' = C df_b).

@@ -37,7 +37,15 @@ class ErrorPropagator {
   /// kinematics (omega_ib_b, omega_dot_ib_b, f_ib_b, t), the rate of change of the specific
   /// force and the model the samples were compensated with (its Jacobian).
   void step(const Eigen::Matrix3d& C_b_n, const KinematicSample& k, const Eigen::Vector3d& f_dot,
-            const ImuErrorModel& model, double dt);
+            const ImuErrorModel& model, double dt) {
+    step(C_b_n, k, f_dot, model, dt, C_b_n * k.f_ib_b);
+  }
+  /// The same with the Jacobian's kinematics `k` and attitude `C_b_n` taken from a reference
+  /// trajectory (the table's known motion) and `f_n`, the specific force the navigator
+  /// integrated in navigation axes (the INS error matrix's f_n x phi term: the compensated,
+  /// measured one).
+  void step(const Eigen::Matrix3d& C_b_n, const KinematicSample& k, const Eigen::Vector3d& f_dot,
+            const ImuErrorModel& model, double dt, const Eigen::Vector3d& f_n);
   /// P <- Phi P Phi^T + Q over the accumulated interval, then starts a new interval.
   void propagate(Eigen::MatrixXd& P);
   /// Time accumulated since the last propagate() (s).

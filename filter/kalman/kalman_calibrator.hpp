@@ -19,6 +19,7 @@
 #include <atomic>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,6 +35,7 @@
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"
 #include "rig/imu_sample.hpp"
+#include "rig/motion.hpp"
 #include "rig/table.hpp"
 #include "rig/thermal.hpp"
 #include "rig/timeline.hpp"
@@ -116,6 +118,15 @@ struct CalibratorOptions {
   /// a plan mismatch.
   bool use_table_angles = true;
   double table_plan_tolerance = 1.0 * units::deg;  // rad
+  /// The table's known motion in plan time (the plan's motion of a perfect table, rig/plan.hpp
+  /// build_motion), when the IMU follows it: the error dynamics are then evaluated along it (the
+  /// Jacobian's rates and specific force, and the attitude that turns the coefficient errors into
+  /// navigation axes, with `initial_base_n`), not along the navigator's compensated outputs.
+  /// Those carry the sensor noise and the current estimate: for a MEMS unit, whose estimates
+  /// wander along the combinations the first turns leave undetermined, the Jacobian followed
+  /// them and the filter gained information the data do not hold (README "Several passes").
+  /// Null: the navigator's outputs and attitude (every estimator but run_kalman's passes).
+  std::shared_ptr<const Motion> reference_motion;
   /// Held-out intervals of plan time (s, start and end): no measurement update inside them, and
   /// the first update after each is recorded as a prediction (HoldoutPrediction). The
   /// diagnosis leaves turns out this way to measure how well a model predicts them.
@@ -234,6 +245,8 @@ class Calibrator {
   StateLayout layout_;
   ImuErrorModel model_;
   Eigen::Matrix3d C_base_ = Eigen::Matrix3d::Identity();  // the base attitude's estimate
+  // The base the reference motion is turned by (the start's, fixed: not the wandering estimate).
+  Eigen::Matrix3d C_reference_base_ = Eigen::Matrix3d::Identity();
   Strapdown nav_;
   ErrorPropagator propagator_;
   bool started_ = false;

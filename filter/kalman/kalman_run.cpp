@@ -13,6 +13,7 @@
 #include "filter/installation/stream_alignment.hpp"
 #include "models/attitude.hpp"
 #include "models/coefficient_families.hpp"
+#include "rig/plan.hpp"
 
 namespace sinscal {
 
@@ -268,7 +269,14 @@ void summarize(const Calibrator& kf, const PlanTimeline& timeline, const KalmanR
 KalmanRun run_pass(const Session& session, const CalibratorOptions& options, SampleSource* source,
                    const KalmanRunOptions& run) {
   const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
-  Calibrator kf(timeline, session.site, options);
+  CalibratorOptions o = options;
+  // The error dynamics along the plan's motion when the IMU follows it: the dwells where the plan
+  // puts them, the table's attitude known (the body frame the table's), the reference point on
+  // the table's axes (at rest while it turns).
+  if (!o.reference_motion && o.static_from == CalibratorOptions::StaticFrom::Plan &&
+      o.attitude != CalibratorOptions::AttitudeUpdates::None && o.zero_velocity_in_motion)
+    o.reference_motion = std::make_shared<const Motion>(build_motion(session.plan, session.site));
+  Calibrator kf(timeline, session.site, o);
   std::unique_ptr<LogReader> reader;
   if (!source) {
     reader = std::make_unique<LogReader>(session.log);
