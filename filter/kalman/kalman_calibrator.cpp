@@ -46,6 +46,11 @@ bool gyros_find_north(const CalibratorOptions& o) {
   return true;
 }
 
+bool follows_plan_motion(const CalibratorOptions& o) {
+  return o.static_from == CalibratorOptions::StaticFrom::Plan &&
+         o.attitude != CalibratorOptions::AttitudeUpdates::None && o.zero_velocity_in_motion;
+}
+
 double initial_attitude_sigma(const CalibratorOptions& o) {
   if (o.initial_attitude_sigma > 0.0) return o.initial_attitude_sigma;
   return kDefaultStartAttitudeSigma;

@@ -161,6 +161,11 @@ StateLayoutOptions effective_layout(const CalibratorOptions& options);
 /// Whether the gyros find North: every gyro-bias prior below kNorthSeekingBiasRatio of the Earth
 /// rate (otherwise the base heading's prior is the table's attitude sigma: the plan's heading).
 bool gyros_find_north(const CalibratorOptions& options);
+/// Whether the IMU follows the plan's motion as the options describe the session (dwells where
+/// the plan puts them, table-attitude updates, the reference point on the table's axes): the
+/// error dynamics are then evaluated along the plan's motion (CalibratorOptions::reference_motion;
+/// run_kalman and the plan search give it).
+bool follows_plan_motion(const CalibratorOptions& options);
 /// The start-attitude sigma the options imply.
 double initial_attitude_sigma(const CalibratorOptions& options);
 
@@ -228,6 +233,11 @@ class Calibrator {
   /// dwells begin with those given so far (the same plan with further turns). Throws
   /// std::invalid_argument when they do not.
   void extend_timeline(const PlanTimeline& longer);
+  /// The reference motion from here on (CalibratorOptions::reference_motion), e.g. a longer
+  /// plan's whose beginning is the motion so far.
+  void set_reference_motion(std::shared_ptr<const Motion> motion) {
+    o_.reference_motion = std::move(motion);
+  }
 
  private:
   void process(const ImuSample& s, const Eigen::Vector3d& omega_dot, const Eigen::Vector3d& f_dot,

@@ -270,11 +270,8 @@ KalmanRun run_pass(const Session& session, const CalibratorOptions& options, Sam
                    const KalmanRunOptions& run) {
   const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
   CalibratorOptions o = options;
-  // The error dynamics along the plan's motion when the IMU follows it: the dwells where the plan
-  // puts them, the table's attitude known (the body frame the table's), the reference point on
-  // the table's axes (at rest while it turns).
-  if (!o.reference_motion && o.static_from == CalibratorOptions::StaticFrom::Plan &&
-      o.attitude != CalibratorOptions::AttitudeUpdates::None && o.zero_velocity_in_motion)
+  // The error dynamics along the plan's motion when the IMU follows it.
+  if (!o.reference_motion && follows_plan_motion(o))
     o.reference_motion = std::make_shared<const Motion>(build_motion(session.plan, session.site));
   Calibrator kf(timeline, session.site, o);
   std::unique_ptr<LogReader> reader;
