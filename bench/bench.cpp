@@ -7,6 +7,7 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -295,7 +296,9 @@ double bench_kalman_stages(const Plan& rot, const Motion& rot_motion,
       sink += k.f_ib_b(0);
     }
   });
-  const CalibratorOptions options = calibrator_options_from_profile(profile);
+  // As run_kalman runs it: the error dynamics along the plan's motion.
+  CalibratorOptions options = calibrator_options_from_profile(profile);
+  options.reference_motion = std::make_shared<const Motion>(rot_motion);
   const StateLayout layout = StateLayout::make(effective_layout(options));
   std::vector<int> catalog;
   for (const auto& cb : layout.coefficients)
@@ -431,11 +434,14 @@ int main(int argc, char** argv) {
     ImuSample s;
     while (sim.next(s)) rot_samples.push_back(s);
   }
+  // As run_kalman runs the filter: the error dynamics along the plan's motion.
+  CalibratorOptions rot_options = calibrator_options_from_profile(profile);
+  if (follows_plan_motion(rot_options))
+    rot_options.reference_motion = std::make_shared<const Motion>(rot_motion);
   double t_kf = 1e300;
   int states = 0;
   for (int pass = 0; pass < 3; ++pass) {
-    Calibrator kf(PlanTimeline::of(rot, rot.site), rot.site,
-                  calibrator_options_from_profile(profile));
+    Calibrator kf(PlanTimeline::of(rot, rot.site), rot.site, rot_options);
     t0 = Clock::now();
     for (const auto& s : rot_samples) kf.push(s);
     kf.finish();
@@ -499,8 +505,7 @@ int main(int argc, char** argv) {
     t0 = Clock::now();
     {
       LogReader r(rot_log);
-      Calibrator kf(PlanTimeline::of(rot, rot.site), rot.site,
-                    calibrator_options_from_profile(profile));
+      Calibrator kf(PlanTimeline::of(rot, rot.site), rot.site, rot_options);
       ImuSample s;
       while (r.next(s)) kf.push(s);
       kf.finish();

@@ -71,7 +71,10 @@ class Grower {
 
  private:
   void run(const Plan& plan, const Context& c) {
-    const Motion motion = build_motion(plan, c.site);
+    const auto shared = std::make_shared<const Motion>(build_motion(plan, c.site));
+    const Motion& motion = *shared;
+    // Along the plan's motion, as run_kalman's pass of the design over the whole plan.
+    if (follows_plan_motion(design_filter_options(c.options))) kf_->set_reference_motion(shared);
     SimulatorOptions so;
     so.rate_hz = c.search.rate_hz;
     so.noise = false;

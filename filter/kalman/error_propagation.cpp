@@ -62,12 +62,13 @@ void ErrorPropagator::reset() {
 
 void ErrorPropagator::step(const Eigen::Matrix3d& C, const KinematicSample& k,
                            const Eigen::Vector3d& f_dot, const ImuErrorModel& model,
-                           const ImuErrorModel::LinearInverses& inverses, double dt) {
+                           const ImuErrorModel::LinearInverses& inverses, double dt,
+                           const Eigen::Vector3d& f_n) {
   model.jacobian(k, f_dot, coefficient_catalog_, J_);
   J_sum_ += J_ * dt;
   C_sum_ += C * dt;
   inverses_ = inverses;
-  f_n_sum_ += C * k.f_ib_b * dt;
+  f_n_sum_ += f_n * dt;
   substep_ += dt;
   accumulated_ += dt;
   if (substep_ >= kTransitionSubstep - 1e-9) flush();

@@ -52,7 +52,16 @@ class ErrorPropagator {
   /// force and the model the samples were compensated with (its Jacobian) with its
   /// linear_inverses().
   void step(const Eigen::Matrix3d& C_b_n, const KinematicSample& k, const Eigen::Vector3d& f_dot,
-            const ImuErrorModel& model, const ImuErrorModel::LinearInverses& inverses, double dt);
+            const ImuErrorModel& model, const ImuErrorModel::LinearInverses& inverses, double dt) {
+    step(C_b_n, k, f_dot, model, inverses, dt, C_b_n * k.f_ib_b);
+  }
+  /// The same with the Jacobian's kinematics `k` and attitude `C_b_n` taken from a reference
+  /// trajectory (the table's known motion) and `f_n`, the specific force the navigator
+  /// integrated in navigation axes (the INS error matrix's f_n x phi term: the compensated,
+  /// measured one).
+  void step(const Eigen::Matrix3d& C_b_n, const KinematicSample& k, const Eigen::Vector3d& f_dot,
+            const ImuErrorModel& model, const ImuErrorModel::LinearInverses& inverses, double dt,
+            const Eigen::Vector3d& f_n);
   /// P <- Phi P Phi^T + Q over the accumulated interval, then starts a new interval.
   void propagate(Eigen::MatrixXd& P);
   /// Completes the current substep: the accessors below then hold every sample stepped.

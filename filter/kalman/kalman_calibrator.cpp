@@ -46,6 +46,11 @@ bool gyros_find_north(const CalibratorOptions& o) {
   return true;
 }
 
+bool follows_plan_motion(const CalibratorOptions& o) {
+  return o.static_from == CalibratorOptions::StaticFrom::Plan &&
+         o.attitude != CalibratorOptions::AttitudeUpdates::None && o.zero_velocity_in_motion;
+}
+
 double initial_attitude_sigma(const CalibratorOptions& o) {
   if (o.initial_attitude_sigma > 0.0) return o.initial_attitude_sigma;
   return kDefaultStartAttitudeSigma;
@@ -75,6 +80,8 @@ Calibrator::Calibrator(PlanTimeline timeline, const Site& site, const Calibrator
   for (const auto& f : coefficient_families())
     if (f.thermal() && layout_.block(f.name)) thermal_ = true;
   C_base_ = dcm_from_rotvec(o_.initial_base_n);
+  C_reference_base_ = C_base_;
+  C_reference_mounting_ = dcm_from_rotvec(o_.start_mounting_b);
   if (o_.static_from == CalibratorOptions::StaticFrom::Data)
     detector_.emplace(o_.noise, o_.detector);
 }
@@ -211,7 +218,23 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot_ra
   // end attitude would rotate the specific force by half the interval's turn, a spurious
   // heading-velocity coupling of g omega dt / 2 while the table turns).
   const Eigen::Quaterniond q_mid = q_before.slerp(0.5, nav_.state().q_b_n);
-  propagator_.step(q_mid.toRotationMatrix(), k, f_dot, model_, inverses_, dt);
+  const Eigen::Matrix3d C_mid = q_mid.toRotationMatrix();
+  if (o_.reference_motion) {
+    // The output error J(x) dtheta is exact at the true input x, and the coefficient errors act
+    // through the true attitude. The table's motion gives both without the sensor noise and
+    // without the current estimate (a fixed linearization point), in the IMU's axes (the start's
+    // mounting and base). The f_n x phi term keeps the specific force the navigator integrated:
+    // its error is what the attitude error rotates.
+    const KinematicState ref = o_.reference_motion->at(k.t);
+    KinematicSample k_ref = k;
+    k_ref.omega_ib_b = C_reference_mounting_.transpose() * ref.imu.omega_ib_b;
+    k_ref.omega_dot_ib_b = C_reference_mounting_.transpose() * ref.imu.omega_dot_ib_b;
+    k_ref.f_ib_b = C_reference_mounting_.transpose() * ref.imu.f_ib_b;
+    propagator_.step(C_reference_base_ * ref.C_b_n * C_reference_mounting_, k_ref, f_dot, model_,
+                     inverses_, dt, C_mid * k.f_ib_b);
+  } else {
+    propagator_.step(C_mid, k, f_dot, model_, inverses_, dt);
+  }
   if (propagator_.accumulated() >= o_.update_interval - 1e-9) {
     propagator_.propagate(P_);
     update(s.t - o_.time_offset);

@@ -19,6 +19,7 @@
 #include <atomic>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,6 +35,7 @@
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"
 #include "rig/imu_sample.hpp"
+#include "rig/motion.hpp"
 #include "rig/table.hpp"
 #include "rig/thermal.hpp"
 #include "rig/timeline.hpp"
@@ -116,6 +118,15 @@ struct CalibratorOptions {
   /// a plan mismatch.
   bool use_table_angles = true;
   double table_plan_tolerance = 1.0 * units::deg;  // rad
+  /// The table's known motion in plan time (the plan's motion of a perfect table, rig/plan.hpp
+  /// build_motion), when the IMU follows it: the error dynamics are then evaluated along it (the
+  /// Jacobian's rates and specific force, and the attitude that turns the coefficient errors into
+  /// navigation axes, with `initial_base_n`), not along the navigator's compensated outputs.
+  /// Those carry the sensor noise and the current estimate: for a MEMS unit, whose estimates
+  /// wander along the combinations the first turns leave undetermined, the Jacobian followed
+  /// them and the filter gained information the data do not hold (README "Several passes").
+  /// Null: the navigator's outputs and attitude (every estimator but run_kalman's passes).
+  std::shared_ptr<const Motion> reference_motion;
   /// Held-out intervals of plan time (s, start and end): no measurement update inside them, and
   /// the first update after each is recorded as a prediction (HoldoutPrediction). The
   /// diagnosis leaves turns out this way to measure how well a model predicts them.
@@ -150,6 +161,11 @@ StateLayoutOptions effective_layout(const CalibratorOptions& options);
 /// Whether the gyros find North: every gyro-bias prior below kNorthSeekingBiasRatio of the Earth
 /// rate (otherwise the base heading's prior is the table's attitude sigma: the plan's heading).
 bool gyros_find_north(const CalibratorOptions& options);
+/// Whether the IMU follows the plan's motion as the options describe the session (dwells where
+/// the plan puts them, table-attitude updates, the reference point on the table's axes): the
+/// error dynamics are then evaluated along the plan's motion (CalibratorOptions::reference_motion;
+/// run_kalman and the plan search give it).
+bool follows_plan_motion(const CalibratorOptions& options);
 /// The start-attitude sigma the options imply.
 double initial_attitude_sigma(const CalibratorOptions& options);
 
@@ -217,6 +233,11 @@ class Calibrator {
   /// dwells begin with those given so far (the same plan with further turns). Throws
   /// std::invalid_argument when they do not.
   void extend_timeline(const PlanTimeline& longer);
+  /// The reference motion from here on (CalibratorOptions::reference_motion), e.g. a longer
+  /// plan's whose beginning is the motion so far.
+  void set_reference_motion(std::shared_ptr<const Motion> motion) {
+    o_.reference_motion = std::move(motion);
+  }
 
  private:
   void process(const ImuSample& s, const Eigen::Vector3d& omega_dot, const Eigen::Vector3d& f_dot,
@@ -236,6 +257,10 @@ class Calibrator {
   ImuErrorModel::LinearInverses inverses_;  // model_'s, refreshed with each change of it
   Eigen::MatrixXd work_KHP_, work_KSK_;     // apply(): n x n products, kept between updates
   Eigen::Matrix3d C_base_ = Eigen::Matrix3d::Identity();  // the base attitude's estimate
+  // The base the reference motion is turned by (the start's, fixed: not the wandering estimate).
+  Eigen::Matrix3d C_reference_base_ = Eigen::Matrix3d::Identity();
+  // The IMU's mounting on the table at the start (the navigator's start: C_base C_table C_m).
+  Eigen::Matrix3d C_reference_mounting_ = Eigen::Matrix3d::Identity();
   Strapdown nav_;
   ErrorPropagator propagator_;
   bool started_ = false;

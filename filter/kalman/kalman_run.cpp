@@ -13,6 +13,7 @@
 #include "filter/installation/stream_alignment.hpp"
 #include "models/attitude.hpp"
 #include "models/coefficient_families.hpp"
+#include "rig/plan.hpp"
 
 namespace sinscal {
 
@@ -268,7 +269,11 @@ void summarize(const Calibrator& kf, const PlanTimeline& timeline, const KalmanR
 KalmanRun run_pass(const Session& session, const CalibratorOptions& options, SampleSource* source,
                    const KalmanRunOptions& run) {
   const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
-  Calibrator kf(timeline, session.site, options);
+  CalibratorOptions o = options;
+  // The error dynamics along the plan's motion when the IMU follows it.
+  if (!o.reference_motion && follows_plan_motion(o))
+    o.reference_motion = std::make_shared<const Motion>(build_motion(session.plan, session.site));
+  Calibrator kf(timeline, session.site, o);
   std::unique_ptr<LogReader> reader;
   if (!source) {
     reader = std::make_unique<LogReader>(session.log);
