@@ -141,7 +141,7 @@ TEST_CASE("Kalman filter: bad samples are skipped (reported) or stop the run, es
   KalmanRunOptions skip;
   skip.skip_bad_samples = true;
   const KalmanRun skipped = run_kalman(s, o, nullptr, skip);
-  CHECK(skipped.stopped == "");
+  CHECK(skipped.stopped.empty());
   REQUIRE(skipped.skipped == 2);
   CHECK(skipped.skipped_examples[0].find(":" + std::to_string(nan_line) + ":") !=
         std::string::npos);
