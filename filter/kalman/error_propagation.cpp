@@ -38,7 +38,7 @@ ErrorPropagator::ErrorPropagator(const StateLayout& layout, const InsSiteTerms& 
     }
   }
   A_.setZero();
-  Phi_nc_[1 - current_].setZero(kMaxNavStates, m_);
+  work_nc_.setZero(kMaxNavStates, m_);
   B_sum_.setZero(kMaxNavStates, m_);
   half_nc_.setZero(kMaxNavStates, m_);
   J_sum_.setZero(6, coefficients_);
@@ -53,9 +53,17 @@ void ErrorPropagator::step_product(const Matrix& in, Matrix& out, double scale) 
     out.row(nz_row_[k]) += (scale * nz_value_[k]) * in.row(nz_col_[k]);
 }
 
+template <class Matrix>
+void ErrorPropagator::transition_product(const Matrix& in, Matrix& half, Matrix& out) const {
+  // Phi_h X = X + A h (X + A h / 2 X): half holds X + A h / 2 X.
+  step_product(in, half, 0.5);
+  step_product(half, out);
+  out += in - half;
+}
+
 void ErrorPropagator::reset() {
   Phi_nn_.setIdentity();
-  Phi_nc_[current_].setZero(kMaxNavStates, m_);
+  Phi_nc_.setZero(kMaxNavStates, m_);
   Q_nn_.setZero();
   accumulated_ = 0.0;
 }
@@ -90,9 +98,7 @@ void ErrorPropagator::flush() {
         nz_value_[nonzero_++] = A_(i, j) * h;
       }
   // Phi <- Phi_h Phi: X + A h (X + A h / 2 X).
-  step_product(Phi_nn_, half_nn_, 0.5);
-  step_product(half_nn_, work_nn_);
-  work_nn_ += Phi_nn_ - half_nn_;  // step_product copied half_nn_: the first X is Phi_nn_
+  transition_product(Phi_nn_, half_nn_, work_nn_);
   Phi_nn_ = work_nn_;
   // The coefficient coupling's integral over the substep (the model and its inverses are constant
   // within it: the filter updates between substeps): B = [-C A_g^-1 J_g; C A_a^-1 J_a] with the
@@ -115,21 +121,17 @@ void ErrorPropagator::flush() {
   J_sum_.setZero();
   C_sum_.setZero();
   // Phi_nc <- Phi_h Phi_nc + (I + A h / 2) int B = X + S + A h (X + S / 2 + A h / 2 X).
-  NavCoefficientMatrix& X = Phi_nc_[current_];
-  NavCoefficientMatrix& out = Phi_nc_[1 - current_];
-  step_product(X, half_nc_, 0.5);
+  step_product(Phi_nc_, half_nc_, 0.5);
   half_nc_ += 0.5 * B_sum_;
-  step_product(half_nc_, out);
-  out += X + B_sum_ - half_nc_;
-  current_ = 1 - current_;
+  step_product(half_nc_, work_nc_);
+  work_nc_ += Phi_nc_ + B_sum_ - half_nc_;
+  Phi_nc_ = work_nc_;
   // Q <- Phi_h Q Phi_h^T + (I + A h / 2) q h (I + A h / 2)^T.
   auto both_sides = [this](NavMatrix& M, bool second_order) {
     // M <- T M T^T with T = Phi_h (second order) or I + A h / 2.
     for (int side = 0; side < 2; ++side) {
       if (second_order) {
-        step_product(M, half_nn_, 0.5);
-        step_product(half_nn_, work_nn_);
-        work_nn_ += M - half_nn_;
+        transition_product(M, half_nn_, work_nn_);
       } else {
         step_product(M, work_nn_, 0.5);
       }
@@ -153,7 +155,7 @@ void ErrorPropagator::propagate(Eigen::MatrixXd& P) {
   // states is unchanged (but for the wander), the navigation rows become T = Phi [P_n; P_c]
   // (top rows), and their block with themselves T_n Phi_nn^T + T_c Phi_nc^T.
   const auto Phi_nn = Phi_nn_.topLeftCorner(n, n);
-  const auto Phi_nc = Phi_nc_[current_].topRows(n);
+  const auto Phi_nc = Phi_nc_.topRows(n);
   work_T_.noalias() = Phi_nn * P.topRows(n);
   work_T_.noalias() += Phi_nc * P.bottomRows(m);
   Eigen::MatrixXd& T = work_T_;

@@ -72,7 +72,7 @@ class ErrorPropagator {
   /// (nav_size x nav_size) and from the coefficient states (nav_size x coefficient states), as of
   /// the last completed substep (flush()).
   Eigen::MatrixXd Phi_nn() const { return Phi_nn_.topLeftCorner(n_, n_); }
-  Eigen::MatrixXd Phi_nc() const { return Phi_nc_[current_].topRows(n_); }
+  Eigen::MatrixXd Phi_nc() const { return Phi_nc_.topRows(n_); }
   Eigen::MatrixXd Q_nn() const { return Q_nn_.topLeftCorner(n_, n_); }
 
  private:
@@ -86,17 +86,15 @@ class ErrorPropagator {
   Eigen::VectorXd wander_;                // per coefficient state: random-walk density (SI^2/s)
   NavMatrix Phi_nn_, Q_nn_, work_nn_, half_nn_;
   Eigen::Matrix<double, kMaxNavStates, kMaxNavStates> A_;  // column-major: ins_error_matrix()
-  // The transition from the coefficients: two buffers, the current one and the next product's;
-  // the substep's integral of B, and a work buffer.
-  NavCoefficientMatrix Phi_nc_[2], half_nc_;
-  NavCoefficientMatrix B_sum_;
+  // The transition from the coefficients and work buffers of its products.
+  NavCoefficientMatrix Phi_nc_, half_nc_, work_nc_;
+  Eigen::MatrixXd work_T_;      // propagate(): the navigation rows of Phi P
+  int delay_column_ = -1;       // the time delay's coefficient state (after n_), or -1
+  NavCoefficientMatrix B_sum_;  // flush(): the coupling's integral over the substep
   // The substep's integrals of the Jacobian and of the attitude, and the model's inverses.
   ImuErrorModel::JacobianColumns J_sum_;
   Eigen::Matrix3d C_sum_ = Eigen::Matrix3d::Zero();
   ImuErrorModel::LinearInverses inverses_;
-  Eigen::MatrixXd work_T_;  // propagate(): the navigation rows of Phi P
-  int current_ = 0;
-  int delay_column_ = -1;  // the time delay's coefficient state (after n_), or -1
   // The substep so far: its length and the integral of the specific force in n.
   double substep_ = 0.0;
   Eigen::Vector3d f_n_sum_ = Eigen::Vector3d::Zero();
@@ -109,6 +107,9 @@ class ErrorPropagator {
   /// out = in + scale A h in, rows of `in` combined by the non-zero entries.
   template <class Matrix>
   void step_product(const Matrix& in, Matrix& out, double scale = 1.0) const;
+  /// out = Phi_h in (second order in A h), `half` a work buffer.
+  template <class Matrix>
+  void transition_product(const Matrix& in, Matrix& half, Matrix& out) const;
   ImuErrorModel::JacobianColumns J_;
   double accumulated_ = 0.0;
 };
