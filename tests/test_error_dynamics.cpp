@@ -174,7 +174,8 @@ TEST_CASE("Error dynamics: every column of the transition matches the perturbed 
     ++checked;
   }
   CHECK(checked == l.size);
-  CHECK(l.size == 9 + static_cast<int>(coefficient_catalog().size()) + 3);  // + the base
+  // + the base and the dwell's orientation error
+  CHECK(l.size == 9 + static_cast<int>(coefficient_catalog().size()) + 3 + 3);
 }
 
 TEST_CASE(
@@ -193,6 +194,10 @@ TEST_CASE(
   // measures the attitude relative to it).
   REQUIRE(StateLayout::on(l.base));
   const Eigen::Matrix3d C_base0 = dcm_from_rotvec(Eigen::Vector3d(2e-5, -3e-5, 5e-5));
+  // And the dwell's orientation error (the table's at this dwell), a state as well.
+  REQUIRE(StateLayout::on(l.dwell_orientation));
+  const Eigen::Matrix3d C_dwell0 = dcm_from_rotvec(Eigen::Vector3d(-4e-6, 1e-5, 7e-6));
+  Eigen::Matrix3d C_dwell = C_dwell0;
   using Function = std::function<Measurement(const NavState&, const Eigen::Matrix3d&)>;
   const std::vector<std::pair<std::string, Function>> ms = {
       {"zero velocity",
@@ -200,14 +205,16 @@ TEST_CASE(
       {"position",
        [&](const NavState& x, const Eigen::Matrix3d&) { return known_position(l, x, site, 1e-2); }},
       {"attitude", [&](const NavState& x, const Eigen::Matrix3d& C_base) {
-         return known_attitude(l, x, C_known, 1e-5, C_base);
+         return known_attitude(l, x, C_known, 1e-5, C_base, C_dwell);
        }}};
   for (const auto& [name, h] : ms) {
     CAPTURE(name);
+    C_dwell = C_dwell0;
     const Measurement m0 = h(x0, C_base0);
     const Eigen::MatrixXd H = m0.H(l.size);
     for (int j = 0; j < l.size; ++j) {
-      const bool base = j >= l.base.index && j < l.base.index + l.base.size;
+      const bool base =
+          j >= l.base.index && j < l.base.index + l.base.size + l.dwell_orientation.size;
       const double eps = j < l.velocity.index || base ? 1e-6 : j < l.position.index ? 1e-4 : 1e-2;
       Eigen::VectorXd dx = Eigen::VectorXd::Zero(l.size);
       dx(j) = eps;
@@ -216,6 +223,8 @@ TEST_CASE(
       inject_error(l, terms, dx, x, model);
       Eigen::Matrix3d C_base = C_base0;
       inject_base_error(l, dx, C_base);
+      C_dwell = C_dwell0;
+      inject_dwell_orientation_error(l, dx, C_dwell);
       const Measurement m1 = h(x, C_base);
       for (int i = 0; i < m0.rows(); ++i) {
         const double numeric =

@@ -157,7 +157,11 @@ TEST_CASE("Kalman filter with a table-angle column: the attitude the table reall
     Calibrator kf(test::timeline(plan), plan.site, o);
     for (const auto& s : samples) kf.push(s);
     kf.finish();
-    CHECK(kf.table_attitude_updates() == (use_angles ? 8 : 0));
+    // Every update of the 8 dwells takes the angles (the attitude held through each dwell).
+    if (use_angles)
+      CHECK(kf.table_attitude_updates() > 8 * 10);
+    else
+      CHECK(kf.table_attitude_updates() == 0);
     const double worst = max_error_over_sigma(kf.estimate(), truth);
     return worst;
   };

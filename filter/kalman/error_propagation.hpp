@@ -55,10 +55,9 @@ class ErrorPropagator {
             const ImuErrorModel& model, const ImuErrorModel::LinearInverses& inverses, double dt) {
     step(C_b_n, k, f_dot, model, inverses, dt, C_b_n * k.f_ib_b);
   }
-  /// The same with the Jacobian's kinematics `k` and attitude `C_b_n` taken from a reference
-  /// trajectory (the table's known motion) and `f_n`, the specific force the navigator
-  /// integrated in navigation axes (the INS error matrix's f_n x phi term: the compensated,
-  /// measured one).
+  /// The same with `f_n`, the specific force of the INS error matrix's f_n x phi term, given in
+  /// navigation axes: along the table's known motion, the motion's own (without the sensor
+  /// noise, whose product with an attitude error the data do not observe informs of nothing).
   void step(const Eigen::Matrix3d& C_b_n, const KinematicSample& k, const Eigen::Vector3d& f_dot,
             const ImuErrorModel& model, const ImuErrorModel::LinearInverses& inverses, double dt,
             const Eigen::Vector3d& f_n);

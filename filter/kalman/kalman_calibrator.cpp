@@ -61,6 +61,7 @@ StateLayoutOptions effective_layout(const CalibratorOptions& o) {
   if (o.attitude == CalibratorOptions::AttitudeUpdates::None) l.accel_triad_frame = true;
   // Only an attitude update relates the navigation to the base.
   l.base_attitude = o.base_attitude && o.attitude != CalibratorOptions::AttitudeUpdates::None;
+  l.dwell_orientation = o.attitude_hold && o.attitude != CalibratorOptions::AttitudeUpdates::None;
   return l;
 }
 
@@ -223,15 +224,18 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot_ra
     // The output error J(x) dtheta is exact at the true input x, and the coefficient errors act
     // through the true attitude. The table's motion gives both without the sensor noise and
     // without the current estimate (a fixed linearization point), in the IMU's axes (the start's
-    // mounting and base). The f_n x phi term keeps the specific force the navigator integrated:
-    // its error is what the attitude error rotates.
+    // mounting and base). So does the specific force of the f_n x phi term, in navigation axes
+    // (gravity and the motion's own, whatever the base and mounting): the navigator's carries
+    // the accelerometers' noise, and noise times the heading error (unobserved at rest, degrees
+    // for a MEMS unit) gave the filter information on the vertical gyro's bias that the data do
+    // not hold (its estimate left the truth by 6 of its sigmas within the first dwell).
     const KinematicState ref = o_.reference_motion->at(k.t);
     KinematicSample k_ref = k;
     k_ref.omega_ib_b = C_reference_mounting_.transpose() * ref.imu.omega_ib_b;
     k_ref.omega_dot_ib_b = C_reference_mounting_.transpose() * ref.imu.omega_dot_ib_b;
     k_ref.f_ib_b = C_reference_mounting_.transpose() * ref.imu.f_ib_b;
-    propagator_.step(C_reference_base_ * ref.C_b_n * C_reference_mounting_, k_ref, f_dot, model_,
-                     inverses_, dt, C_mid * k.f_ib_b);
+    const Eigen::Matrix3d C_ref = C_reference_base_ * ref.C_b_n * C_reference_mounting_;
+    propagator_.step(C_ref, k_ref, f_dot, model_, inverses_, dt, ref.C_b_n * ref.imu.f_ib_b);
   } else {
     propagator_.step(C_mid, k, f_dot, model_, inverses_, dt);
   }
@@ -253,6 +257,7 @@ void Calibrator::inject_error(const Eigen::VectorXd& dx) {
   sinscal::inject_error(layout_, site_terms_, dx, x, model_);
   inverses_ = model_.linear_inverses();
   inject_base_error(layout_, dx, C_base_);
+  inject_dwell_orientation_error(layout_, dx, C_dwell_);
   nav_.correct(x);
   pending_error_.resize(0);
 }
@@ -304,7 +309,18 @@ void Calibrator::update(double t_plan) {
   const bool attitude_wanted =
       o_.attitude == CalibratorOptions::AttitudeUpdates::Every ||
       (o_.attitude == CalibratorOptions::AttitudeUpdates::First && dwell->index == 1);
-  if (attitude_wanted && dwell->index > attitude_dwell_done_) {
+  if (attitude_wanted && StateLayout::on(layout_.dwell_orientation)) {
+    if (dwell->index > attitude_dwell_done_) {
+      // A new dwell: the table's orientation error drawn anew (the last dwell's marginalized).
+      const int d = layout_.dwell_orientation.index;
+      P_.middleRows(d, 3).setZero();
+      P_.middleCols(d, 3).setZero();
+      P_.block<3, 3>(d, d).diagonal().setConstant(o_.attitude_sigma * o_.attitude_sigma);
+      C_dwell_.setIdentity();
+      attitude_dwell_done_ = dwell->index;
+    }
+    m.append(known_attitude(layout_, x, dwell_attitude(*dwell), o_.hold_sigma, C_base_, C_dwell_));
+  } else if (attitude_wanted && dwell->index > attitude_dwell_done_) {
     m.append(known_attitude(layout_, x, dwell_attitude(*dwell), o_.attitude_sigma, C_base_));
     attitude_dwell_done_ = dwell->index;
   }
@@ -335,6 +351,7 @@ void Calibrator::apply(const Measurement& m) {
       const auto k = static_cast<std::size_t>(i);
       out.row(i) = X.row(m.states[k]);
       if (m.minus_states[k] >= 0) out.row(i) -= X.row(m.minus_states[k]);
+      if (m.minus_states_2[k] >= 0) out.row(i) -= X.row(m.minus_states_2[k]);
     }
   };
   auto columns_of = [&](const Eigen::MatrixXd& X, Eigen::MatrixXd& out) {
@@ -342,6 +359,7 @@ void Calibrator::apply(const Measurement& m) {
       const auto k = static_cast<std::size_t>(j);
       out.col(j) = X.col(m.states[k]);
       if (m.minus_states[k] >= 0) out.col(j) -= X.col(m.minus_states[k]);
+      if (m.minus_states_2[k] >= 0) out.col(j) -= X.col(m.minus_states_2[k]);
     }
   };
   Eigen::MatrixXd HP(r, n);
@@ -382,6 +400,7 @@ void Calibrator::apply(const Measurement& m) {
   feed_back(layout_, site_terms_, dx, x, model_);
   inverses_ = model_.linear_inverses();
   feed_back_base(layout_, dx, C_base_);
+  feed_back_dwell_orientation(layout_, dx, C_dwell_);
   // Keep the coning/sculling memory: the correction is tiny and the increments unchanged.
   nav_.correct(x);
 }

@@ -9,10 +9,11 @@
 // with J the error model's Jacobian (residual coefficient errors dtheta = true - estimate). The
 // transition is accumulated per sample exploiting its structure [[A, B], [0, I]]; the covariance is
 // propagated and updated every `update_interval`. Measurements during the plan's static dwells:
-// zero velocity, known position, and (once per dwell, the table's error being constant within
-// it) the table-known attitude. Joseph-form updates, symmetrized; the normalized innovation
-// squared (NIS) is kept. After every update the estimate is fed back (navigator state and
-// coefficients) and the error state reset.
+// zero velocity, known position, and the table-known attitude (at every update of a dwell, the
+// table's orientation error of the dwell a state: the same at every update, drawn anew at each
+// dwell; or once per dwell, that error the measurement's noise). Joseph-form updates, symmetrized;
+// the normalized innovation squared (NIS) is kept. After every update the estimate is fed back
+// (navigator state and coefficients) and the error state reset.
 #pragma once
 
 #include <Eigen/Core>
@@ -48,6 +49,8 @@ namespace sinscal {
 constexpr double kDefaultPriorScale = 1.5;
 /// Table attitude accuracy per orientation (2-3 arcsec for a precision two-axis table).
 constexpr double kDefaultTableAttitudeSigma = 2.5 * units::arcsec;
+/// A precision table's stillness within a dwell (servo jitter, encoder noise), per update.
+constexpr double kDefaultTableHoldSigma = 0.1 * units::arcsec;
 /// Start of the navigation: attitude about the plan's start orientation (the body frame may
 /// differ from the table's by the mounting), velocity and position at rest on the site.
 constexpr double kDefaultStartAttitudeSigma = 0.5 * units::deg;
@@ -78,6 +81,16 @@ struct CalibratorOptions {
   bool zero_velocity_in_motion = true;
   double motion_velocity_sigma = 1e-4;                 // m/s
   double attitude_sigma = kDefaultTableAttitudeSigma;  // rad, table attitude
+  /// The attitude updates repeated through each dwell, the dwell's orientation error (of
+  /// attitude_sigma) a state of the layout: the table holds its orientation, so the navigator's
+  /// drift at rest is measured against it (a MEMS unit's vertical gyro bias, unobserved by
+  /// gravity, otherwise turns the heading by degrees over the first dwell, and the first turn
+  /// about a horizontal axis then meets a heading error the linear error model does not hold).
+  /// Off: one update per dwell, its table error the measurement noise.
+  bool attitude_hold = true;
+  /// 1-sigma per update of the table's orientation about the dwell's own (its stillness: servo
+  /// jitter, encoder noise), rad.
+  double hold_sigma = kDefaultTableHoldSigma;
   /// The table base attitude estimated (states of the layout; only with attitude updates): the
   /// attitude updates then measure the attitude relative to the base.
   bool base_attitude = true;
@@ -257,6 +270,8 @@ class Calibrator {
   ImuErrorModel::LinearInverses inverses_;  // model_'s, refreshed with each change of it
   Eigen::MatrixXd work_KHP_, work_KSK_;     // apply(): n x n products, kept between updates
   Eigen::Matrix3d C_base_ = Eigen::Matrix3d::Identity();  // the base attitude's estimate
+  // The estimate of the table's orientation error in the current dwell (identity without it).
+  Eigen::Matrix3d C_dwell_ = Eigen::Matrix3d::Identity();
   // The base the reference motion is turned by (the start's, fixed: not the wandering estimate).
   Eigen::Matrix3d C_reference_base_ = Eigen::Matrix3d::Identity();
   // The IMU's mounting on the table at the start (the navigator's start: C_base C_table C_m).

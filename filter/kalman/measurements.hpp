@@ -19,11 +19,12 @@
 
 namespace sinscal {
 
-/// z = H x + v, v ~ N(0, diag(sigma^2)); row i observes state `states[i]` minus state
-/// `minus_states[i]` when that is not -1 (H: +1 and -1 entries).
+/// z = H x + v, v ~ N(0, diag(sigma^2)); row i observes state `states[i]` minus the states
+/// `minus_states[i]` and `minus_states_2[i]` that are not -1 (H: +1 and -1 entries).
 struct Measurement {
   std::vector<int> states;
-  std::vector<int> minus_states;  // one per row, -1: none
+  std::vector<int> minus_states;    // one per row, -1: none
+  std::vector<int> minus_states_2;  // one per row, -1: none
   std::vector<double> z;
   std::vector<double> sigma;
   int rows() const { return static_cast<int>(states.size()); }
@@ -41,13 +42,22 @@ Measurement known_position(const StateLayout& layout, const NavState& x, const S
                            double sigma);
 /// The attitude the table gives (C_b_n_known, relative to the table's base), per axis of the
 /// navigation frame. With the base attitude in the layout, the attitude in the navigation frame
-/// is C_base C_b_n_known (C_base: the base's estimate) and the rows observe phi_n - d_base.
+/// is C_base C_b_n_known (C_base: the base's estimate) and the rows observe phi_n - d_base. With
+/// the dwell's orientation error in the layout as well, it is C_dwell C_base C_b_n_known
+/// (C_dwell: that error's estimate) and the rows observe phi_n - d_base - d_dwell.
 Measurement known_attitude(const StateLayout& layout, const NavState& x,
                            const Eigen::Matrix3d& C_b_n_known, double sigma,
-                           const Eigen::Matrix3d& C_base = Eigen::Matrix3d::Identity());
+                           const Eigen::Matrix3d& C_base = Eigen::Matrix3d::Identity(),
+                           const Eigen::Matrix3d& C_dwell = Eigen::Matrix3d::Identity());
 /// The base estimate that carries the estimated error `dx` (its base block): C_base <- R(d_base)
 /// C_base; inject_base_error() is its inverse. Nothing without a base block.
 void feed_back_base(const StateLayout& layout, const Eigen::VectorXd& dx, Eigen::Matrix3d& C_base);
+/// The same for the dwell's orientation error (its block): C_dwell <- R(d_dwell) C_dwell, and
+/// its inverse.
+void feed_back_dwell_orientation(const StateLayout& layout, const Eigen::VectorXd& dx,
+                                 Eigen::Matrix3d& C_dwell);
+void inject_dwell_orientation_error(const StateLayout& layout, const Eigen::VectorXd& dx,
+                                    Eigen::Matrix3d& C_dwell);
 void inject_base_error(const StateLayout& layout, const Eigen::VectorXd& dx,
                        Eigen::Matrix3d& C_base);
 

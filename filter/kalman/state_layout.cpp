@@ -62,6 +62,7 @@ StateLayout StateLayout::make(const StateLayoutOptions& o) {
     if (cb.block.size > 0) l.coefficients.push_back(cb);
   }
   if (o.base_attitude) add(l.base, 3);
+  if (o.dwell_orientation) add(l.dwell_orientation, 3);
   l.size = next;
   return l;
 }

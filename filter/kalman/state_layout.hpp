@@ -6,9 +6,10 @@
 // one block per coefficient family of the family table (models/coefficient_families.hpp), in its
 // order: base families always, extended ones when switched on (sensor profile or `--terms`).
 // Coefficients fixed by a convention (the accelerometer-triad body frame, a reference lever arm)
-// are not states. Last, when on, the table base attitude (3, rad, NED: a random constant, not an
-// IMU coefficient; docs/conventions.md "Table base and mounting"): the coefficient states are
-// [nav_size, nav_size + coefficient_states()).
+// are not states. Then, when on, the table base attitude (3, rad, NED: a random constant, not an
+// IMU coefficient; docs/conventions.md "Table base and mounting"), and last the table's
+// orientation error in the current dwell (3, rad, NED: constant within a dwell, drawn anew at
+// each): the coefficient states are [nav_size, nav_size + coefficient_states()).
 
 #pragma once
 
@@ -48,6 +49,10 @@ struct StateLayoutOptions {
   /// The table base attitude as states (the table-attitude updates then measure the attitude
   /// relative to the base).
   bool base_attitude = false;
+  /// The table's orientation error of the current dwell as states: the attitude updates then
+  /// repeat through each dwell (the table holds its orientation; its error is the same at every
+  /// update of the dwell), so the gyros' drift at rest is measured against the still table.
+  bool dwell_orientation = false;
 
   bool on(const std::string& family) const;
   /// Switches an extended family; throws std::invalid_argument for an unknown or base family.
@@ -81,6 +86,10 @@ struct StateLayout {
   /// The table base attitude's error (true minus estimated rotation vector, rad, NED), after the
   /// coefficients; off (size 0) unless StateLayoutOptions::base_attitude.
   Block base{-1, 0};
+  /// The table's orientation error in the current dwell (true minus estimated rotation vector,
+  /// rad, NED; reset at each dwell), after the base; off (size 0) unless
+  /// StateLayoutOptions::dwell_orientation.
+  Block dwell_orientation{-1, 0};
   int size = 0;
   int nav_size = 0;  // the navigation errors come first: states [0, nav_size)
   bool accel_triad_frame = false;
@@ -95,7 +104,7 @@ struct StateLayout {
   const std::vector<CoefficientBlock>& coefficient_blocks() const { return coefficients; }
   static bool on(const Block& b) { return b.size > 0; }
   /// Number of coefficient states (they follow the navigation errors).
-  int coefficient_states() const { return size - nav_size - base.size; }
+  int coefficient_states() const { return size - nav_size - base.size - dwell_orientation.size; }
   /// Catalog indices of the coefficients fixed at zero by a convention (not states).
   const std::vector<int>& fixed_by_convention() const { return fixed; }
 };
