@@ -406,6 +406,14 @@ check "a MEMS soak's implausible alignment is not taken" python3 -c "
 import json,sys; a=json.load(open('$work/mems-soak.json'))['installation']['alignment']
 sys.exit(not (a['valid'] and not a['applied'] and abs(a['base_arcsec'][2]) > 5 * 3600))"
 check "... and the filter passes the first turn" test "$(grep -c 'at t = 80\.' "$work/mems-soak.err")" -eq 0
+# The MEMS chamber's six soaks: each soak's filter held its attitude through the dwells (the
+# x gyro's drift at rest measured), none stops at the first turn (soak 1 stopped at t = 77 s
+# before), and the fit finds the degrees the profile injects.
+"$bin" thermal --chamber "$work/mems-soaks/chamber.ini" --out "$work/mems-thermal" > "$work/mems-thermal.txt" 2>&1
+check "thermal calibrates the MEMS chamber's six soaks" test $? -eq 0
+check "... the degrees as injected (biases 2, scale factors and misalignments 1)" python3 -c "
+import json,sys; d={t['family']: t['degree'] for t in json.load(open('$work/mems-thermal/result.json'))['thermal']['degrees']}
+sys.exit(not (d['gyro.bias'] == 2 and d['accel.bias'] == 2 and d['gyro.scale'] == 1 and d['accel.scale'] == 1 and d['gyro.misalignment'] == 1 and d['accel.misalignment'] == 1))"
 
 echo "$pass passed, $fail failed"
 test "$fail" -eq 0
