@@ -87,6 +87,13 @@ CalibratorOptions all_on() {
   for (const auto& f : coefficient_families())
     if (!f.base) o.layout.set(f.name, true);
   o.layout.base_attitude = true;  // the table base too (the calibrator turns it on likewise)
+  // And the bias instability's wander as states (a MEMS unit's sizes; a correlation time long
+  // against the window: the coupling's geometry is checked here, the decay is applied to the
+  // covariance in propagate()).
+  o.noise.gyro.bias_instability = 10.0 * units::deg_per_h;
+  o.noise.gyro.correlation_time = 1e4;
+  o.noise.accel.bias_instability = 0.05 * units::mg;
+  o.noise.accel.correlation_time = 1e4;
   o.update_interval = 1e9;        // no update: the transition accumulates over the whole window
   o.time_offset = 0.0;
   return o;
@@ -125,6 +132,8 @@ TEST_CASE("Error dynamics: every column of the transition matches the perturbed 
     for (const auto& cb : l.coefficients)
       if (j >= cb.block.index && j < cb.block.index + cb.block.size)
         return coefficient_family_info(cb.family).default_prior;  // SI
+    if (j >= l.wander.index && j < l.wander.index + 3) return 100.0 * units::deg_per_h;  // rad/s
+    if (j >= l.wander.index) return 100.0 * units::ug;  // m/s^2
     return 100.0 * units::arcsec;  // the table base (rad): no effect on the navigation
   };
   const double T = window().samples.back().t - window().samples.front().t + 0.01;  // s
@@ -174,8 +183,8 @@ TEST_CASE("Error dynamics: every column of the transition matches the perturbed 
     ++checked;
   }
   CHECK(checked == l.size);
-  // + the base and the dwell's orientation error
-  CHECK(l.size == 9 + static_cast<int>(coefficient_catalog().size()) + 3 + 3);
+  // + the base, the dwell's orientation error and the bias wander
+  CHECK(l.size == 9 + static_cast<int>(coefficient_catalog().size()) + 3 + 3 + 6);
 }
 
 TEST_CASE(

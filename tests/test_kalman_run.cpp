@@ -234,10 +234,12 @@ TEST_CASE("Kalman filter, several passes: a MEMS unit's large errors linearized 
   // outputs the single pass tripped the divergence alarm on this seed (t = 275 s); along the
   // table's known motion it is marginal at the first turn (NIS per dof 1.85-1.88 against the
   // limit 1.84-1.85 at t = 85-102 s, or no alarm, as rounding of the filter's arithmetic goes:
-  // the first pass's linearization with the coefficients at their priors): not asserted. Passes
-  // that start from the previous estimate settle: the
-  // third moves no coefficient by more than 0.1 sigma, and the innovations are consistent (NIS
-  // per dof below 1: the zero-velocity sigma is a bound).
+  // the first pass's linearization with the coefficients at their priors), and the second pass
+  // moved the estimates by 1.7-4.0 sigma. With the attitude held through each dwell (the x
+  // gyro's drift at rest measured before the first turn) and the bias instability's wander as
+  // states the single pass is already where the passes settle: the second moves no coefficient
+  // by a quarter of its sigma (0.07 measured), the third by 0.1, and the innovations are
+  // consistent (NIS per dof below 1: the zero-velocity sigma is a bound).
   const Session s =
       make_session("kf_mems", "rot19.ini", "config/sensors/mems.ini", "config/sensors/mems.ini", 1);
   // The table's base known (not estimated); with it estimated, the next case.
@@ -249,7 +251,7 @@ TEST_CASE("Kalman filter, several passes: a MEMS unit's large errors linearized 
   CHECK(r.diverged.empty());
   CHECK(r.stopped.empty());
   REQUIRE(r.passes.size() == 3);
-  CHECK(*r.passes[1].largest_change_over_sigma > 1.0);
+  CHECK(*r.passes[1].largest_change_over_sigma < 0.25);
   CHECK(*r.passes[2].largest_change_over_sigma < 0.1);
   CHECK(r.nis_per_dof < 1.0);
   CHECK(r.passes_requested == 3);
@@ -388,7 +390,8 @@ TEST_CASE("Kalman filter, several passes, the base estimated: a MEMS unit settle
   // gyros with biases of 0.5 deg/s cannot find, was estimated from a 5 deg prior: it wandered
   // 2.2 deg off (9 of its sigmas), the third pass moved 12.6 sigma and tripped the alarm at the
   // first turn about a second axis (t = 254 s; a single pass at the first turn, t = 80 s). Now
-  // the heading of such gyros is the plan's, to the table's accuracy.
+  // the heading of such gyros is the plan's, to the table's accuracy. (The second pass then
+  // moved 1.7-4 sigma; with the attitude held through each dwell and the wander's states, 0.06.)
   const Session s = make_session("kf_mems_base", "rot19.ini", "config/sensors/mems.ini",
                                  "config/sensors/mems.ini", 1);
   const CalibratorOptions o = options_for(s);
@@ -404,7 +407,7 @@ TEST_CASE("Kalman filter, several passes, the base estimated: a MEMS unit settle
   REQUIRE(r.installation.base_estimated);
   CAPTURE(*r.passes[1].largest_change_over_sigma, *r.passes[2].largest_change_over_sigma,
           r.installation.base_n.transpose() / units::arcsec);
-  CHECK(*r.passes[1].largest_change_over_sigma > 1.0);
+  CHECK(*r.passes[1].largest_change_over_sigma < 0.25);
   CHECK(*r.passes[2].largest_change_over_sigma < 0.1);  // coefficients and base
   // The truth's base is the plan's: within 3 of its sigmas (level 7 arcsec, heading 2.5).
   for (int i = 0; i < 3; ++i)

@@ -1,5 +1,7 @@
 #include "filter/kalman/error_propagation.hpp"
 
+#include <cmath>
+
 #include "models/coefficient_families.hpp"
 
 namespace sinscal {
@@ -32,9 +34,12 @@ ErrorPropagator::ErrorPropagator(const StateLayout& layout, const InsSiteTerms& 
     const CoefficientFamily& f = coefficient_family_info(cb.family);
     for (int k = 0; k < cb.block.size; ++k) {
       coefficient_catalog_.push_back(cb.catalog[static_cast<std::size_t>(k)]);
-      if (f.wanders_with_bias_noise)
+      if (f.wanders_with_bias_noise) {
+        const TriadNoise& tn = f.output == FamilyOutput::Gyro ? noise_.gyro : noise_.accel;
+        // With the wander's states the bias instability is theirs; the random walk stays.
         wander_(cb.block.index - n_ + k) =
-            bias_wander(f.output == FamilyOutput::Gyro ? noise_.gyro : noise_.accel);
+            StateLayout::on(layout_.wander) ? tn.random_walk * tn.random_walk : bias_wander(tn);
+      }
     }
   }
   A_.setZero();
@@ -43,6 +48,7 @@ ErrorPropagator::ErrorPropagator(const StateLayout& layout, const InsSiteTerms& 
   half_nc_.setZero(kMaxNavStates, m_);
   J_sum_.setZero(6, coefficients_);
   if (const auto* delay = layout_.block("time_delay")) delay_column_ = delay->block.index - n_;
+  if (StateLayout::on(layout_.wander)) wander_column_ = layout_.wander.index - n_;
   reset();
 }
 
@@ -118,6 +124,13 @@ void ErrorPropagator::flush() {
   if (delay_column_ >= 0)
     B_sum_.block(v.index, delay_column_, v.size, 1).noalias() =
         (C_mean * J_sum_.bottomRows<3>().col(delay_column_)).topRows(v.size);
+  // The bias wander acts on the compensated inputs (its states are in their axes): -C h on the
+  // attitude, C h on the velocity. Its decay within the update interval (h / tau, 1 % at 1 s
+  // against a MEMS unit's 100 s) is left out of the coupling; propagate() applies it to P.
+  if (wander_column_ >= 0) {
+    B_sum_.block(a.index, wander_column_, 3, 3) = -C_mean * h;
+    B_sum_.block(v.index, wander_column_ + 3, v.size, 3) = (C_mean * h).topRows(v.size);
+  }
   J_sum_.setZero();
   C_sum_.setZero();
   // Phi_nc <- Phi_h Phi_nc + (I + A h / 2) int B = X + S + A h (X + S / 2 + A h / 2 X).
@@ -167,6 +180,19 @@ void ErrorPropagator::propagate(Eigen::MatrixXd& P) {
   top.topLeftCorner(n, n) += Q_nn_.topLeftCorner(n, n);
   P.topLeftCorner(n, n) = 0.5 * (top.topLeftCorner(n, n) + top.topLeftCorner(n, n).transpose());
   P.diagonal().tail(m) += wander_ * accumulated_;
+  if (wander_column_ >= 0) {
+    // The Gauss-Markov wander: Phi's block on it is exp(-h / tau) (not I), so its rows and
+    // columns scale by it, and its stationary variance b^2 refills what the decay took.
+    for (int i = 0; i < 6; ++i) {
+      const TriadNoise& tn = i < 3 ? noise_.gyro : noise_.accel;
+      if (!(tn.correlation_time > 0.0)) continue;
+      const double d = std::exp(-accumulated_ / tn.correlation_time);
+      const int s = n + wander_column_ + i;
+      P.row(s) *= d;
+      P.col(s) *= d;
+      P(s, s) += tn.bias_instability * tn.bias_instability * (1.0 - d * d);
+    }
+  }
   reset();
 }
 

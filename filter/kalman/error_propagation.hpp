@@ -4,7 +4,10 @@
 //   phi'  = -omega_ie x phi + d_omega_in(dv, dp) - C_b_n J_g dtheta
 //   dv'   = f_n x phi - 2 omega_ie x dv + (2g/R) dp_d e_d + C_b_n J_a dtheta
 //   dp'   = dv
-//   dtheta' = 0 (coefficients constant; bias families wander with the profile's bias noise)
+//   dtheta' = 0 (coefficients constant; bias families wander with the profile's bias noise,
+//               unless the layout has the wander's states)
+//   w'    = -w / tau + noise (the bias instability's Gauss-Markov wander, when a state: it adds
+//           to the compensated inputs like a bias, -C_b_n w_g on phi, C_b_n w_a on dv)
 //
 // with the INS error matrix of filter/strapdown/ins_error_model.hpp written in the layout's
 // navigation indices, J the error model's Jacobian (models/imu_error_model.hpp) for the coefficient
@@ -89,6 +92,7 @@ class ErrorPropagator {
   NavCoefficientMatrix Phi_nc_, half_nc_, work_nc_;
   Eigen::MatrixXd work_T_;      // propagate(): the navigation rows of Phi P
   int delay_column_ = -1;       // the time delay's coefficient state (after n_), or -1
+  int wander_column_ = -1;      // the bias wander's first state (after n_), or -1
   NavCoefficientMatrix B_sum_;  // flush(): the coupling's integral over the substep
   // The substep's integrals of the Jacobian and of the attitude, and the model's inverses.
   ImuErrorModel::JacobianColumns J_sum_;

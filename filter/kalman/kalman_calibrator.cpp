@@ -62,6 +62,11 @@ StateLayoutOptions effective_layout(const CalibratorOptions& o) {
   // Only an attitude update relates the navigation to the base.
   l.base_attitude = o.base_attitude && o.attitude != CalibratorOptions::AttitudeUpdates::None;
   l.dwell_orientation = o.attitude_hold && o.attitude != CalibratorOptions::AttitudeUpdates::None;
+  auto gauss_markov = [](const TriadNoise& tn) {
+    return tn.bias_instability > 0.0 && tn.correlation_time > 0.0;
+  };
+  l.bias_wander =
+      o.bias_wander_states && (gauss_markov(o.noise.gyro) || gauss_markov(o.noise.accel));
   return l;
 }
 
@@ -112,6 +117,13 @@ void Calibrator::initialize_covariance() {
     P_.block<3, 3>(a, b) = -P_base;
     P_.block<3, 3>(b, a) = -P_base;
   }
+  if (StateLayout::on(layout_.wander))
+    for (int i = 0; i < 6; ++i) {
+      const TriadNoise& tn = i < 3 ? o_.noise.gyro : o_.noise.accel;
+      if (tn.correlation_time > 0.0)  // stationary
+        P_(layout_.wander.index + i, layout_.wander.index + i) =
+            tn.bias_instability * tn.bias_instability;
+    }
   for (const auto& cb : layout_.coefficients)
     for (int k = 0; k < cb.block.size; ++k) {
       const auto c = static_cast<std::size_t>(cb.catalog[static_cast<std::size_t>(k)]);
@@ -210,6 +222,15 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot_ra
   }
   model_.compensate(s.dtheta_b / dt, s.dv_b / dt, omega_dot, k.omega_ib_b, k.f_ib_b, k.t, &k,
                     &inverses_);
+  if (StateLayout::on(layout_.wander)) {
+    // The bias wander's estimate, decaying towards zero as the Gauss-Markov process does.
+    k.omega_ib_b -= wander_.head<3>();
+    k.f_ib_b -= wander_.tail<3>();
+    for (int i = 0; i < 6; ++i) {
+      const TriadNoise& tn = i < 3 ? o_.noise.gyro : o_.noise.accel;
+      if (tn.correlation_time > 0.0) wander_(i) *= std::exp(-dt / tn.correlation_time);
+    }
+  }
   // Accelerometers late by tau: f(t) = f_meas(t + tau), to second order.
   const double tau = model_.time_delay;
   k.f_ib_b += tau * f_dot + 0.5 * tau * tau * f_ddot;
@@ -258,6 +279,7 @@ void Calibrator::inject_error(const Eigen::VectorXd& dx) {
   inverses_ = model_.linear_inverses();
   inject_base_error(layout_, dx, C_base_);
   inject_dwell_orientation_error(layout_, dx, C_dwell_);
+  if (StateLayout::on(layout_.wander)) wander_ -= dx.segment<6>(layout_.wander.index);
   nav_.correct(x);
   pending_error_.resize(0);
 }
@@ -401,6 +423,7 @@ void Calibrator::apply(const Measurement& m) {
   inverses_ = model_.linear_inverses();
   feed_back_base(layout_, dx, C_base_);
   feed_back_dwell_orientation(layout_, dx, C_dwell_);
+  if (StateLayout::on(layout_.wander)) wander_ += dx.segment<6>(layout_.wander.index);
   // Keep the coning/sculling memory: the correction is tiny and the increments unchanged.
   nav_.correct(x);
 }

@@ -91,6 +91,11 @@ struct CalibratorOptions {
   /// 1-sigma per update of the table's orientation about the dwell's own (its stillness: servo
   /// jitter, encoder noise), rad.
   double hold_sigma = kDefaultTableHoldSigma;
+  /// The bias instability's Gauss-Markov wander as six states when the noise model has one (a
+  /// bias_instability with a correlation_time): the bias families are then the constant bias.
+  /// Off: the bias families wander as a random walk of density 2 b^2 / tau, which over runs
+  /// much longer than tau grows far beyond the wander's b (a MEMS chamber ramp: 10.8 b).
+  bool bias_wander_states = true;
   /// The table base attitude estimated (states of the layout; only with attitude updates): the
   /// attitude updates then measure the attitude relative to the base.
   bool base_attitude = true;
@@ -272,6 +277,9 @@ class Calibrator {
   Eigen::Matrix3d C_base_ = Eigen::Matrix3d::Identity();  // the base attitude's estimate
   // The estimate of the table's orientation error in the current dwell (identity without it).
   Eigen::Matrix3d C_dwell_ = Eigen::Matrix3d::Identity();
+  // The bias wander's estimate (gyro, accelerometer; compensated inputs' axes), decaying with
+  // the correlation time between updates; zero without its states.
+  Eigen::Matrix<double, 6, 1> wander_ = Eigen::Matrix<double, 6, 1>::Zero();
   // The base the reference motion is turned by (the start's, fixed: not the wandering estimate).
   Eigen::Matrix3d C_reference_base_ = Eigen::Matrix3d::Identity();
   // The IMU's mounting on the table at the start (the navigator's start: C_base C_table C_m).

@@ -63,6 +63,7 @@ StateLayout StateLayout::make(const StateLayoutOptions& o) {
   }
   if (o.base_attitude) add(l.base, 3);
   if (o.dwell_orientation) add(l.dwell_orientation, 3);
+  if (o.bias_wander) add(l.wander, 6);
   l.size = next;
   return l;
 }

@@ -9,7 +9,9 @@
 // are not states. Then, when on, the table base attitude (3, rad, NED: a random constant, not an
 // IMU coefficient; docs/conventions.md "Table base and mounting"), and last the table's
 // orientation error in the current dwell (3, rad, NED: constant within a dwell, drawn anew at
-// each): the coefficient states are [nav_size, nav_size + coefficient_states()).
+// each), and last the bias instability's Gauss-Markov wander of the gyros and the accelerometers
+// (6, rad/s and m/s^2, the compensated inputs' axes): the coefficient states are
+// [nav_size, nav_size + coefficient_states()).
 
 #pragma once
 
@@ -53,6 +55,10 @@ struct StateLayoutOptions {
   /// repeat through each dwell (the table holds its orientation; its error is the same at every
   /// update of the dwell), so the gyros' drift at rest is measured against the still table.
   bool dwell_orientation = false;
+  /// The bias instability's Gauss-Markov wander as states (gyro x, y, z, accelerometer x, y, z):
+  /// the bias families then hold the constant bias, and the wander, bounded at the bias
+  /// instability, is not carried as a random walk of them.
+  bool bias_wander = false;
 
   bool on(const std::string& family) const;
   /// Switches an extended family; throws std::invalid_argument for an unknown or base family.
@@ -90,6 +96,9 @@ struct StateLayout {
   /// rad, NED; reset at each dwell), after the base; off (size 0) unless
   /// StateLayoutOptions::dwell_orientation.
   Block dwell_orientation{-1, 0};
+  /// The bias wander (true minus estimated, rad/s then m/s^2, in the compensated inputs' axes),
+  /// last; off (size 0) unless StateLayoutOptions::bias_wander.
+  Block wander{-1, 0};
   int size = 0;
   int nav_size = 0;  // the navigation errors come first: states [0, nav_size)
   bool accel_triad_frame = false;
@@ -104,7 +113,9 @@ struct StateLayout {
   const std::vector<CoefficientBlock>& coefficient_blocks() const { return coefficients; }
   static bool on(const Block& b) { return b.size > 0; }
   /// Number of coefficient states (they follow the navigation errors).
-  int coefficient_states() const { return size - nav_size - base.size - dwell_orientation.size; }
+  int coefficient_states() const {
+    return size - nav_size - base.size - dwell_orientation.size - wander.size;
+  }
   /// Catalog indices of the coefficients fixed at zero by a convention (not states).
   const std::vector<int>& fixed_by_convention() const { return fixed; }
 };

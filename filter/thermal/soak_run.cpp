@@ -113,19 +113,22 @@ SoakRun calibrate_soak(const std::string& session_path, const ChamberSoaks& cham
       e.covariance(i, j) = r.run.coefficient_covariance(rows[static_cast<std::size_t>(i)],
                                                         rows[static_cast<std::size_t>(j)]);
   }
-  // The filter's bias states follow the bias as it wanders (the bias instability, a random walk
-  // in the filter): the estimate is the bias at the soak's end, and that differs from the bias
-  // the thermal model describes by the wander's value then, of the bias instability's stationary
-  // sigma, independent between soaks (hours apart, the correlation time minutes). A MEMS unit's
-  // 10 deg/h is several of the filter's sigmas: without it the fit's biases were 2 sigma RMS off.
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const auto& family =
-        cat[static_cast<std::size_t>(e.catalog[static_cast<std::size_t>(i)])].family;
-    const CoefficientFamily& info = coefficient_family_info(family);
-    if (!info.wanders_with_bias_noise) continue;
-    const TriadNoise& tn = info.output == FamilyOutput::Gyro ? o.noise.gyro : o.noise.accel;
-    e.covariance(i, i) += tn.bias_instability * tn.bias_instability;
-  }
+  // Without the wander's states the filter's bias states follow the bias as it wanders (the bias
+  // instability, a random walk in the filter): the estimate is then the bias at the soak's end,
+  // and that differs from the bias the thermal model describes by the wander's value then, of
+  // the bias instability's stationary sigma, independent between soaks (hours apart, the
+  // correlation time minutes). A MEMS unit's 10 deg/h is several of the filter's sigmas: without
+  // it the fit's biases were 2 sigma RMS off. With the states (the default) the bias families
+  // hold the constant bias.
+  if (!effective_layout(o).bias_wander)
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const auto& family =
+          cat[static_cast<std::size_t>(e.catalog[static_cast<std::size_t>(i)])].family;
+      const CoefficientFamily& info = coefficient_family_info(family);
+      if (!info.wanders_with_bias_noise) continue;
+      const TriadNoise& tn = info.output == FamilyOutput::Gyro ? o.noise.gyro : o.noise.accel;
+      e.covariance(i, i) += tn.bias_instability * tn.bias_instability;
+    }
   return r;
 }
 
