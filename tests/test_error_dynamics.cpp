@@ -94,7 +94,7 @@ CalibratorOptions all_on() {
   o.noise.gyro.correlation_time = 1e4;
   o.noise.accel.bias_instability = 0.05 * units::mg;
   o.noise.accel.correlation_time = 1e4;
-  o.update_interval = 1e9;        // no update: the transition accumulates over the whole window
+  o.update_interval = 1e9;  // no update: the transition accumulates over the whole window
   o.time_offset = 0.0;
   return o;
 }
@@ -131,9 +131,9 @@ TEST_CASE("Error dynamics: every column of the transition matches the perturbed 
     }
     for (const auto& cb : l.coefficients)
       if (j >= cb.block.index && j < cb.block.index + cb.block.size)
-        return coefficient_family_info(cb.family).default_prior;  // SI
+        return coefficient_family_info(cb.family).default_prior;                         // SI
     if (j >= l.wander.index && j < l.wander.index + 3) return 100.0 * units::deg_per_h;  // rad/s
-    if (j >= l.wander.index) return 100.0 * units::ug;  // m/s^2
+    if (j >= l.wander.index) return 100.0 * units::ug;                                   // m/s^2
     return 100.0 * units::arcsec;  // the table base (rad): no effect on the navigation
   };
   const double T = window().samples.back().t - window().samples.front().t + 0.01;  // s
@@ -197,7 +197,7 @@ TEST_CASE(
   const StateLayout& l = ref.layout();
   const Site site = window().plan.site;
   const InsSiteTerms terms = InsSiteTerms::at(site);
-  const NavState x0 = ref.navigation();
+  const NavState& x0 = ref.navigation();
   const Eigen::Matrix3d C_known = window().motion.at(74.0).C_b_n;
   // The table's base: an estimate off the identity, its error a state (the attitude update
   // measures the attitude relative to it).

@@ -222,15 +222,7 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot_ra
   }
   model_.compensate(s.dtheta_b / dt, s.dv_b / dt, omega_dot, k.omega_ib_b, k.f_ib_b, k.t, &k,
                     &inverses_);
-  if (StateLayout::on(layout_.wander)) {
-    // The bias wander's estimate, decaying towards zero as the Gauss-Markov process does.
-    k.omega_ib_b -= wander_.head<3>();
-    k.f_ib_b -= wander_.tail<3>();
-    for (int i = 0; i < 6; ++i) {
-      const TriadNoise& tn = i < 3 ? o_.noise.gyro : o_.noise.accel;
-      if (tn.correlation_time > 0.0) wander_(i) *= std::exp(-dt / tn.correlation_time);
-    }
-  }
+  remove_wander(k, dt);
   // Accelerometers late by tau: f(t) = f_meas(t + tau), to second order.
   const double tau = model_.time_delay;
   k.f_ib_b += tau * f_dot + 0.5 * tau * tau * f_ddot;
@@ -263,6 +255,17 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot_ra
   if (propagator_.accumulated() >= o_.update_interval - 1e-9) {
     propagator_.propagate(P_);
     update(s.t - o_.time_offset);
+  }
+}
+
+void Calibrator::remove_wander(KinematicSample& k, double dt) {
+  if (!StateLayout::on(layout_.wander)) return;
+  // The bias wander's estimate, decaying towards zero as the Gauss-Markov process does.
+  k.omega_ib_b -= wander_.head<3>();
+  k.f_ib_b -= wander_.tail<3>();
+  for (int i = 0; i < 6; ++i) {
+    const TriadNoise& tn = i < 3 ? o_.noise.gyro : o_.noise.accel;
+    if (tn.correlation_time > 0.0) wander_(i) *= std::exp(-dt / tn.correlation_time);
   }
 }
 

@@ -40,6 +40,52 @@ ChamberSoaks ChamberSoaks::load(const std::string& path) {
   return c;
 }
 
+namespace {
+// The soak's observed coefficients and their covariance.
+SoakEstimate soak_estimate(const KalmanRun& run, const CalibratorOptions& o,
+                           const std::string& session_path, const SoakTemperature& T) {
+  const auto& cat = coefficient_catalog();
+  SoakEstimate e;
+  e.name = session_path;
+  e.accel_temperature_c = T.accel_mean_c;
+  e.gyro_temperature_c = T.gyro_mean_c;
+  std::vector<Eigen::Index> rows;
+  for (std::size_t k = 0; k < run.covariance_catalog.size(); ++k) {
+    const int c = run.covariance_catalog[k];
+    if (!run.estimates[static_cast<std::size_t>(c)].observed()) continue;
+    e.catalog.push_back(c);
+    rows.push_back(static_cast<Eigen::Index>(k));
+  }
+  const auto n = static_cast<Eigen::Index>(rows.size());
+  e.value.resize(n);
+  e.covariance.resize(n, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    e.value(i) =
+        run.estimates[static_cast<std::size_t>(e.catalog[static_cast<std::size_t>(i)])].value;
+    for (Eigen::Index j = 0; j < n; ++j)
+      e.covariance(i, j) = run.coefficient_covariance(rows[static_cast<std::size_t>(i)],
+                                                      rows[static_cast<std::size_t>(j)]);
+  }
+  // Without the wander's states the filter's bias states follow the bias as it wanders (the bias
+  // instability, a random walk in the filter): the estimate is then the bias at the soak's end,
+  // and that differs from the bias the thermal model describes by the wander's value then, of
+  // the bias instability's stationary sigma, independent between soaks (hours apart, the
+  // correlation time minutes). A MEMS unit's 10 deg/h is several of the filter's sigmas: without
+  // it the fit's biases were 2 sigma RMS off. With the states (the default) the bias families
+  // hold the constant bias.
+  if (!effective_layout(o).bias_wander)
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const auto& family =
+          cat[static_cast<std::size_t>(e.catalog[static_cast<std::size_t>(i)])].family;
+      const CoefficientFamily& info = coefficient_family_info(family);
+      if (!info.wanders_with_bias_noise) continue;
+      const TriadNoise& tn = info.output == FamilyOutput::Gyro ? o.noise.gyro : o.noise.accel;
+      e.covariance(i, i) += tn.bias_instability * tn.bias_instability;
+    }
+  return e;
+}
+}  // namespace
+
 SoakRun calibrate_soak(const std::string& session_path, const ChamberSoaks& chamber,
                        const KalmanRunOptions& run) {
   SoakRun r;
@@ -91,44 +137,7 @@ SoakRun calibrate_soak(const std::string& session_path, const ChamberSoaks& cham
   if (!r.run.stopped.empty() || !r.run.diverged.empty())
     throw std::runtime_error(session_path + ": the soak's calibration stopped: " +
                              (r.run.stopped.empty() ? r.run.diverged : r.run.stopped));
-  SoakEstimate& e = r.estimate;
-  e.name = session_path;
-  e.accel_temperature_c = T.accel_mean_c;
-  e.gyro_temperature_c = T.gyro_mean_c;
-  // The observed coefficients and their covariance.
-  std::vector<Eigen::Index> rows;
-  for (std::size_t k = 0; k < r.run.covariance_catalog.size(); ++k) {
-    const int c = r.run.covariance_catalog[k];
-    if (!r.run.estimates[static_cast<std::size_t>(c)].observed()) continue;
-    e.catalog.push_back(c);
-    rows.push_back(static_cast<Eigen::Index>(k));
-  }
-  const auto n = static_cast<Eigen::Index>(rows.size());
-  e.value.resize(n);
-  e.covariance.resize(n, n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    e.value(i) =
-        r.run.estimates[static_cast<std::size_t>(e.catalog[static_cast<std::size_t>(i)])].value;
-    for (Eigen::Index j = 0; j < n; ++j)
-      e.covariance(i, j) = r.run.coefficient_covariance(rows[static_cast<std::size_t>(i)],
-                                                        rows[static_cast<std::size_t>(j)]);
-  }
-  // Without the wander's states the filter's bias states follow the bias as it wanders (the bias
-  // instability, a random walk in the filter): the estimate is then the bias at the soak's end,
-  // and that differs from the bias the thermal model describes by the wander's value then, of
-  // the bias instability's stationary sigma, independent between soaks (hours apart, the
-  // correlation time minutes). A MEMS unit's 10 deg/h is several of the filter's sigmas: without
-  // it the fit's biases were 2 sigma RMS off. With the states (the default) the bias families
-  // hold the constant bias.
-  if (!effective_layout(o).bias_wander)
-    for (Eigen::Index i = 0; i < n; ++i) {
-      const auto& family =
-          cat[static_cast<std::size_t>(e.catalog[static_cast<std::size_t>(i)])].family;
-      const CoefficientFamily& info = coefficient_family_info(family);
-      if (!info.wanders_with_bias_noise) continue;
-      const TriadNoise& tn = info.output == FamilyOutput::Gyro ? o.noise.gyro : o.noise.accel;
-      e.covariance(i, i) += tn.bias_instability * tn.bias_instability;
-    }
+  r.estimate = soak_estimate(r.run, o, session_path, T);
   return r;
 }
 
