@@ -34,6 +34,14 @@ Session make_session(const std::string& name, const std::string& plan_file,
 CalibratorOptions options_for(const Session& s) {
   return calibrator_options_from_profile(SensorProfile::load(s.sensor_file));
 }
+// Every observable estimate of a run within `n_sigma` of its sigmas of the truth.
+void check_within_sigmas(const KalmanRun& r, const ResultCoefficients& truth, double n_sigma) {
+  for (const auto& [name, c] : result_coefficients(r)) {
+    if (!c.observable || c.fixed_by_convention || !c.sigma) continue;
+    CAPTURE(name, r.passes.size());
+    CHECK(std::abs(c.value - truth.at(name).value) < n_sigma * *c.sigma);
+  }
+}
 }  // namespace
 
 TEST_CASE("Kalman filter and closed form agree on seed8 within 3 sigma of the difference",
@@ -303,11 +311,7 @@ TEST_CASE(
                                return run_kalman(s, o, nullptr, three);
                              }()}) {
     CHECK(r.diverged.empty());
-    for (const auto& [name, c] : result_coefficients(r)) {
-      if (!c.observable || c.fixed_by_convention || !c.sigma) continue;
-      CAPTURE(name, r.passes.size());
-      CHECK(std::abs(c.value - truth.at(name).value) < 4.0 * *c.sigma);
-    }
+    check_within_sigmas(r, truth, 4.0);
   }
 }
 
@@ -377,11 +381,7 @@ TEST_CASE(
   // every error within 4 sigma.
   const KalmanRun r = run_kalman(s, o);
   CHECK(r.diverged.empty());
-  for (const auto& [name, c] : result_coefficients(r)) {
-    if (!c.observable || c.fixed_by_convention || !c.sigma) continue;
-    CAPTURE(name);
-    CHECK(std::abs(c.value - truth.at(name).value) < 4.0 * *c.sigma);
-  }
+  check_within_sigmas(r, truth, 4.0);
 }
 
 TEST_CASE("Kalman filter, several passes, the base estimated: a MEMS unit settles",
@@ -413,9 +413,5 @@ TEST_CASE("Kalman filter, several passes, the base estimated: a MEMS unit settle
   for (int i = 0; i < 3; ++i)
     CHECK(std::abs(r.installation.base_n(i)) < 3.0 * r.installation.base_sigma_n(i));
   const ResultCoefficients truth = load_truth(s, r.accel_triad_frame);
-  for (const auto& [name, c] : result_coefficients(r)) {
-    if (!c.observable || c.fixed_by_convention || !c.sigma) continue;
-    CAPTURE(name);
-    CHECK(std::abs(c.value - truth.at(name).value) < 4.0 * *c.sigma);
-  }
+  check_within_sigmas(r, truth, 4.0);
 }

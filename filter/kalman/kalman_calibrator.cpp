@@ -263,10 +263,14 @@ void Calibrator::remove_wander(KinematicSample& k, double dt) {
   // The bias wander's estimate, decaying towards zero as the Gauss-Markov process does.
   k.omega_ib_b -= wander_.head<3>();
   k.f_ib_b -= wander_.tail<3>();
-  for (int i = 0; i < 6; ++i) {
-    const TriadNoise& tn = i < 3 ? o_.noise.gyro : o_.noise.accel;
-    if (tn.correlation_time > 0.0) wander_(i) *= std::exp(-dt / tn.correlation_time);
+  if (dt != wander_dt_) {  // the sample interval changes rarely: the decay once per change
+    wander_dt_ = dt;
+    for (int i = 0; i < 6; ++i) {
+      const TriadNoise& tn = i < 3 ? o_.noise.gyro : o_.noise.accel;
+      wander_decay_(i) = tn.correlation_time > 0.0 ? std::exp(-dt / tn.correlation_time) : 1.0;
+    }
   }
+  wander_ = wander_.cwiseProduct(wander_decay_);
 }
 
 void Calibrator::inject_error(const Eigen::VectorXd& dx) {

@@ -282,6 +282,9 @@ class Calibrator {
   // The bias wander's estimate (gyro, accelerometer; compensated inputs' axes), decaying with
   // the correlation time between updates; zero without its states.
   Eigen::Matrix<double, 6, 1> wander_ = Eigen::Matrix<double, 6, 1>::Zero();
+  // Its decay over one sample interval, for the interval `wander_dt_` (s).
+  Eigen::Matrix<double, 6, 1> wander_decay_ = Eigen::Matrix<double, 6, 1>::Ones();
+  double wander_dt_ = -1.0;
   // The base the reference motion is turned by (the start's, fixed: not the wandering estimate).
   Eigen::Matrix3d C_reference_base_ = Eigen::Matrix3d::Identity();
   // The IMU's mounting on the table at the start (the navigator's start: C_base C_table C_m).
