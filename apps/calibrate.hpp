@@ -32,6 +32,7 @@ struct CalibrateOptions {
   bool force = false;  // run even when the plausibility gate fails (recorded in the result)
   int passes = 1;
   std::string base = "estimated";  // the table base: estimated | known (the plan's)
+  std::string motion = "data";     // kf: the linearization motion: data | plan
   std::string terms;
   // table-free (apps/calibrate_table_free.cpp)
   double gravity = 0.0;                      // m/s^2, 0: the session's

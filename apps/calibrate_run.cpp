@@ -75,6 +75,7 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
   KalmanRunOptions run;
   run.skip_bad_samples = o.on_bad_sample == OnBadSample::Skip;
   run.passes = o.passes;
+  run.motion_from_data = o.motion == "data";
   run.stop = &g_stop;
   run.sigma_targets = profile.sigma_targets;
   std::unique_ptr<LogReader> stdin_reader;
@@ -123,6 +124,7 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
   if (!verbose) return row;
   std::printf("Kalman-filter calibration of '%s': %d states, %zu samples, NIS per dof %.3f\n",
               session.name.c_str(), kr.states, kr.samples, kr.nis_per_dof);
+  if (kr.motion) std::printf("Motion: %s\n", kr.motion->summary().c_str());
   print_coefficient_table(coefficients, truth);
   std::printf("\nResult written to %s (%.2f s, %.0fx real time)\n", out_path.c_str(), seconds,
               kr.duration / seconds);
@@ -184,6 +186,8 @@ void check_kf_values(const CalibrateOptions& o) {
         "--static-window must be positive, --static-min at least the window, "
         "--static-rate-threshold positive");
   if (o.passes < 1 || o.passes > 20) throw UsageError("--passes must be 1 to 20");
+  if (o.motion != "data" && o.motion != "plan")
+    throw UsageError("--motion must be data or plan, not '" + o.motion + "'");
   if (o.passes > 1 && o.stream) throw UsageError("--passes reads the log again: not with --stream");
   if (!o.lever_arm_reference.empty() && o.lever_arm_reference != "x" &&
       o.lever_arm_reference != "y" && o.lever_arm_reference != "z")

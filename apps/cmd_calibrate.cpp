@@ -56,6 +56,10 @@ void add_options(po::options_description& d, CalibrateOptions& o) {
       ("no-table-angles", "kf: ignore the log's table-angle columns (attitude from the plan)")
       ("base", po::value(&o.base)->default_value("estimated"),
        "kf: the table base's attitude: estimated (3 states) | known (the plan's: not estimated)")
+      ("motion", po::value(&o.motion)->default_value("data"),
+       "kf: the motion the filter linearizes along: data (the plan's turns as the log shows "
+       "them: start-time offset, smoothed, lagging or overshooting turns) | plan (the plan's "
+       "commanded trapezoids)")
       ("passes", po::value(&o.passes)->default_value(1),
        "kf: passes over the log, each from the previous pass's coefficients (large errors: MEMS)")
       ("static-from", po::value(&o.static_from)->default_value(CalibratorOptions::StaticFrom::Plan,
@@ -81,7 +85,7 @@ void check_method_options(const po::variables_map& vm, CalibrateOptions& o) {
   static const std::vector<std::string> kf_only = {
       "stream", "monitor", "monitor-interval", "attitude", "no-position", "no-zero-velocity",
       "terms", "prior-scale", "lever-arm-reference", "no-motion-zero-velocity", "no-table-angles",
-      "passes", "base", "static-from", "static-window", "static-min", "static-rate-threshold",
+      "passes", "motion", "base", "static-from", "static-window", "static-min", "static-rate-threshold",
       "on-bad-sample"};
   // clang-format on
   check_table_free_options(vm, o, {closed_form_only, kf_only, {"table-sigma"}});

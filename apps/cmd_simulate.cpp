@@ -13,6 +13,7 @@
 #include "models/units.hpp"
 #include "report/output.hpp"
 #include "rig/session.hpp"
+#include "rig/table_spec.hpp"
 
 namespace sinscal::cli {
 
@@ -39,6 +40,65 @@ bool check_out_dir(const std::string& out_dir, bool force) {
                    "): simulate writes a new or empty directory, or replaces an earlier "
                    "simulation whole (its results would not match the new data); --force writes "
                    "into it anyway, keeping its other files");
+}
+
+// "a[,b]": one or two numbers (the second optional); a usage error naming the option otherwise.
+std::pair<double, std::optional<double>> one_or_two(const std::string& option,
+                                                    const std::string& text) {
+  std::vector<double> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    std::size_t used = 0;
+    double v = 0.0;
+    try {
+      v = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(v))
+      throw UsageError("--" + option + " takes one or two comma-separated numbers, not '" + text +
+                       "'");
+    out.push_back(v);
+  }
+  if (out.empty() || out.size() > 2)
+    throw UsageError("--" + option + " takes one or two comma-separated numbers, not '" + text +
+                     "'");
+  return {out[0], out.size() > 1 ? std::optional<double>(out[1]) : std::nullopt};
+}
+
+// The table's dynamics: the --table file's, then each --table-* option over it.
+TableDynamics table_dynamics(const po::variables_map& vm, const std::string& table_path) {
+  TableDynamics d;
+  if (!table_path.empty()) d = TableSpec::load(table_path).dynamics;
+  auto get = [&](const char* name) -> std::optional<std::string> {
+    if (!vm.count(name)) return std::nullopt;
+    return vm[name].as<std::string>();
+  };
+  if (auto v = get("table-smoothing")) d.smoothing = one_or_two("table-smoothing", *v).first;
+  if (auto v = get("table-jerk-time")) d.jerk_time = one_or_two("table-jerk-time", *v).first;
+  if (auto v = get("table-servo")) {
+    const auto [f, z] = one_or_two("table-servo", *v);
+    d.servo_frequency = f;
+    if (z) d.servo_damping = *z;
+  }
+  if (auto v = get("table-ripple")) {
+    const auto [f, z] = one_or_two("table-ripple", *v);
+    d.ripple_frequency = f;
+    if (z) d.ripple_damping = *z;
+  }
+  if (auto v = get("table-rate-ripple")) {
+    const auto [a, period] = one_or_two("table-rate-ripple", *v);
+    d.rate_ripple = a * units::arcsec;
+    d.rate_ripple_period = period.value_or(1.0) * units::deg;
+  }
+  if (auto v = get("start-offset")) d.start_offset = one_or_two("start-offset", *v).first;
+  try {
+    d.validate();
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  return d;
 }
 
 // "a,b[,c]" (deg) as `count` angles in rad; a usage error naming the option otherwise.
@@ -98,7 +158,8 @@ int cmd_simulate(const std::vector<std::string>& args) {
   SessionSimulation spec;
   std::string out_dir;
   double angle_sigma_arcsec = 0.0, non_orth_arcsec = 0.0, base_heading_deg = 0.0;
-  std::string base_level = "0,0", mounting = "0,0,0", chamber_path;
+  double attitude_sigma_arcsec = 0.0;
+  std::string base_level = "0,0", mounting = "0,0,0", chamber_path, table_path;
   unsigned long long seed = 1;
   // clang-format off
   d.add_options()
@@ -119,6 +180,9 @@ int cmd_simulate(const std::vector<std::string>& args) {
        "(its other files kept)")
       ("table-angle-sigma", po::value(&angle_sigma_arcsec)->default_value(0.0),
        "table angle error per commanded angle, 1-sigma [arcsec]")
+      ("table-attitude-sigma", po::value(&attitude_sigma_arcsec)->default_value(0.0),
+       "the table's attitude error at each dwell, 1-sigma about each axis [arcsec] (what the "
+       "Kalman filter's --table-sigma models)")
       ("table-non-orthogonality", po::value(&non_orth_arcsec)->default_value(0.0),
        "lean of the inner axis [arcsec]")
       ("base-level-error", po::value(&base_level),
@@ -126,7 +190,22 @@ int cmd_simulate(const std::vector<std::string>& args) {
       ("base-heading-error", po::value(&base_heading_deg)->default_value(0.0),
        "heading error of the table's base, about Down [deg]")
       ("mounting-error", po::value(&mounting),
-       "the IMU's mounting on the platform: x,y,z [deg], rotation vector in body axes");
+       "the IMU's mounting on the platform: x,y,z [deg], rotation vector in body axes")
+      ("table", po::value(&table_path),
+       "table file (config/tables/*.ini): its rate and acceleration limits and dynamics realize "
+       "the plan's turns")
+      ("table-smoothing", po::value<std::string>(),
+       "turns smoothed by a zero-phase Gaussian of this sigma [s] (another tool's profile)")
+      ("table-jerk-time", po::value<std::string>(),
+       "jerk limit: the acceleration ramps over this time [s]")
+      ("table-servo", po::value<std::string>(),
+       "servo lag and overshoot: natural frequency [Hz][,damping (0.7)]")
+      ("table-ripple", po::value<std::string>(),
+       "settling ripple: a structural mode's frequency [Hz][,damping (0.05)]")
+      ("table-rate-ripple", po::value<std::string>(),
+       "rate ripple: cogging amplitude [arcsec][,period in turned angle [deg] (1)]")
+      ("start-offset", po::value<std::string>(),
+       "the plan starts this late in the log [s] (session.ini does not know it)");
   // clang-format on
   const auto vm =
       parse(args, d,
@@ -146,7 +225,10 @@ int cmd_simulate(const std::vector<std::string>& args) {
   spec.perfect = vm->count("perfect") > 0;
   spec.noise = !vm->count("no-noise");
   spec.table_angles = vm->count("table-angles") > 0;
+  if (!(attitude_sigma_arcsec >= 0.0 && attitude_sigma_arcsec < 3600.0))
+    throw UsageError("--table-attitude-sigma must be 0 to 3600 arcsec");
   spec.table.angle_sigma = angle_sigma_arcsec * units::arcsec;
+  spec.table.attitude_sigma = attitude_sigma_arcsec * units::arcsec;
   spec.table.non_orthogonality = non_orth_arcsec * units::arcsec;
   spec.table.seed = derive_seed(seed, 3);
   const std::vector<double> level = angles_deg("base-level-error", base_level, 2);
@@ -157,6 +239,11 @@ int cmd_simulate(const std::vector<std::string>& args) {
   spec.table.base_level_east = level[1];
   spec.table.base_heading = base_heading_deg * units::deg;
   spec.table.mounting_b = Eigen::Vector3d(mount[0], mount[1], mount[2]);
+  try {
+    spec.table.dynamics = table_dynamics(*vm, table_path);
+  } catch (const ConfigError& e) {
+    throw UsageError(e.what());
+  }
   std::vector<std::pair<std::string, std::string>> outputs;
   for (const char* f : {"imu.csv", "session.ini", "plan.ini", "sensor.ini", "truth.json"})
     outputs.emplace_back("output", out_dir + "/" + f);

@@ -152,6 +152,29 @@ nlohmann::ordered_json result_sections(const KalmanRun& r) {
   d["consistency"] = {{"nis_per_dof", r.nis_per_dof}, {"samples", r.samples}};
   d["convergence"] = kalman_convergence(r);
   d["installation"] = installation_section(r.installation);
+  if (r.motion) {
+    // The table's motion as the data show it against the plan's (docs/formats.md "motion").
+    const DataMotion& m = *r.motion;
+    nlohmann::ordered_json moves = nlohmann::ordered_json::array();
+    for (const auto& v : m.moves)
+      moves.push_back({{"move", v.move},
+                       {"t_plan_s", v.t_plan},
+                       {"follows_plan", v.follows},
+                       {"largest_departure_deg", v.largest / units::deg},
+                       {"mid_turn_shift_s", v.start_shift},
+                       {"overshoot_deg", v.overshoot / units::deg},
+                       {"data_begins_s", v.begins},
+                       {"data_ends_s", v.ends},
+                       {"gyro_turn_deg", v.turned / units::deg},
+                       {"plan_turn_deg", v.plan_turned / units::deg}});
+    d["motion"] = {{"summary", m.summary()},
+                   {"session_time_offset_s", m.session_offset},
+                   {"time_offset_s", m.time_offset},
+                   {"offset_correlation", m.correlation},
+                   {"follow_tolerance_deg", kFollowTolerance / units::deg},
+                   {"departing_moves", m.departing()},
+                   {"moves", moves}};
+  }
   if (r.detected) {
     // Where the data were static against where the plan says: the log's timing, measured.
     nlohmann::ordered_json dwells = nlohmann::ordered_json::array();

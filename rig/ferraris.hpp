@@ -4,6 +4,7 @@
 // through a full turn about each body axis with that axis up (the total angle off by a random
 // error, the rate uneven: the turn's axis wobbles in the body), with rests between. Every part is
 // labelled with imucal's names.
+// The procedure and its model: docs/methods/six-face.md.
 #pragma once
 
 #include <array>

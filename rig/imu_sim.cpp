@@ -22,7 +22,10 @@ ImuSimulator::ImuSimulator(const Motion& motion, const ImuErrorModel& errors,
       dt_(1.0 / options.rate_hz) {
   if (!(options.rate_hz > 0.0)) throw std::invalid_argument("sample rate must be positive");
   // Cover the whole motion: a last partial interval is completed at rest.
-  total_ = static_cast<std::size_t>(std::ceil(motion.duration() * options.rate_hz - 1e-9));
+  if (!(motion.duration() + options.motion_start > 0.0))
+    throw std::invalid_argument("the log would begin after the motion ends (start offset)");
+  total_ = static_cast<std::size_t>(
+      std::ceil((motion.duration() + options.motion_start) * options.rate_hz - 1e-9));
   if (options.table_angles)
     for (const auto& seg : motion.segments())
       if (!seg.has_table)
@@ -68,8 +71,8 @@ bool ImuSimulator::next(ImuSample& s) {
   const double a = static_cast<double>(k_ - 1) * dt_;
   s.t = b;
   s.dt = b - a;
-  s.dtheta_b = integrate(a, b, 0.0, true);
-  s.dv_b = integrate(a, b, errors_.time_delay, false);
+  s.dtheta_b = integrate(a, b, options_.motion_start, true);
+  s.dv_b = integrate(a, b, options_.motion_start + errors_.time_delay, false);
   noise_.apply(s.dtheta_b, s.dv_b, s.dt);
   bool clipped = false;
   auto clip = [&](Eigen::Vector3d& inc, double range) {
@@ -84,7 +87,7 @@ bool ImuSimulator::next(ImuSample& s) {
   clip(s.dv_b, options_.accel_range);
   if (clipped) ++saturated_;
   s.has_table = options_.table_angles;
-  if (s.has_table) motion_.table_angles(s.t, s.table_outer, s.table_inner);
+  if (s.has_table) motion_.table_angles(s.t - options_.motion_start, s.table_outer, s.table_inner);
   s.has_temperature = options_.temperature != nullptr;
   if (s.has_temperature)
     s.accel_temperature_c = s.gyro_temperature_c = options_.temperature->at(s.t);

@@ -22,6 +22,9 @@ struct SimulatorOptions {
   double gyro_range = 0.0;    // rad/s; outputs beyond it are clipped (0: no limit)
   double accel_range = 0.0;   // m/s^2
   bool table_angles = false;  // fill the table's axis angles (the motion must be table moves)
+  /// Log time at which the motion starts (s; TableDynamics::start_offset): the IMU rests in the
+  /// start attitude before; negative, the log begins inside the motion.
+  double motion_start = 0.0;
   /// The sensor's temperature over the motion's time (a chamber; null: at the reference
   /// temperature, no column). Not owned: it must outlive the simulator. Both triads read it, the
   /// samples carry it (deg C at the end of each interval).

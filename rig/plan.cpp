@@ -576,6 +576,16 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
                   st.pause);
     }
   }
+  if (errors.dynamics.any()) {
+    // The table realizes each commanded profile with its dynamics.
+    errors.dynamics.validate();
+    for (auto& s : segments) {
+      if (s.is_static()) continue;
+      s.alpha = errors.dynamics.realize(s.alpha.commanded());
+      s.beta = errors.dynamics.realize(s.beta.commanded());
+      s.gamma = errors.dynamics.realize(s.gamma.commanded());
+    }
+  }
   if (errors.has_installation_errors()) {
     // C_b_n_true = R(base) C_b_n R(mounting): nav-fixed axes turn with the base, body-fixed axes
     // are seen from the mounted IMU.

@@ -100,6 +100,9 @@ struct TableErrors {
   /// of the IMU's axes relative to the platform's nominal ones (rad, body axes):
   /// C_b_n_true = C_p_n C_b_p.
   Eigen::Vector3d mounting_b = Eigen::Vector3d::Zero();
+  /// How the table's turns depart from the commanded trapezoids (rig/motion.hpp): limits, servo,
+  /// smoothing, ripple; its start_offset delays the whole motion in the log (the simulator).
+  TableDynamics dynamics;
   Eigen::Vector3d base_n() const { return {base_level_north, base_level_east, base_heading}; }
   bool has_installation_errors() const { return base_n().norm() > 0.0 || mounting_b.norm() > 0.0; }
 };

@@ -165,6 +165,7 @@ SimulatedSession simulate_session(const std::string& out_dir, const SessionSimul
   so.gyro_range = r.profile.gyro_range;
   so.accel_range = r.profile.accel_range;
   so.table_angles = spec.table_angles;
+  so.motion_start = spec.table.dynamics.start_offset;
   ImuSimulator sim(motion, sensor_errors, r.profile.noise, so);
 
   std::filesystem::create_directories(out_dir);
@@ -229,6 +230,22 @@ void write_truth_json(const std::string& path, const ImuErrorModel& model, const
                          {"base_heading_deg", table->base_heading / units::deg},
                          {"mounting_deg", {m.x(), m.y(), m.z()}},
                          {"mounting_angle_deg", table->mounting_b.norm() / units::deg}};
+    const TableDynamics& d = table->dynamics;
+    if (d.any() || d.start_offset != 0.0) {
+      // What the table really did: the estimators never read it (tests compare with it).
+      auto& o = j["table_dynamics"];
+      o["start_offset_s"] = d.start_offset;
+      o["max_rate_deg_s"] = d.max_rate / units::deg;
+      o["max_acceleration_deg_s2"] = d.max_acceleration / units::deg;
+      o["jerk_time_s"] = d.jerk_time;
+      o["smoothing_s"] = d.smoothing;
+      o["servo_frequency_hz"] = d.servo_frequency;
+      o["servo_damping"] = d.servo_damping;
+      o["ripple_frequency_hz"] = d.ripple_frequency;
+      o["ripple_damping"] = d.ripple_damping;
+      o["rate_ripple_arcsec"] = d.rate_ripple / units::arcsec;
+      o["rate_ripple_period_deg"] = d.rate_ripple_period / units::deg;
+    }
   }
   std::ofstream out(path);
   out << j.dump(2) << "\n";

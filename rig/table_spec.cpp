@@ -43,7 +43,9 @@ TableSpec TableSpec::parse(const std::string& path, const std::string& text) {
     if (s != "table")
       throw ConfigError(path + ": unknown section [" + s + "] (a table file has [table] only)");
   ini.check_keys("table", {"name", "description", "axes", "max_rate", "max_acceleration",
-                           "settling_time", "attitude_accuracy", "reference_on_axes"});
+                           "settling_time", "attitude_accuracy", "reference_on_axes", "jerk_time",
+                           "smoothing", "servo_frequency", "servo_damping", "ripple_frequency",
+                           "ripple_damping", "rate_ripple", "rate_ripple_period"});
   TableSpec t;
   t.path = path;
   t.name = ini.get_string("table.name", "table");
@@ -57,6 +59,22 @@ TableSpec TableSpec::parse(const std::string& path, const std::string& text) {
     throw ConfigError(ini.where("table.settling_time") + "must be within 0 and 3600 s");
   t.attitude_sigma = positive(ini, "table.attitude_accuracy", Q::Angle, "arcsec", 0.01);
   t.reference_on_axes = ini.get_bool("table.reference_on_axes", true);
+  TableDynamics& d = t.dynamics;
+  d.max_rate = t.max_rate;
+  d.max_acceleration = t.max_acceleration;
+  d.jerk_time = ini.get_quantity("table.jerk_time", Q::Time, "s", 0.0);
+  d.smoothing = ini.get_quantity("table.smoothing", Q::Time, "s", 0.0);
+  d.servo_frequency = ini.get_quantity("table.servo_frequency", Q::Frequency, "Hz", 0.0);
+  d.servo_damping = ini.get_quantity("table.servo_damping", Q::Ratio, "1", 0.7);
+  d.ripple_frequency = ini.get_quantity("table.ripple_frequency", Q::Frequency, "Hz", 0.0);
+  d.ripple_damping = ini.get_quantity("table.ripple_damping", Q::Ratio, "1", 0.05);
+  d.rate_ripple = ini.get_quantity("table.rate_ripple", Q::Angle, "arcsec", 0.0);
+  d.rate_ripple_period = ini.get_quantity("table.rate_ripple_period", Q::Angle, "deg", 0.0);
+  try {
+    d.validate();
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(path + ": " + e.what());
+  }
   return t;
 }
 
@@ -69,7 +87,7 @@ std::vector<TableViolation> check_against_table(const Motion& motion, const Tabl
   for (std::size_t i = 0; i < segs.size(); ++i) {
     const MotionSegment& s = segs[i];
     char msg[240];
-    for (const TrapezoidProfile* p : {&s.alpha, &s.beta}) {
+    for (const AngleProfile* p : {&s.alpha, &s.beta}) {
       if (p->angle() == 0.0) continue;
       const double rate = std::abs(p->peak_rate());
       const double accel = std::abs(p->acceleration());

@@ -23,6 +23,11 @@ struct TableSpec {
   /// The IMU's reference point on the table's axes: it stays put while the table turns, so the
   /// zero-velocity updates continue through the turns.
   bool reference_on_axes = true;
+  /// How its turns depart from the commanded trapezoids (simulate --table; docs/formats.md
+  /// "Table files"): max_rate and max_acceleration above, and the optional keys jerk_time,
+  /// smoothing, servo_frequency, servo_damping, ripple_frequency, ripple_damping, rate_ripple,
+  /// rate_ripple_period.
+  TableDynamics dynamics;
 
   static TableSpec load(const std::string& path);
   static TableSpec parse(const std::string& path, const std::string& text);

@@ -832,7 +832,7 @@ fixed 1 "belong to --optimize" dz --require accel.lever_arm
 
 # --- six-face (issue 18): imucal's labelled session, its declaration or its log changed
 sf_session="$src/config/measured/imucal-ferraris/session.ini"
-sf_log="$src/tests/data/imucal/annotated_session.csv"
+sf_log="$src/data/imucal/annotated_session.csv"
 # sfnew NAME: the session in $d, its log named by absolute path.
 sfnew() { new "$1"; sed "s|^file = .*|file = $sf_log|" "$sf_session" > "$d/session.ini"; }
 sf() { S calibrate --method six-face --session session.ini --out out/result.json "$@"; }
@@ -871,12 +871,12 @@ fixed 1 "--table-sigma is an option of the table methods (closed-form, kf), not 
 
 # --- issue 21: the plausibility gate without a table (filter/plausibility/rest_plausibility.hpp),
 # simulate's output directory, and the messages the probe found weak. The real recordings of
-# ../shared/data through the sessions of config/measured (their paths made absolute).
-data=$src/../shared/data
+# data/ through the sessions of config/measured (their paths made absolute).
+data=$src/data
 # meas NAME MEASURED: the measured session in $d.
 meas() {
   new "$1"
-  sed -e "s|\.\./\.\./\.\./\.\./shared|$src/../shared|" -e "s|^sensor = \.\./\.\./sensors|sensor = $src/config/sensors|" \
+  sed -e "s|\.\./\.\./\.\./data/|$data/|" -e "s|^sensor = \.\./\.\./sensors|sensor = $src/config/sensors|" \
     "$src/config/measured/$2/session.ini" > "$d/session.ini"
 }
 meas handheld-mpu-control mpu6050-calibration

@@ -175,11 +175,8 @@ TEST_CASE(
 
 TEST_CASE("Split log: the real Xsens MTi recording reads in place through a session",
           "[log][split][data]") {
-  const std::string data = test::source_path("../shared/data/xsens-mti-handheld");
-  if (!std::filesystem::exists(data + "/xsens_acc.txt")) {
-    WARN("shared data not present, skipped: " << data);
-    return;
-  }
+  const std::string data = test::source_path("data/xsens-mti-handheld");
+  REQUIRE(std::filesystem::exists(data + "/xsens_acc.txt"));
   const std::string dir = test::temp_dir("h2_xsens");
   test::write_file(dir + "/plan.ini",
                    "[plan]\ntype = rotations\nrotation_acceleration = 10 deg/s^2\n[site]\n"

@@ -191,11 +191,8 @@ TEST_CASE("Log: foreign formats (counts, rates, delimiters, axis mapping)", "[lo
 }
 
 TEST_CASE("Log: the real MPU-6050 recording reads with its documented format", "[log][data]") {
-  const std::string file = test::source_path("../shared/data/mpu6050-handheld/imu_static_test.csv");
-  if (!std::filesystem::exists(file)) {
-    WARN("shared data not present, skipped: " << file);
-    return;
-  }
+  const std::string file = test::source_path("data/mpu6050-handheld/imu_static_test.csv");
+  REQUIRE(std::filesystem::exists(file));
   const std::string dir = test::temp_dir("log_mpu");
   test::write_file(dir + "/s.ini",
                    "[log]\nfile = " + file +

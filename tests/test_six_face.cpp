@@ -115,7 +115,7 @@ TEST_CASE("Six-face: Monte Carlo, errors as the sigmas say", "[six_face][long]")
 }
 
 TEST_CASE("Six-face: imucal's recording against its stored calibration", "[six_face][real]") {
-  // tests/data/imucal: the sensitivities (counts per unit along each sensor's own axis) within
+  // data/imucal: the sensitivities (counts per unit along each sensor's own axis) within
   // 0.1 % (accelerometers) and 0.5 % (gyros) of imucal's, as the issue asks; the biases within
   // their sigma's reach. Measured: 0.004-0.012 % and 0.009-0.050 %.
   const Session s = Session::load(test::source_path("config/measured/imucal-ferraris/session.ini"),
@@ -123,7 +123,7 @@ TEST_CASE("Six-face: imucal's recording against its stored calibration", "[six_f
   REQUIRE(s.six_face);
   const SixFaceResult r = six_face_calibrate(read_parts(s), six_face_options(s));
   const nlohmann::json ref =
-      nlohmann::json::parse(std::ifstream(test::source_path("tests/data/imucal/example_cal.json")));
+      nlohmann::json::parse(std::ifstream(test::source_path("data/imucal/example_cal.json")));
   const Eigen::Matrix3d A = r.model.accel.linear(), G = r.model.gyro.linear();
   for (int i = 0; i < 3; ++i) {
     const double ka = A.row(i).norm() / s.log.accel.scale;              // counts per m/s^2

@@ -1,21 +1,8 @@
-// The source paper's closed-form calibration (../shared/seed-method.md), faithful and generalized.
-//
-// Stage 1, per static dwell: the navigation errors over the dwell (started from the known
-// attitude, zero velocity, known position) give the equivalent inputs u = (df_n, dw_n): the
-// accelerometer and gyro errors in NED, natural sign (the paper's dwn, dwe are -dw_n, -dw_e).
-//   point: the paper's single-time formulas (eq. 5) on the uncoupled Schuler solutions;
-//   fit:   weighted least squares of the error dynamics over the whole window. The errors are
-//          observed exactly at every sample, so the one-step residuals
-//          x(k+1) - Phi x(k) - Gamma u are the sensor noise of that step, independent from step to
-//          step (VRW^2 h on velocity rows, ARW^2 h on attitude rows): the fit is the optimal
-//          estimator of u under the noise model and reaches VRW / sqrt(T). Constant memory.
-// Channels: north (dv_n, phi_e -> df_n, dw_e), east (dv_e, phi_n -> df_e, dw_n), optionally
-// vertical (dv_d -> df_d) and heading (phi_d -> dw_d). Model: the paper's uncoupled channels or the
-// coupled one (Earth rate, Coriolis, transport, gravity feedback).
-//
-// Stage 2: the equivalent inputs of all dwells are linear in the 24 base coefficients; a general
-// weighted least-squares solve (any static plan) with an identifiability report, and the paper's
-// literal closed forms for the X and Z sensors of the 8-orientation plan.
+// The source paper's closed-form calibration, faithful and generalized: stage 1 turns each static
+// dwell's navigation errors into equivalent accelerometer and gyro errors (the paper's single-time
+// formulas, or a weighted fit over the dwell), stage 2 solves the 24 base coefficients for any
+// static plan by weighted least squares, with the paper's literal closed forms for its
+// 8-orientation plan. docs/methods/closed-form.md; the paper: docs/methods/source-paper.md.
 #pragma once
 
 #include <Eigen/Core>
@@ -157,7 +144,7 @@ Stage2Result solve_stage2(const std::vector<EquivalentInputs>& inputs, const Sit
                           const Stage2Options& options);
 
 /// The paper's closed forms for the X and Z sensors of the 8-orientation plan, literally
-/// (X as printed, with the OCR-lost signs of seed-method.md; Z derived the same way).
+/// (X as printed, with the OCR-lost signs of docs/methods/source-paper.md; Z derived the same way).
 /// `inputs` are the 8 dwells in the paper's order. SI units.
 struct PaperClosedForms {
   double w0x, dkgx, nu_xy, nu_xz;  // X gyro: bias, scale, misalignments

@@ -3,6 +3,7 @@
 // diagnosis's "not separable" and "ambiguous" sets), what to append to the plan to determine it
 // best, found by a covariance pass per candidate: a turn about a body axis with a dwell (rotation
 // plans), or an orientation with a body axis up and another north (orientation plans).
+// docs/methods/design.md "Identifiability advice".
 #pragma once
 
 #include <string>

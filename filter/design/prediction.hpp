@@ -1,12 +1,7 @@
 // Plan design, first part: the accuracy a plan will give, predicted without data. The Kalman
-// filter's covariance is run over the plan's truth motion: an ideal IMU (no errors, no noise)
-// simulated through the plan drives the same Calibrator `calibrate --method kf` runs, so the error
-// dynamics, the measurement geometry, the process and measurement noise, the priors and the
-// updates are the calibration's own. With zero errors the estimate stays at its linearization
-// point (the truth) and every innovation is zero: what the run produces is the covariance a real
-// calibration of the plan reaches (its coefficients' sigmas, the combinations it cannot
-// observe, the sigmas over time), within the difference of linearizing about the truth instead
-// of the estimate.
+// filter of `calibrate --method kf` run over the plan's truth motion with an ideal IMU: with zero
+// errors every innovation is zero and what the run produces is the covariance a calibration of
+// the plan reaches. docs/methods/design.md "Prediction".
 #pragma once
 
 #include <map>

@@ -4,6 +4,7 @@
 // sigma over seeds and components is reported for the nominal world (it confirms the
 // prediction: near 1) and for each perturbation: a table worse than its description, the IMU's
 // reference point off the table's axes, noise above the profile's.
+// docs/methods/design.md "Robustness".
 #pragma once
 
 #include <Eigen/Core>

@@ -1,16 +1,7 @@
-// Plan design, second part: the search for the shortest plan whose predicted sigmas meet every
-// target on a given table (or the plan of smallest excess within a time budget).
-//
-// Plans searched: rotation plans about body axes, executed at the table's rate and acceleration
-// limits: a start orientation (a body axis up or down, as a two-axis table sets it) with its
-// dwell, then turns of 90 or 180 deg about +-x, +-y, +-z, each followed by a dwell. The
-// objective is the excess of the predicted sigmas over their targets,
-//   J = sum over families of max(0, ln(sigma_f / target_f)),  sigma_f the family's worst sigma,
-// zero when every target is met. The search is a beam search over the turns (each extension of
-// a plan is scored by the decrease of J per second of table time it costs), its predictions an
-// incremental covariance pass (one filter per beam member, copied and run over the new turn
-// only), then a refinement of the best plan: turns removed and dwells shortened while the
-// targets stay met (or J does not grow), every change confirmed by a full pass.
+// Plan design, second part: the search for the shortest rotation plan whose predicted sigmas meet
+// every target on a given table (or the plan of smallest excess within a time budget): a beam
+// search over turns by incremental covariance passes, then a refinement.
+// docs/methods/design.md "Search for the shortest plan".
 #pragma once
 
 #include <map>

@@ -1,20 +1,7 @@
-// Model discovery on a table session's static dwells: what the calibrated model fails to explain,
-// which missing effect explains it, and what adding it gains (../shared/model-discovery.md).
-//
-// The residual is the closed form's stage-2 residual: each dwell's equivalent inputs (measured,
-// from stage 1) minus those the calibrated error model predicts at the dwell's attitude (the same
-// error-model Jacobian the simulator's error model linearizes to; exact for the static dwells,
-// whose inputs are constant). The candidates are the extended families of the one family table
-// (models/coefficient_families.hpp), component by component: a new family there is a new
-// candidate here. Each candidate is refitted; the most significant is named when its likelihood
-// ratio is significant at the stated family-wise level (Bonferroni over the round's candidates)
-// and no other family's candidate explains the same residual; then the next round tests the rest
-// against the extended model. The leave-one-dwell-out prediction error is reported beside it.
-// A candidate whose signature lies in the span of the model on this plan is "not separable",
-// with the plan feature that would separate it; two candidates the plan cannot tell apart are
-// reported as ambiguous, neither named. Effects that act only while the table turns (inner lever
-// arms, time delay, gyro scale asymmetry) have no static signature: on the static dwells they are
-// reported as not separable, never guessed.
+// Model discovery on a table session's static dwells: the closed form's stage-2 residual, each
+// extended family of the family table refitted as a candidate, named by its likelihood ratio at a
+// family-wise level with its leave-one-dwell-out gain; what the plan cannot separate is said, never
+// guessed. docs/methods/diagnosis.md (the general notes: docs/methods/model-discovery.md).
 #pragma once
 
 #include <Eigen/Core>

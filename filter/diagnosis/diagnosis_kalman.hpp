@@ -1,22 +1,7 @@
 // Model discovery from the Kalman filter's innovations, for the effects that act only while the
-// table turns (inner lever arms, time delay, gyro scale asymmetry): they leave nothing in the
-// static dwells (filter/diagnosis/diagnosis.hpp reports them not separable there) but do leave it
-// in the zero-velocity, position and attitude updates during and after the turns.
-//
-// Each candidate family is switched on in the filter's model (the family table's entry and its
-// physics: no diagnosis code per family) and the session run again. In the linear-Gaussian model
-// the filter's estimate x of coefficients whose true value is zero has covariance
-// P - P P0^-1 P (P0 prior, P posterior): on prior-normalized coefficients, mu (1 - mu) along
-// an eigenvector of the normalized posterior with eigenvalue mu (the fraction of the prior
-// variance the data left). The test statistic W sums (projection of x)^2 / (mu (1 - mu)) over
-// the directions the data determine (mu at most `separable_remaining`): chi-square with as many
-// degrees of freedom as such directions when there is no such effect; for well-determined
-// directions it is the familiar (x / sigma)^2. No such direction: the plan does not separate the
-// family ("not separable"). When the run with the candidate still has a NIS per degree of
-// freedom above 1 (the filter's noise model does not hold), W is divided by it. A
-// candidate is named when it is the most significant of its round at the family-wise level
-// (Bonferroni over the round's candidates); the next round tests the others with it in the model.
-// The gain is the NIS per degree of freedom and the innovation log-likelihood before and after.
+// table turns (inner lever arms, time delay, gyro scale asymmetry): each candidate family switched
+// on in the filter, its estimate tested against zero with the covariance it has when the effect is
+// absent (a Wald test). docs/methods/diagnosis.md "The turns' test".
 #pragma once
 
 #include <string>

@@ -1,33 +1,7 @@
-// Model discovery on a table session as one story across its dwells and turns.
-//
-// Two tests look for what the calibrated model lacks: the static dwells' (closed-form stage 2
-// residuals, filter/diagnosis/diagnosis.hpp), which sees every effect with a static signature, and
-// the Kalman filter's innovations (filter/diagnosis/diagnosis_kalman.hpp), which sees the effects
-// that act only while the table turns (the families with no component the dwells can separate).
-// Each round tests every candidate of both against one current model, on one Bonferroni level
-// (alpha over all the round's tests) and one comparable statistic (log10 of the p-value, finite
-// where p underflows). The round's finding joins the model both tests use, and every other
-// candidate is tested again against the extended model in the next round.
-//
-// The dwells first: while a dwell candidate is significant, the round's finding is the most
-// significant dwell candidate, whatever the turns' test says. A missing effect of the dwells
-// leaks into the filter's innovations during the turns (measured: a hidden accelerometer K2 on
-// rot19 made the inner lever arms significant at p = 3e-6 in 2 of 6 sessions), while the
-// effects of the turns have no static signature and cannot leak into the dwells' test; so a turn
-// candidate is only named against a model that explains the dwells.
-//
-// An ambiguous set (candidates of several families that explain the dwells equally well on this
-// plan, e.g. K2 and scale-factor asymmetry on a plan with one specific-force level per axis) is a
-// finding in its own rank: the model is extended with the member the user prefers
-// (DiagnosisOptions::prefer) or, without a preference, the data's pick, the member with the best
-// fit; later rounds are tested against that explained model. The finding names the whole set and
-// what separates its members.
-//
-// Each finding reports the extended calibration's coefficients of its family (the filter's
-// estimate with the family, which sees the turns too, where it observes a coefficient; else the
-// dwells' fit; for components neither determines alone, the dwells' determined combinations) and
-// its gain as held-out prediction: the leave-one-dwell-out error of the dwells' fit, and the turns
-// held out of the filter (HeldoutTurns), before and after.
+// Model discovery on a table session as one story across its dwells and turns: the static dwells'
+// test (diagnosis.hpp) and the Kalman filter's (diagnosis_kalman.hpp) ranked in one round at one
+// Bonferroni level, the dwells first; ambiguous sets as one finding; each finding's magnitudes and
+// its gain as held-out prediction. docs/methods/diagnosis.md "One story across dwells and turns".
 #pragma once
 
 #include <optional>

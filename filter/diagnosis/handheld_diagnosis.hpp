@@ -1,34 +1,8 @@
-// Model discovery on a hand-held session (../shared/model-discovery.md): what the table-free
-// calibration (filter/table_free/table_free.hpp) fails to explain, which missing effect explains
-// it, and what adding it gains. The hand-held counterpart of filter/diagnosis/diagnosis.hpp, with
-// its statistics and report structures.
-//
-// Residuals of the calibrated model: per static pose the gravity-magnitude residual |f| - g of
-// the corrected mean specific force and the rate at rest (the corrected mean rate minus the
-// Earth rate's modelled vertical part); per motion between poses the turn residual, the angle
-// between the gravity direction the corrected gyro rates predict (integrated from the previous
-// pose) and the one the pose's accelerometers see.
-//
-// Refits: the table-free problem is linearized at its solution, in its own whitened residuals
-// (each pose's mean specific force and mean rate, each turn's two tangent components, with the
-// calibration's noise) and parameters (the 21 estimated base coefficients and each pose's
-// gravity direction, two tangent angles). A candidate adds its columns: the sensitivity of the
-// sensor outputs to its coefficients from the one error model (ImuErrorModel::jacobian), at each
-// pose's specific force and time and, through the integration of the corrected rates, at every
-// reading of each turn. One Gauss-Newton step of the extended problem from the solution is its
-// refit (exact to first order in the candidate, whose size is that of a sensor error). The
-// candidates are the extended families of the family table (models/coefficient_families.hpp),
-// component by component and each family whole: a new family there is a new candidate here.
-// They are ranked and named by the likelihood-ratio (or F) test at a family-wise level
-// (Bonferroni), with the held-out prediction error (leave one pose, or one turn, out) before and
-// after; a candidate the poses cannot separate from the base coefficients and the pose
-// directions (smallest principal angle below a bound, or a detection sigma beyond any plausible
-// size) is reported as such, with the motion that would separate it.
-//
-// Noise candidates come from the Allan deviation of the longest static pose: bias instability
-// or rate (acceleration) random walk is significant when the measured Allan deviation exceeds the
-// white-noise-only model (its level from the short cluster times) beyond its confidence bound at
-// the family-wise level.
+// Model discovery on a hand-held session: what the table-free calibration
+// (filter/table_free/table_free.hpp) fails to explain on its poses and turns, each candidate family
+// refitted in the linearized table-free problem, plus noise candidates from the longest pose's
+// Allan deviation. The hand-held counterpart of filter/diagnosis/diagnosis.hpp, with its
+// statistics and report structures. docs/methods/diagnosis.md "Hand-held sessions".
 #pragma once
 
 #include <Eigen/Core>

@@ -1,27 +1,7 @@
-// Model discovery over temperature, on a chamber's soaks: which thermal family the model (the
-// sensor profile's thermal families) lacks, its magnitude, and the gain of adding it measured on
-// held-out soaks.
-//
-// Each soak is one calibration at one temperature (filter/thermal/soak_run.hpp); the model is the
-// generalized least-squares fit of the soaks' coefficients against temperature with the model's
-// thermal families and the soaks' full covariance (filter/thermal/soak_fit.hpp). Each candidate
-// thermal family (a family of the family table the model lacks) is added in turn: twice the
-// log-likelihood ratio (the drop in chi-square) is chi-square with the candidate's size as its
-// degrees of freedom while the extended fit's chi-square holds the soaks' covariance; when it
-// rejects it (p below alpha), the drop is tested against the fit's residual scale, F(dof, dof2),
-// as the dwells' test does (filter/diagnosis/diagnosis.hpp). The most significant candidate at
-// the family-wise level (alpha over the round's candidates, Bonferroni) is named and joins the
-// model; the next round tests the rest against the extended model.
-//
-// The gain is held-out prediction: each soak left out in turn, the model fitted to the others
-// predicts the left-out soak's coefficients; the RMS of the Mahalanobis distance per coefficient
-// (sqrt(d^2 / m), with the soak's covariance plus the prediction's) is 1 when the model predicts
-// as its sigmas say. A finding reports it before and after, and its family's prediction error in
-// the family's units.
-//
-// Not testable on soaks, with the reason: the gyro bias in dT/dt (a soak holds its temperature:
-// a ramp separates it), a family whose coefficient at T0 the soaks do not estimate, and a degree
-// beyond what the soaks' temperatures determine (n soaks: at most n - 1 terms per coefficient).
+// Model discovery over temperature, on a chamber's soaks: which thermal family the model lacks, by
+// the soaks' fit against temperature with and without it (likelihood ratio, Bonferroni), its
+// magnitude, and the gain of adding it on held-out soaks. docs/methods/diagnosis.md "Thermal
+// families on a chamber's soaks".
 #pragma once
 
 #include <string>

@@ -145,6 +145,12 @@ struct CalibratorOptions {
   /// them and the filter gained information the data do not hold (README "Several passes").
   /// Null: the navigator's outputs and attitude (every estimator but run_kalman's passes).
   std::shared_ptr<const Motion> reference_motion;
+  /// Along the reference motion, the time delay's Jacobian column from the motion's specific
+  /// force rate (-omega_nb_b x f_ib_b) instead of the measured difference (off: the measured).
+  bool delay_from_reference = true;
+  /// The plan's dwells where the data are still (filter/kalman/motion_from_data.hpp: turns that
+  /// reach into the plan's dwells shorten them); null: the plan's.
+  std::shared_ptr<const PlanTimeline> data_timeline;
   /// Held-out intervals of plan time (s, start and end): no measurement update inside them, and
   /// the first update after each is recorded as a prediction (HoldoutPrediction). The
   /// diagnosis leaves turns out this way to measure how well a model predicts them.

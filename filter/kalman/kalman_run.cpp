@@ -266,9 +266,14 @@ void summarize(const Calibrator& kf, const PlanTimeline& timeline, const KalmanR
   }
 }
 
+// The plan's timeline, or the dwells where the data are still.
+PlanTimeline timeline_of(const Session& session, const CalibratorOptions& o) {
+  return o.data_timeline ? *o.data_timeline : PlanTimeline::of(session.plan, session.site);
+}
+
 KalmanRun run_pass(const Session& session, const CalibratorOptions& options, SampleSource* source,
                    const KalmanRunOptions& run) {
-  const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
+  const PlanTimeline timeline = timeline_of(session, options);
   CalibratorOptions o = options;
   // The error dynamics along the plan's motion when the IMU follows it.
   if (!o.reference_motion && follows_plan_motion(o))
@@ -332,7 +337,7 @@ double largest_prior(const CalibratorOptions& o, const std::string& family) {
 // The mean outputs of the plan's dwells in the session's log (empty when the log cannot be read:
 // the filter's pass refuses it, with the reason).
 std::vector<AlignmentDwell> log_dwell_means(const Session& session, const CalibratorOptions& o) {
-  const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
+  const PlanTimeline timeline = timeline_of(session, o);
   try {
     // Bad samples left out of the means; the filter's pass reports them (stop or skip).
     LogReader reader(session.log);
@@ -441,8 +446,23 @@ KalmanRun run_kalman(const Session& session, const CalibratorOptions& given, Sam
   const bool align_first = run.align && given.static_from == CalibratorOptions::StaticFrom::Plan;
   std::optional<HeldStream> held;
   CalibratorOptions options = given;
+  // The motion from the data (a batch run along the plan's motion): the start-time offset, the
+  // turns' realized profiles, the dwells where the data are still.
+  std::optional<DataMotion> motion;
+  if (!source && run.motion_from_data && follows_plan_motion(given) && !given.reference_motion) {
+    try {
+      motion = motion_from_data(session, given);
+    } catch (const std::runtime_error&) {
+      motion.reset();  // the filter's pass reads the log again and reports what is wrong
+    }
+    if (motion) {
+      options.time_offset = motion->time_offset;
+      options.reference_motion = motion->reference;
+      options.data_timeline = motion->timeline;
+    }
+  }
   if (align_first && !source) {
-    options = aligned(session, given, log_dwell_means(session, given), false, installation);
+    options = aligned(session, options, log_dwell_means(session, options), false, installation);
   } else if (align_first) {
     held.emplace(*source, run.stream_alignment_capacity, run.skip_bad_samples);
     options =
@@ -455,6 +475,7 @@ KalmanRun run_kalman(const Session& session, const CalibratorOptions& given, Sam
     r.installation.alignment_applied = installation.alignment_applied;
     r.installation.alignment_streamed = installation.alignment_streamed;
     r.options = given;
+    r.motion = motion;
     return r;
   };
   if (run.passes <= 1) return with_installation(run_pass(session, options, source, run));

@@ -15,6 +15,7 @@
 #include "filter/installation/installation.hpp"
 #include "filter/installation/stream_alignment.hpp"
 #include "filter/kalman/kalman_calibrator.hpp"
+#include "filter/kalman/motion_from_data.hpp"
 #include "rig/io/log_io.hpp"
 #include "rig/session.hpp"
 
@@ -53,6 +54,10 @@ struct KalmanRunOptions {
   /// accelerometer misalignments' largest prior, and both within what the filter admits (a
   /// mounting up to kAdmittedMounting, a base within 3 of its prior sigmas).
   bool align = true;
+  /// Batch runs along the plan's motion (follows_plan_motion): take the motion from the data
+  /// first (filter/kalman/motion_from_data.hpp): a start-time offset the session does not state,
+  /// turns that depart from the plan's profile. Off: the plan's commanded motion.
+  bool motion_from_data = true;
   std::size_t stream_alignment_capacity = kStreamAlignmentCapacity;  // samples
   /// Set (e.g. from a signal handler) to stop reading: the run ends as if the log ended there,
   /// with `interrupted` and the estimates so far.
@@ -124,6 +129,8 @@ struct KalmanRun {
   std::vector<Pass> passes;  // several passes only
   int passes_requested = 1;
   InstallationResult installation;
+  /// The motion found in the data (batch runs along the plan's motion).
+  std::optional<DataMotion> motion;
 };
 
 /// Runs the filter over `source` (the session's log when null; several passes need the log).

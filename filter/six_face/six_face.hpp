@@ -1,38 +1,9 @@
 // Calibration by hand without a table: the six-face and known-turn procedure of Ferraris, Grimaldi
-// and Parvis (1995), as imucal records it. The unit rests on each of its six faces (a box against
-// a flat surface: "+x up" ... "-z up"), then is turned by hand about each axis, that axis up,
-// through a known total angle (360 deg). Parts are labelled in the log.
-//
-// Model (sinscal's one error model, base terms, both triads): y = A x + b, A = I + diag(k) + M,
-// in the frame of the box's faces (every misalignment estimated; none fixed by convention).
-//
-// Accelerometers, one linear least-squares problem: each face's mean specific force
-//   m_k = g A (u_k + T_k d_k) + b,
-// u_k the face's nominal up direction (body), T_k two unit vectors across it and d_k the face's
-// placement tilt (two small angles, rad) with the prior sigma `face_accuracy`: the faces are
-// known to their sign and axis only. Unknowns A (9), b (3), d (12); 18 equations plus the 12
-// priors. The sum of the tilts of opposite faces shows in the data (their common across-axis
-// reading against the bias the other faces give), their difference does not: it trades with the
-// accelerometer misalignments, which are therefore determined to about face_accuracy / sqrt(2)
-// relative to the box (named in the result). The scale factors and biases are determined to the
-// noise (the tilt changes a face's reading along its axis by its square only; the scale factors
-// are solved with the tilts' second-order term, relinearized).
-//
-// Gyros, a second linear least-squares problem with A and b known:
-//   rests:  r_k = b_g + G w_ie,k                       (mean rate of face k)
-//   turns:  W_j = G theta a_j + b_g T_j                (sum of the increments of turn j)
-// a_j the turn's axis: the direction of the calibrated mean specific force over the turn (the
-// turn is about the vertical, the turned axis up), theta the declared angle (right-handed about
-// the up-pointing axis) with sigma `turn_accuracy`: the hand's return to its start heading, which
-// no gravity reference sees, so it bounds the gyro scale factors (1 deg in 360: 0.28 %).
-// Earth rate: with a site its vertical part along each rest's up direction is modelled and its
-// horizontal part (unknown heading) is noise of (Omega cos lat)^2 / 2 per horizontal axis; without
-// a site the whole of it is noise (Omega^2 / 3 per axis): a bound stated in the sigmas, which a
-// MEMS gyro's bias far exceeds.
-// Noise: the variance of each rest's mean from its own readings' scatter over blocks of at least
-// `rest_correlation` s (BlockScatter: white noise, and the tremor of a hand, whose back-and-forth
-// averages out faster and whose tilt slower than white noise); a turn's sum has the rests' white
-// gyro noise over its length.
+// and Parvis (1995), as imucal records it. The unit rests on each of its six faces, then is turned
+// by hand about each axis, that axis up, through a known angle; the parts are labelled in the log.
+// Two linear least-squares problems (accelerometers with each face's placement tilt, then gyros
+// from the rests and the turns), the rests' noise from their pooled Allan variance (a hand's
+// tremor). The model and why it is so: docs/methods/six-face.md.
 #pragma once
 
 #include <Eigen/Core>

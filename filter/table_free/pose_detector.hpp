@@ -1,21 +1,8 @@
-// Static poses of a hand-held multi-position session, found in the raw data. The sensors' offsets
-// are unknown (a MEMS gyro may read several deg/s at rest), so nothing is compared with an
-// absolute rate: a sample is at rest when the variance of the gyro and of the accelerometer
-// readings over a centred window about it is at the level of the record's own static noise.
-//
-// The noise level is found from the record itself, in two passes. Pass 1 takes, per channel, a
-// low quantile of the windowed variances over the whole record (a hand-held session rests most of
-// the time, so the low quantiles are static windows). Pass 2 re-estimates it as the median of
-// the windowed variances of the windows pass 1 called static, corrected for the median of the
-// chi-square distribution. With it, a window is static when the sum over the three axes of
-// variance / noise variance, which is chi-square with 3 (w - 1) degrees of freedom over (w - 1)
-// for white noise, stays below its (1 - false_alarm) quantile times `margin` (real sensors'
-// noise is not white; hand-held motion exceeds the noise by orders of magnitude, so the margin
-// costs nothing at the edges). A pose is a run of static window centres, extended towards the
-// edges of their windows reading by reading while every channel stays within `edge_sigmas` noise
-// sigmas of the run's mean (so its edges are where the motion stops and starts, not half a window
-// inside, and a hand settling slowly at the start is left out); at least `min_duration` long.
-// The number of poses is found, not given. O(N) time and memory (cumulative sums).
+// Static poses of a hand-held multi-position session, found in the raw data: a sample is at rest
+// when its windowed gyro and accelerometer variances are at the level of the record's own static
+// noise (found from the record in two passes; no absolute rate compared, so unknown offsets do no
+// harm). The number of poses is found, not given; O(N). The test and its thresholds:
+// docs/methods/table-free.md "Static poses, found in the data".
 #pragma once
 
 #include <Eigen/Core>

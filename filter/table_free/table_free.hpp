@@ -1,45 +1,9 @@
 // Table-free (multi-position, hand-held) calibration of both triads, after Tedaldi, Pretto and
 // Menegatti, "A robust and easy to implement method for IMU calibration without external
-// equipments", ICRA 2014, in sinscal's one error model (models/imu_error_model.hpp):
-//
-//   y = (I + diag(k) + M) x + b      for each triad; base terms only
-//
-// with the body frame of the accelerometer triad (docs/conventions.md: accel.misalignment.xy,
-// .xz, .yz are zero by this convention), so A = I + diag(k_a) + M_a is lower triangular.
-//
-// Stages (nonlinear least squares with Ceres):
-//  1. Accelerometers: at rest the specific force's magnitude is local gravity g in every pose:
-//     minimise sum_p (|A^-1 (y_p - b_a)| - g)^2 / sigma_p^2 over the 9 accelerometer terms.
-//  2. Gyros: the bias from the static poses' mean rate; scale factors and misalignments from the
-//     turns between poses: the calibrated rates G^-1 (y_g - b_g), integrated from the end of pose
-//     p to the start of pose p+1 (rotation vectors with a two-sample coning term, quaternion
-//     product), must turn the gravity direction the calibrated accelerometers see in pose p
-//     into the one they see in pose p+1.
-//  3. Joint refinement, the maximum-likelihood form of the same model: parameters are both
-//     triads' terms plus the gravity direction u_p of every pose (a unit vector, Ceres
-//     SphereManifold); residuals, each with its own noise and mutually independent for white
-//     noise: the pose's mean specific force y_a,p - (A g u_p + b_a) (per-axis noise / sqrt(n)),
-//     its mean rate y_g,p - (b_g + G w_v,p), and each turn's two tangent components of
-//     R^T u_p - u_p+1 (gyro noise integrated over the turn).
-//  Sigmas: the covariance of the joint solution (Ceres Covariance, dense SVD) scaled by
-//  chi2/dof of its residuals.
-//
-// The noise of the residuals comes from the data: the per-reading variance of each axis pooled
-// over the static poses (white noise assumed: a mean over n readings has variance / n; the rate
-// noise density integrates over a turn's duration).
-//
-// Earth rate: the gyros at rest read b_g + G w_ie_b, w_ie_b of size 15 deg/h. Its vertical part
-// (Omega sin(lat) along the pose's gravity direction) is modelled when the site is known; its
-// horizontal part (Omega cos(lat)) points along the unknown heading of each pose, so it enters as
-// noise of the pose's mean rate in the two horizontal directions only (variance
-// (Omega cos(lat))^2 / 2 each, for a uniformly random heading), and of the turns (the gravity
-// direction moves by up to Omega cos(lat) T during a turn of T s). Each pose so measures the
-// bias along its own vertical to the white-noise level, and poses in many directions give all
-// three components to that level: the horizontal Earth rate costs little even for a tactical
-// gyro (Monte Carlo: 0.3 deg/h sigma at ARW 0.05 deg/sqrt(h), errors consistent with it). For a
-// MEMS gyro (bias 0.1-2 deg/s) the Earth rate is far below the bias and comparable to the noise
-// of a few-second pose. Without a site, the whole Earth rate is taken as noise of random
-// direction (variance Omega^2 / 3 per axis).
+// equipments", ICRA 2014: the accelerometers from the constancy of gravity's magnitude over the
+// static poses, the gyros from the turns between them, then a joint maximum-likelihood refinement
+// (Ceres), in the body frame of the accelerometer triad. The model, the stages, the noise and the
+// Earth rate: docs/methods/table-free.md.
 #pragma once
 
 #include <Eigen/Core>

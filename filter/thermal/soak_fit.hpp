@@ -5,6 +5,7 @@
 // over the number of families, of the family's size (the family table says how far: a family F has
 // degrees 1 ... d when F_temp1 ... F_tempd exist). Degree k of family F is the thermal family
 // F_tempk (models/coefficient_families.hpp); degree 0 is F itself at the reference temperature T0.
+// docs/methods/thermal.md.
 #pragma once
 
 #include <Eigen/Core>

@@ -2,6 +2,7 @@
 // temperature): the chamber file listing the soaks' sessions (docs/formats.md "Chamber
 // sessions"), each soak's Kalman-filter calibration at its temperature, and the checks that a
 // soak is one temperature.
+// docs/methods/thermal.md "From soaks".
 #pragma once
 
 #include <string>
