@@ -14,6 +14,10 @@ namespace sinscal {
 
 namespace {
 
+// How far a move's window reaches into the dwells around it (at most to their middles): slow
+// turns of a table below the plan's rate ended up to 11 s late on seed8; the samples held grow
+// with it, not with the dwells.
+constexpr double kReach = 20.0;             // s
 constexpr double kBin = 0.1;                // s, bins of the offset search
 constexpr double kWindow = 5.0;             // s a move's window reaches into a dwell (at most half)
 constexpr double kCorrelationSpan = 600.0;  // s of plan the offset search compares
@@ -195,7 +199,13 @@ void find_offset(const Session& session, const CalibratorOptions& o, const Motio
 struct MoveWindow {
   std::size_t segment = 0;
   double a = 0.0, b = 0.0;  // plan time
-  std::vector<Sample> samples;
+  // Held compactly (single precision rates): memory grows with the moves, not the dwells.
+  struct Held {
+    double t = 0.0;
+    float dt = 0.0F;
+    Eigen::Vector3f omega_ib_b = Eigen::Vector3f::Zero();
+  };
+  std::vector<Held> samples;
   // The adjacent dwells' means of omega_ib_b less the Earth rate (bias), and their weights.
   Eigen::Vector3d bias_sum = Eigen::Vector3d::Zero();
   double bias_count = 0.0;
@@ -253,9 +263,9 @@ void analyse_moves(const Session& session, const CalibratorOptions& o, const Mot
     w.a = segs[i].t0;
     w.b = segs[i].t1;
     if (i > 0 && segs[i - 1].is_static())
-      w.a = segs[i - 1].t0 + 0.5 * (segs[i - 1].t1 - segs[i - 1].t0);
+      w.a = std::max(segs[i - 1].t0 + 0.5 * (segs[i - 1].t1 - segs[i - 1].t0), w.a - kReach);
     if (i + 1 < segs.size() && segs[i + 1].is_static())
-      w.b = segs[i + 1].t0 + 0.5 * (segs[i + 1].t1 - segs[i + 1].t0);
+      w.b = std::min(segs[i + 1].t0 + 0.5 * (segs[i + 1].t1 - segs[i + 1].t0), w.b + kReach);
     windows.push_back(std::move(w));
   }
   // The dwells' bias: each dwell's samples away from the moves (kWindow inside, or its middle
@@ -280,7 +290,8 @@ void analyse_moves(const Session& session, const CalibratorOptions& o, const Mot
     const ImuErrorModel model = o.initial_model.value_or(ImuErrorModel{});
     read_log(session, model, out.time_offset, [&](const Sample& x) {
       while (wi < windows.size() && x.t > windows[wi].b) ++wi;
-      if (wi < windows.size() && x.t >= windows[wi].a) windows[wi].samples.push_back(x);
+      if (wi < windows.size() && x.t >= windows[wi].a)
+        windows[wi].samples.push_back({x.t, static_cast<float>(x.dt), x.omega_ib_b.cast<float>()});
       while (di < segs.size() && segs[di].t1 < x.t) ++di;
       if (di < segs.size() && segs[di].is_static() && x.t >= dwell_means[di].a &&
           x.t <= dwell_means[di].b) {
@@ -327,9 +338,10 @@ void analyse_moves(const Session& session, const CalibratorOptions& o, const Mot
     std::vector<double> ra(n, 0.0), rb(n, 0.0);
     double beta = 0.0;
     for (std::size_t k = 0; k < n; ++k) {
-      const Sample& x = w.samples[k];
+      const MoveWindow::Held& x = w.samples[k];
       const KinematicState p = plan.at(x.t);
-      const Eigen::Vector3d omega_nb = x.omega_ib_b - bias - p.C_b_n.transpose() * omega_ie_n;
+      const Eigen::Vector3d omega_nb =
+          x.omega_ib_b.cast<double>() - bias - p.C_b_n.transpose() * omega_ie_n;
       const Eigen::Vector3d u_b =
           (seg.C_b_n_start * rotation(seg.axis_b, beta)).transpose() * seg.axis_n;
       if (has_alpha && has_beta) {
