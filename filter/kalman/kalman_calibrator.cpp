@@ -233,38 +233,42 @@ void Calibrator::process(const ImuSample& s, const Eigen::Vector3d& omega_dot_ra
   // heading-velocity coupling of g omega dt / 2 while the table turns).
   const Eigen::Quaterniond q_mid = q_before.slerp(0.5, nav_.state().q_b_n);
   const Eigen::Matrix3d C_mid = q_mid.toRotationMatrix();
-  if (o_.reference_motion) {
-    // The output error J(x) dtheta is exact at the true input x, and the coefficient errors act
-    // through the true attitude. The table's motion gives both without the sensor noise and
-    // without the current estimate (a fixed linearization point), in the IMU's axes (the start's
-    // mounting and base). So does the specific force of the f_n x phi term, in navigation axes
-    // (gravity and the motion's own, whatever the base and mounting): the navigator's carries
-    // the accelerometers' noise, and noise times the heading error (unobserved at rest, degrees
-    // for a MEMS unit) gave the filter information on the vertical gyro's bias that the data do
-    // not hold (its estimate left the truth by 6 of its sigmas within the first dwell).
-    const KinematicState ref = o_.reference_motion->at(k.t);
-    KinematicSample k_ref = k;
-    k_ref.omega_ib_b = C_reference_mounting_.transpose() * ref.imu.omega_ib_b;
-    k_ref.omega_dot_ib_b = C_reference_mounting_.transpose() * ref.imu.omega_dot_ib_b;
-    k_ref.f_ib_b = C_reference_mounting_.transpose() * ref.imu.f_ib_b;
-    const Eigen::Matrix3d C_ref = C_reference_base_ * ref.C_b_n * C_reference_mounting_;
-    // The time delay's column is the specific force's rate of change: along the motion, gravity
-    // turning in the IMU's axes, -omega_nb_b x f_ib_b (the measured difference carries the
-    // accelerometers' noise twice over one sample interval: the delay's estimate came out 1.55
-    // times its sigma's spread, same sign every time, on another tool's 19-position log).
-    const Eigen::Vector3d f_dot_ref =
-        o_.delay_from_reference
-            ? Eigen::Vector3d(
-                  -(C_reference_mounting_.transpose() * ref.omega_nb_b).cross(k_ref.f_ib_b))
-            : f_dot;
-    propagator_.step(C_ref, k_ref, f_dot_ref, model_, inverses_, dt, ref.C_b_n * ref.imu.f_ib_b);
-  } else {
+  if (o_.reference_motion)
+    step_along_reference(k, f_dot, dt);
+  else
     propagator_.step(C_mid, k, f_dot, model_, inverses_, dt);
-  }
   if (propagator_.accumulated() >= o_.update_interval - 1e-9) {
     propagator_.propagate(P_);
     update(s.t - o_.time_offset);
   }
+}
+
+void Calibrator::step_along_reference(const KinematicSample& k, const Eigen::Vector3d& f_dot,
+                                      double dt) {
+  // The output error J(x) dtheta is exact at the true input x, and the coefficient errors act
+  // through the true attitude. The table's motion gives both without the sensor noise and
+  // without the current estimate (a fixed linearization point), in the IMU's axes (the start's
+  // mounting and base). So does the specific force of the f_n x phi term, in navigation axes
+  // (gravity and the motion's own, whatever the base and mounting): the navigator's carries
+  // the accelerometers' noise, and noise times the heading error (unobserved at rest, degrees
+  // for a MEMS unit) gave the filter information on the vertical gyro's bias that the data do
+  // not hold (its estimate left the truth by 6 of its sigmas within the first dwell).
+  const KinematicState ref = o_.reference_motion->at(k.t);
+  KinematicSample k_ref = k;
+  k_ref.omega_ib_b = C_reference_mounting_.transpose() * ref.imu.omega_ib_b;
+  k_ref.omega_dot_ib_b = C_reference_mounting_.transpose() * ref.imu.omega_dot_ib_b;
+  k_ref.f_ib_b = C_reference_mounting_.transpose() * ref.imu.f_ib_b;
+  const Eigen::Matrix3d C_ref = C_reference_base_ * ref.C_b_n * C_reference_mounting_;
+  // The time delay's column is the specific force's rate of change: along the motion, gravity
+  // turning in the IMU's axes, -omega_nb_b x f_ib_b (the measured difference carries the
+  // accelerometers' noise twice over one sample interval: the delay's estimate came out 1.55
+  // times its sigma's spread, same sign every time, on another tool's 19-position log).
+  const Eigen::Vector3d f_dot_ref =
+      o_.delay_from_reference
+          ? Eigen::Vector3d(
+                -(C_reference_mounting_.transpose() * ref.omega_nb_b).cross(k_ref.f_ib_b))
+          : f_dot;
+  propagator_.step(C_ref, k_ref, f_dot_ref, model_, inverses_, dt, ref.C_b_n * ref.imu.f_ib_b);
 }
 
 void Calibrator::remove_wander(KinematicSample& k, double dt) {

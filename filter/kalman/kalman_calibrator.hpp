@@ -267,6 +267,8 @@ class Calibrator {
   void process(const ImuSample& s, const Eigen::Vector3d& omega_dot, const Eigen::Vector3d& f_dot,
                const Eigen::Vector3d& f_ddot);
   void update(double t_plan);
+  /// The error dynamics of one sample along the reference motion (CalibratorOptions).
+  void step_along_reference(const KinematicSample& k, const Eigen::Vector3d& f_dot, double dt);
   /// Takes the bias wander's estimate off the compensated inputs, and decays it over dt.
   void remove_wander(KinematicSample& k, double dt);
   /// The known attitude of a dwell: the table's angles when the log has them, else the plan's.

@@ -19,7 +19,6 @@ namespace {
 // with it, not with the dwells.
 constexpr double kReach = 20.0;             // s
 constexpr double kBin = 0.1;                // s, bins of the offset search
-constexpr double kWindow = 5.0;             // s a move's window reaches into a dwell (at most half)
 constexpr double kCorrelationSpan = 600.0;  // s of plan the offset search compares
 constexpr double kOffsetCorrelation = 0.8;  // the least correlation of a shift taken
 constexpr double kOffsetGain = 0.05;        // over the correlation without a shift
@@ -246,6 +245,7 @@ namespace {
 
 // The moves of the log under `out.time_offset`: their departures, the reference motion and the
 // dwells where the data are still.
+// NOLINTNEXTLINE(readability-function-size): each move analysed in one loop (to be split)
 void analyse_moves(const Session& session, const CalibratorOptions& o, const Motion& plan,
                    DataMotion& out) {
   out.moves.clear();
@@ -268,8 +268,8 @@ void analyse_moves(const Session& session, const CalibratorOptions& o, const Mot
       w.b = std::min(segs[i + 1].t0 + 0.5 * (segs[i + 1].t1 - segs[i + 1].t0), w.b + kReach);
     windows.push_back(std::move(w));
   }
-  // The dwells' bias: each dwell's samples away from the moves (kWindow inside, or its middle
-  // half when shorter), less the Earth rate in the plan's attitude.
+  // The dwells' bias: each dwell's samples away from the moves (its middle
+  // half), less the Earth rate in the plan's attitude.
   struct DwellMean {
     double a = 0.0, b = 0.0;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
