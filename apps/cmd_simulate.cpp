@@ -1,4 +1,5 @@
 // sinscal simulate: a calibration session on a two-axis table, written to a directory.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -42,9 +43,8 @@ bool check_out_dir(const std::string& out_dir, bool force) {
                    "into it anyway, keeping its other files");
 }
 
-// "a[,b]": one or two numbers (the second optional); a usage error naming the option otherwise.
-std::pair<double, std::optional<double>> one_or_two(const std::string& option,
-                                                    const std::string& text) {
+// The comma-separated numbers of `text`; empty when an item is not a whole finite number.
+std::vector<double> comma_numbers(const std::string& text) {
   std::vector<double> out;
   std::stringstream in(text);
   std::string item;
@@ -56,11 +56,16 @@ std::pair<double, std::optional<double>> one_or_two(const std::string& option,
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used == 0 || used != item.size() || !std::isfinite(v))
-      throw UsageError("--" + option + " takes one or two comma-separated numbers, not '" + text +
-                       "'");
+    if (used == 0 || used != item.size() || !std::isfinite(v)) return {};
     out.push_back(v);
   }
+  return out;
+}
+
+// "a[,b]": one or two numbers (the second optional); a usage error naming the option otherwise.
+std::pair<double, std::optional<double>> one_or_two(const std::string& option,
+                                                    const std::string& text) {
+  const std::vector<double> out = comma_numbers(text);
   if (out.empty() || out.size() > 2)
     throw UsageError("--" + option + " takes one or two comma-separated numbers, not '" + text +
                      "'");
@@ -103,23 +108,15 @@ TableDynamics table_dynamics(const po::variables_map& vm, const std::string& tab
 
 // "a,b[,c]" (deg) as `count` angles in rad; a usage error naming the option otherwise.
 std::vector<double> angles_deg(const std::string& option, const std::string& text, int count) {
-  std::vector<double> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    std::size_t used = 0;
-    double v = 0.0;
-    try {
-      v = std::stod(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != item.size() || !(std::abs(v) <= kMaxInstallationDeg))
-      throw UsageError("--" + option + " takes " + std::to_string(count) +
-                       " comma-separated angles in deg, each within +-" +
-                       fmt("%g", kMaxInstallationDeg) + ", not '" + text + "'");
-    out.push_back(v * units::deg);
-  }
+  std::vector<double> out = comma_numbers(text);
+  const bool in_range = !out.empty() && std::all_of(out.begin(), out.end(), [](double v) {
+    return std::abs(v) <= kMaxInstallationDeg;
+  });
+  if (!in_range)
+    throw UsageError("--" + option + " takes " + std::to_string(count) +
+                     " comma-separated angles in deg, each within +-" +
+                     fmt("%g", kMaxInstallationDeg) + ", not '" + text + "'");
+  for (double& v : out) v *= units::deg;
   if (static_cast<int>(out.size()) != count)
     throw UsageError("--" + option + " takes " + std::to_string(count) +
                      " comma-separated angles in deg, not '" + text + "'");

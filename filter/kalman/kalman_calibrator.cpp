@@ -260,9 +260,8 @@ void Calibrator::step_along_reference(const KinematicSample& k, const Eigen::Vec
   k_ref.f_ib_b = C_reference_mounting_.transpose() * ref.imu.f_ib_b;
   const Eigen::Matrix3d C_ref = C_reference_base_ * ref.C_b_n * C_reference_mounting_;
   // The time delay's column is the specific force's rate of change: along the motion, gravity
-  // turning in the IMU's axes, -omega_nb_b x f_ib_b (the measured difference carries the
-  // accelerometers' noise twice over one sample interval: the delay's estimate came out 1.55
-  // times its sigma's spread, same sign every time, on another tool's 19-position log).
+  // turning in the IMU's axes, -omega_nb_b x f_ib_b, without the accelerometers' noise that
+  // the measured difference of two samples carries (docs/methods/kalman-filter.md).
   const Eigen::Vector3d f_dot_ref =
       o_.delay_from_reference
           ? Eigen::Vector3d(

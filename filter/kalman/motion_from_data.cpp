@@ -478,34 +478,31 @@ void analyse_moves(const Session& session, const CalibratorOptions& o, const Mot
     d.start_shift = half_data - half_plan;
     // The shift that best lays the plan's profile over the data's (Gauss-Newton on the angle
     // residuals), and what remains after it: a pure shift of the log leaves nothing.
-    double shift = d.start_shift;
-    for (int iter = 0; iter < 8; ++iter) {
-      double num = 0.0, den = 0.0;
+    auto residuals = [&](double shift, auto&& take) {  // take(data - plan, plan rate)
       for (std::size_t k = 0; k < n; ++k) {
         const double tau = w.samples[k].t - seg.t0;
         for (const auto* pr : {&data_seg.alpha, &data_seg.beta}) {
           if (pr->angle() == 0.0) continue;
-          double a1, a2, r2, c2;
-          a1 = data_angle(pr, k);
+          double a2, r2, c2;
           pr->commanded().eval(tau - shift, a2, r2, c2);
-          num += r2 * (a1 - a2);
-          den += r2 * r2;
+          take(data_angle(pr, k) - a2, r2);
         }
       }
+    };
+    double shift = d.start_shift;
+    for (int iter = 0; iter < 8; ++iter) {
+      double num = 0.0, den = 0.0;
+      residuals(shift, [&](double r, double rate) {
+        num += rate * r;
+        den += rate * rate;
+      });
       if (!(den > 0.0)) break;
       shift -= num / den;
     }
     d.fitted_shift = shift;
-    for (std::size_t k = 0; k < n; ++k) {
-      const double tau = w.samples[k].t - seg.t0;
-      for (const auto* pr : {&data_seg.alpha, &data_seg.beta}) {
-        if (pr->angle() == 0.0) continue;
-        double a1, a2, r2, c2;
-        a1 = data_angle(pr, k);
-        pr->commanded().eval(tau - shift, a2, r2, c2);
-        d.shift_residual = std::max(d.shift_residual, std::abs(a1 - a2));
-      }
-    }
+    residuals(shift, [&](double r, double) {
+      d.shift_residual = std::max(d.shift_residual, std::abs(r));
+    });
     d.follows = d.largest <= kFollowTolerance;
     if (!d.follows) {
       ref_segs[w.segment] = data_seg;
