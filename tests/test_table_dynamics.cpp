@@ -195,3 +195,24 @@ TEST_CASE(
   CHECK(q.motion->departing() == 0);
   CHECK_FALSE(q.motion->offset_found());
 }
+
+TEST_CASE(
+    "Kalman filter along the data's motion: a MEMS unit's smoothed turns, its gyro biases "
+    "(up to 0.5 deg/s) taken off each turn by the dwells around it",
+    "[kalman][table_dynamics]") {
+  TableDynamics d;
+  d.smoothing = 0.3;
+  const Session s = simulate("dyn_mems", d, 4, "config/sensors/mems.ini");
+  const CalibratorOptions o = calibrator_options_from_profile(SensorProfile::load(s.sensor_file));
+  const KalmanRun r = run_kalman(s, o);
+  REQUIRE(r.motion);
+  CHECK_FALSE(r.motion->offset_found());
+  CHECK(r.motion->departing() == 18);
+  for (const auto& m : r.motion->moves) {
+    CHECK(std::abs(m.start_shift) < 0.035);  // the 50 % crossing, to a few 10 ms samples
+    // The smoothing's lead and lag: 0.3 s of a 10 deg/s^2 ramp reach about 0.45 deg.
+    CHECK(m.largest < 0.7 * units::deg);
+  }
+  CHECK(r.diverged.empty());
+  CHECK(worst(r, s) < 4.0);
+}
