@@ -142,8 +142,10 @@ DirectoryState directory_state(const std::string& dir, const std::string& marker
     empty = false;
     const std::string name = e.path().filename().string();
     if (name == marker) continue;
-    if (!e.is_regular_file() || std::find(listed.begin(), listed.end(), name) == listed.end())
-      foreign.push_back(name);
+    // The earlier output's own files and folders (a chamber's soak-K) are listed in its marker.
+    const bool own = (e.is_regular_file() || e.is_directory()) &&
+                     std::find(listed.begin(), listed.end(), name) != listed.end();
+    if (!own) foreign.push_back(name);
   }
   std::sort(foreign.begin(), foreign.end());
   if (empty) return DirectoryState::Empty;

@@ -1007,6 +1007,22 @@ fixed 2 "r.json|thermal coefficients (gyro.bias_temp1|does not carry a temperatu
 new control-thermal-soaks; cp -r "$base/soaks" "$d/soaks"
 POST='test -s out/t/result.json && test -s out/t/thermal_table.csv'
 control 0 "" S thermal --chamber soaks/chamber.ini --out out/t
+new control-simulate-chamber-again; cp -r "$base/soaks" "$d/soaks"
+POST='test -s soaks/soak-3/imu.csv'
+control 0 "" S simulate --plan "$base/mini.ini" --sensor "$therm" --chamber "$base/soaks3.ini" --out soaks --rate 10
+new simulate-chamber-over-foreign; cp -r "$base/soaks" "$d/soaks"; mkdir "$d/soaks/mine"
+fixed 1 "--out soaks|not empty and not an earlier simulate output|mine" S simulate --plan "$base/mini.ini" --sensor "$therm" --chamber "$base/soaks3.ini" --out soaks --rate 10
+new kf-lever-arm-reference-attitude-none; mini
+fixed 1 "zero velocity at rest only" kf --lever-arm-reference x --attitude none
+new simulate-table-servo-damping; cp "$base/mini.ini" "$d/plan.ini"; cp "$fog" "$d/sensor.ini"
+fixed 1 "servo_damping must be within 0 and 1" sim --table-servo 2,1.5
+new simulate-table-servo-not-a-number; cp "$base/mini.ini" "$d/plan.ini"; cp "$fog" "$d/sensor.ini"
+fixed 1 "--table-servo takes one or two comma-separated numbers|2,x" sim --table-servo 2,x
+new simulate-table-settles-into-next-move; cp "$base/mini.ini" "$d/plan.ini"; cp "$fog" "$d/sensor.ini"
+fixed 2 "still settle|after the next move begins" sim --table-servo 0.2,0.9
+new table-file-smoothing-and-servo; cp "$base/mini.ini" "$d/plan.ini"; cp "$fog" "$d/sensor.ini"
+printf '[table]\nname = t\nmax_rate = 20 deg/s\nmax_acceleration = 20 deg/s^2\nattitude_accuracy = 2.5 arcsec\nsmoothing = 0.3 s\nservo_frequency = 2 Hz\n' > "$d/t.ini"
+fixed 1 "t.ini|a smoothing and a servo or structural mode exclude each other" sim --table t.ini
 new thermal-soak-shorter-than-settling; cp -r "$base/soaks-short" "$d/soaks"
 fixed 2 "soak-1/imu.csv:|the temperature moves by|the soak had not settled" S thermal --chamber soaks/chamber.ini --out out/t
 new thermal-one-soak; cp -r "$base/soaks" "$d/soaks"; set_key "$d/soaks/chamber.ini" soaks "soak-1/session.ini"

@@ -1,4 +1,4 @@
-// The table diagnosis' Monte Carlo matrix (README "Diagnosis matrix"): every family of the
+// The table diagnosis' Monte Carlo matrix (docs/accuracy.md "The diagnosis matrix"): every family of the
 // family table that a profile can lack, hidden alone in rot19 and seed8 sessions of the nav-fog
 // and mems profiles, plus pairs of a dwell effect and a turn effect, plus clean sessions; each
 // cell's magnitudes a band of the family's detection sigma on that plan and profile, each

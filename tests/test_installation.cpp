@@ -322,7 +322,7 @@ TEST_CASE("Streaming: aligned from the first dwells held, a mounted unit streams
   CHECK_FALSE(r.installation.alignment_applied);
 }
 
-TEST_CASE("Measured figures of the installation (README), not a check", "[.][measure]") {
+TEST_CASE("Measured figures of the installation (docs/accuracy.md), not a check", "[.][measure]") {
   // Prints the largest |error| / sigma per mode with and without the base states and the
   // alignment, on the issue's cases and on drawn installations.
   struct Case {

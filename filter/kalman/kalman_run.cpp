@@ -502,7 +502,7 @@ KalmanRun run_kalman(const Session& session, const CalibratorOptions& given, Sam
     // The coefficients carry over; the base starts again where the first pass did (a pass
     // far off, MEMS, leaves it anywhere, and its prior is wide enough). Carrying the base over
     // too was measured worse: MEMS rot19, seeds 1-6, the third pass moved 0.15-0.29 sigma with
-    // it, 0.009-0.029 without (README "Several passes").
+    // it, 0.009-0.029 without (docs/accuracy.md "Several passes (MEMS)").
     o.initial_model = r.model;
     previous = std::move(r);
   }
