@@ -8,6 +8,7 @@
 
 #include "apps/calibrate.hpp"
 #include "apps/print.hpp"
+#include "filter/kalman/motion_from_data.hpp"
 #include "filter/plausibility/plausibility.hpp"
 #include "models/units.hpp"
 #include "report/monitor.hpp"
@@ -52,12 +53,22 @@ CalibratorOptions kalman_options(const CalibrateOptions& o, const Session& sessi
 // with the checks' messages (exit 2) unless --force, which runs anyway and records them in the
 // result. Standard input cannot be read twice: a streamed log is checked by the filter's own
 // alarms.
+// The Kalman filter's motion from the data gives the gate the log's offset and the dwells where the
+// data are still (a foreign log's smoothed turns reach into the plan's dwells).
 PlausibilityReport plausibility_gate(const CalibrateOptions& o, const Session& session,
-                                     const PlausibilityLimits& limits) {
+                                     const PlausibilityLimits& limits,
+                                     const DataMotion* motion = nullptr) {
   if (o.stream) return {};
   const bool dwells_from_plan =
       o.method != Method::Kf || o.static_from == CalibratorOptions::StaticFrom::Plan;
-  PlausibilityReport report = check_plausibility(session, limits, dwells_from_plan);
+  PlausibilityReport report;
+  if (motion) {
+    LogReader reader(session.log);
+    report = check_plausibility(reader, session.log.file, *motion->timeline, session.site,
+                                motion->time_offset, limits, dwells_from_plan);
+  } else {
+    report = check_plausibility(session, limits, dwells_from_plan);
+  }
   enforce(report, o.force);
   return report;
 }
@@ -70,9 +81,17 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
                      ": --method kf needs the session's sensor profile ([session] sensor =)");
   const SensorProfile profile = SensorProfile::load(session.sensor_file);
   const CalibratorOptions ko = kalman_options(o, session, profile);
-  const PlausibilityReport gate =
-      plausibility_gate(o, session, PlausibilityLimits::from_profile(&profile));
+  // The motion from the data, once: for the gate and the filter.
+  std::optional<DataMotion> motion;
+  if (!o.stream && o.motion == "data" && follows_plan_motion(ko)) try {
+      motion = motion_from_data(session, ko);
+    } catch (const std::runtime_error&) {
+      motion.reset();  // the gate and the filter read the log again and say what is wrong
+    }
+  const PlausibilityReport gate = plausibility_gate(
+      o, session, PlausibilityLimits::from_profile(&profile), motion ? &*motion : nullptr);
   KalmanRunOptions run;
+  run.motion = motion ? &*motion : nullptr;
   run.skip_bad_samples = o.on_bad_sample == OnBadSample::Skip;
   run.passes = o.passes;
   run.motion_from_data = o.motion == "data";

@@ -130,14 +130,18 @@ check "export refuses to overwrite its result" test $? -eq 1
 check "streaming exits 0" test $? -eq 0
 check "streaming equals batch" cmp -s <(grep -A1 '"time_delay"' "$work/r19/kf.json") <(grep -A1 '"time_delay"' "$work/r19/stream.json")
 check "monitor has a line per 100 s" test "$(wc -l < "$work/r19/mon.jsonl")" -eq 5
-# A session whose time offset is wrong by 5 s: with the plan's timing the plausibility gate sees
-# the unit turning in the plan's dwells (exit 2, named); with the static intervals detected in
-# the data, the run is whole.
+# A session whose time offset is wrong by 5 s: along the plan's commanded motion (--motion plan)
+# the plausibility gate sees the unit turning in the plan's dwells (exit 2, named); the motion
+# from the data (the default) finds where the plan starts and the run is whole; so is it with the
+# static intervals detected in the data.
 mkdir -p "$work/off"; cp "$work/r19/"{plan.ini,sensor.ini,truth.json} "$work/off/"; ln -s "$work/r19/imu.csv" "$work/off/imu.csv"
 sed 's/^rate = 100 Hz/rate = 100 Hz\ntime_offset = 5 s/' "$work/r19/session.ini" > "$work/off/session.ini"
-"$bin" calibrate --method kf --session "$work/off/session.ini" --out "$work/off/plan.json" > /dev/null 2> "$work/off_plan.err"
+"$bin" calibrate --method kf --session "$work/off/session.ini" --motion plan --out "$work/off/plan.json" > /dev/null 2> "$work/off_plan.err"
 check "wrong time offset exits 2" test $? -eq 2
 check "wrong time offset names the mismatch" contains "$work/off_plan.err" "the plan's timing (or the session's time_offset) does not match the log"
+"$bin" calibrate --method kf --session "$work/off/session.ini" --out "$work/off/found.json" > "$work/off_found.txt" 2>&1
+check "wrong time offset found from the data: exits 0" test $? -eq 0
+check "... the plan starts at t = 0, not 5 s" contains "$work/off_found.txt" "the plan starts at t = 0.000 s of the log, not 5.000 s"
 "$bin" calibrate --method kf --session "$work/off/session.ini" --static-from data --out "$work/off/data.json" > /dev/null
 check "static intervals from the data: exits 0" test $? -eq 0
 check "static intervals from the data: reported" contains "$work/off/data.json" '"static_from_data"'
@@ -420,6 +424,21 @@ check "thermal calibrates the MEMS chamber's six soaks" test $? -eq 0
 check "... the degrees as injected (biases 2, scale factors and misalignments 1)" python3 -c "
 import json,sys; d={t['family']: t['degree'] for t in json.load(open('$work/mems-thermal/result.json'))['thermal']['degrees']}
 sys.exit(not (d['gyro.bias'] == 2 and d['accel.bias'] == 2 and d['gyro.scale'] == 1 and d['accel.scale'] == 1 and d['gyro.misalignment'] == 1 and d['accel.misalignment'] == 1))"
+
+# A log whose plan starts 3 s late (session.ini does not say so): calibrate --method kf finds the
+# offset before its plausibility gate and calibrates along the data's motion, without --force;
+# along the plan's commanded motion the gate refuses it.
+"$bin" simulate --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog-extended.ini" \
+  --out "$work/late" --seed 6 --start-offset 3 --table-attitude-sigma 2.5 > /dev/null
+check "simulate --start-offset exits 0" test $? -eq 0
+check "... truth.json records the offset" contains "$work/late/truth.json" '"start_offset_s": 3'
+"$bin" calibrate --session "$work/late/session.ini" --method kf --out "$work/late.json" > "$work/late.txt" 2>&1
+check "calibrate --method kf on the late log exits 0" test $? -eq 0
+check "... and says where the plan starts" contains "$work/late.txt" "Motion: the plan starts at t = 3.00"
+check "... every estimate within its sigmas of the truth" contains "$work/late.txt" "the errors are what the sigmas say"
+"$bin" calibrate --session "$work/late/session.ini" --method kf --motion plan --out "$work/late-plan.json" > /dev/null 2> "$work/late-plan.err"
+check "... along the plan's motion the gate refuses it (exit 2)" test $? -eq 2
+check "... naming the gate" contains "$work/late-plan.err" "plausibility gate"
 
 echo "$pass passed, $fail failed, $skipped skipped"
 [ "$fail" -eq 0 ] || exit 1

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "filter/kalman/kalman_run.hpp"
+#include "filter/plausibility/plausibility.hpp"
 #include "helpers.hpp"
 #include "models/attitude.hpp"
 #include "models/units.hpp"
@@ -215,4 +216,23 @@ TEST_CASE(
   }
   CHECK(r.diverged.empty());
   CHECK(worst(r, s) < 4.0);
+}
+
+TEST_CASE(
+    "Plausibility gate on a log that starts 3 s late: refused with the plan's timing, "
+    "passed with the offset and the dwells the data show",
+    "[plausibility][table_dynamics]") {
+  TableDynamics d;
+  d.start_offset = 3.0;
+  const Session s = simulate("dyn_gate", d, 6);
+  const SensorProfile profile = SensorProfile::load(s.sensor_file);
+  const PlausibilityLimits limits = PlausibilityLimits::from_profile(&profile);
+  CHECK_FALSE(check_plausibility(s, limits).passed());
+  const DataMotion m = motion_from_data(s, calibrator_options_from_profile(profile));
+  CHECK(std::abs(m.time_offset - 3.0) < 0.005);
+  LogReader reader(s.log);
+  const PlausibilityReport r =
+      check_plausibility(reader, s.log.file, *m.timeline, s.site, m.time_offset, limits);
+  CAPTURE(r.failures());
+  CHECK(r.passed());
 }

@@ -142,8 +142,9 @@ struct CalibratorOptions {
   /// navigation axes, with `initial_base_n`), not along the navigator's compensated outputs.
   /// Those carry the sensor noise and the current estimate: for a MEMS unit, whose estimates
   /// wander along the combinations the first turns leave undetermined, the Jacobian followed
-  /// them and the filter gained information the data do not hold (docs/accuracy.md "Several passes (MEMS)").
-  /// Null: the navigator's outputs and attitude (every estimator but run_kalman's passes).
+  /// them and the filter gained information the data do not hold (docs/accuracy.md "Several passes
+  /// (MEMS)"). Null: the navigator's outputs and attitude (every estimator but run_kalman's
+  /// passes).
   std::shared_ptr<const Motion> reference_motion;
   /// Along the reference motion, the time delay's Jacobian column from the motion's specific
   /// force rate (-omega_nb_b x f_ib_b) instead of the measured difference (off: the measured).

@@ -449,17 +449,20 @@ KalmanRun run_kalman(const Session& session, const CalibratorOptions& given, Sam
   // The motion from the data (a batch run along the plan's motion): the start-time offset, the
   // turns' realized profiles, the dwells where the data are still.
   std::optional<DataMotion> motion;
-  if (!source && run.motion_from_data && follows_plan_motion(given) && !given.reference_motion) {
+  if (run.motion) {
+    motion = *run.motion;
+  } else if (!source && run.motion_from_data && follows_plan_motion(given) &&
+             !given.reference_motion) {
     try {
       motion = motion_from_data(session, given);
     } catch (const std::runtime_error&) {
       motion.reset();  // the filter's pass reads the log again and reports what is wrong
     }
-    if (motion) {
-      options.time_offset = motion->time_offset;
-      options.reference_motion = motion->reference;
-      options.data_timeline = motion->timeline;
-    }
+  }
+  if (motion) {
+    options.time_offset = motion->time_offset;
+    options.reference_motion = motion->reference;
+    options.data_timeline = motion->timeline;
   }
   if (align_first && !source) {
     options = aligned(session, options, log_dwell_means(session, options), false, installation);

@@ -58,6 +58,8 @@ struct KalmanRunOptions {
   /// first (filter/kalman/motion_from_data.hpp): a start-time offset the session does not state,
   /// turns that depart from the plan's profile. Off: the plan's commanded motion.
   bool motion_from_data = true;
+  /// The motion from the data found already (e.g. for the plausibility gate); not owned.
+  const DataMotion* motion = nullptr;
   std::size_t stream_alignment_capacity = kStreamAlignmentCapacity;  // samples
   /// Set (e.g. from a signal handler) to stop reading: the run ends as if the log ended there,
   /// with `interrupted` and the estimates so far.

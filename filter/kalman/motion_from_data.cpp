@@ -212,6 +212,16 @@ struct MoveWindow {
 
 }  // namespace
 
+double noise_smoothing(double density, double dt, double peak, int derivative) {
+  const double bound = derivative == 0 ? kRateSmoothing : kAccelSmoothing;
+  if (!(peak > 0.0)) return bound;
+  const double e = kSmoothingNoise * peak;
+  const double sigma = derivative == 0
+                           ? density * density / (2.0 * std::sqrt(M_PI) * e * e)
+                           : std::pow(density / (2.0 * std::pow(M_PI, 0.25) * e), 2.0 / 3.0);
+  return std::clamp(sigma, dt, bound);
+}
+
 std::string DataMotion::summary() const {
   std::ostringstream m;
   char buf[200];
@@ -360,8 +370,16 @@ void analyse_moves(const Session& session, const CalibratorOptions& o, const Mot
     }
     const double dt = (w.samples.back().t - w.samples.front().t) / static_cast<double>(n - 1);
     // Smoothed rates; the motion where the rate stands above its noise at the window's ends.
-    const std::vector<double> sa = smooth(ra, dt, kRateSmoothing),
-                              sb = smooth(rb, dt, kRateSmoothing);
+    // The gyros' white noise and quantization as one density (rad/s/sqrt(Hz)).
+    const TriadNoise& gn = o.noise.gyro;
+    const double density = std::sqrt(gn.white * gn.white + gn.quantum * gn.quantum / 12.0 / dt);
+    const double peak_rate =
+        std::max(std::abs(seg.alpha.peak_rate()), std::abs(seg.beta.peak_rate()));
+    const double peak_accel =
+        std::max(std::abs(seg.alpha.acceleration()), std::abs(seg.beta.acceleration()));
+    const double rate_sigma = noise_smoothing(density, dt, peak_rate, 0);
+    const double accel_sigma = noise_smoothing(density, dt, peak_accel, 1);
+    const std::vector<double> sa = smooth(ra, dt, rate_sigma), sb = smooth(rb, dt, rate_sigma);
     std::vector<double> mag(n);
     for (std::size_t k = 0; k < n; ++k) mag[k] = std::hypot(sa[k], sb[k]);
     // The noise from the window's ends that lie in a dwell (a move right after another shares
@@ -390,13 +408,13 @@ void analyse_moves(const Session& session, const CalibratorOptions& o, const Mot
     d.begins = w.samples[k0].t;
     d.ends = w.samples[k1].t;
     d.end_shift = d.ends - d.plan_ends;
-    const auto reach = static_cast<std::size_t>(std::ceil(4.0 * kAccelSmoothing / dt));
+    const auto reach = static_cast<std::size_t>(std::ceil(4.0 * accel_sigma / dt));
     k0 = k0 > reach && dwell_before ? k0 - reach : 0;
     k1 = dwell_after ? std::min(n - 1, k1 + reach) : n - 1;
     auto profile = [&](const std::vector<double>& raw, const std::vector<double>& smoothed,
                        double total, double& turned) -> std::shared_ptr<const SampledProfile> {
       std::vector<double> t, angle, rate, accel;
-      const std::vector<double> slow = smooth(raw, dt, kAccelSmoothing);
+      const std::vector<double> slow = smooth(raw, dt, accel_sigma);
       double a = 0.0;
       for (std::size_t k = k0; k <= k1; ++k) {
         const double r = (k == k0 || k == k1) ? 0.0 : smoothed[k];

@@ -35,10 +35,20 @@ constexpr double kOffsetSearch = 60.0;      // s
 constexpr double kOffsetResolution = 0.05;  // s
 /// Where turns have their own timing, the log's start is located to their detection only.
 constexpr double kTimingResolution = 0.1;  // s
-/// Zero-phase Gaussian smoothing of the measured rates (sigma, s): the rate itself, and the rate
-/// the angular acceleration is the derivative of.
+/// Zero-phase Gaussian smoothing of the measured rates (sigma, s), sized by the gyros' noise:
+/// the smoothed rate's noise and its derivative's (the angular acceleration) within
+/// kSmoothingNoise of the move's peak rate and acceleration, at least a sample interval and at
+/// most these (a lighter smoothing keeps a table's ripple: 0.1 s wiped out a 10 Hz structural
+/// mode whose angular acceleration drives the lever arms' column).
+constexpr double kSmoothingNoise = 0.01;
 constexpr double kRateSmoothing = 0.05;
 constexpr double kAccelSmoothing = 0.1;
+
+/// The smoothing (sigma, s) of a rate of white noise density `density` (rad/s/sqrt(Hz)) sampled
+/// every dt whose own noise stays within kSmoothingNoise of `peak`: for the rate (derivative 0)
+/// sigma >= N^2 / (2 sqrt(pi) (e R)^2); for its derivative sigma >= (N / (2 pi^(1/4) e A))^(2/3)
+/// (the variance of white noise through a Gaussian and its derivative).
+double noise_smoothing(double density, double dt, double peak, int derivative);
 
 /// How one move of the data departs from the plan's.
 struct MoveDeparture {
