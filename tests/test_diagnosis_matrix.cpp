@@ -1,7 +1,7 @@
-// The table diagnosis' Monte Carlo matrix (docs/accuracy.md "The diagnosis matrix"): every family of the
-// family table that a profile can lack, hidden alone in rot19 and seed8 sessions of the nav-fog
-// and mems profiles, plus pairs of a dwell effect and a turn effect, plus clean sessions; each
-// cell's magnitudes a band of the family's detection sigma on that plan and profile, each
+// The table diagnosis' Monte Carlo matrix (docs/accuracy.md "The diagnosis matrix"): every family
+// of the family table that a profile can lack, hidden alone in rot19 and seed8 sessions of the
+// nav-fog and mems profiles, plus pairs of a dwell effect and a turn effect, plus clean sessions;
+// each cell's magnitudes a band of the family's detection sigma on that plan and profile, each
 // coefficient's sign random. Scored strictly: the hidden family (or an ambiguous set holding it)
 // named first, no family the data lack named anywhere, every determined magnitude within 3
 // sigma.
