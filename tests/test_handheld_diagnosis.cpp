@@ -247,7 +247,8 @@ TEST_CASE("Hand-held diagnosis Monte Carlo: hidden effects named, clean sessions
               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
 }
 
-// The issue's aim is 95 % named first; 30 seeds cannot tell 93 % from 95 %. Measured (docs/accuracy.md "Model discovery").
+// The issue's aim is 95 % named first; 30 seeds cannot tell 93 % from 95 %. Measured
+// (docs/accuracy.md "Model discovery").
 TEST_CASE("Hand-held diagnosis measured: gyro scale asymmetry over 300 seeds", "[.][measure]") {
   const Tally t = monte_carlo("gyro.scale_asym", 300, 4000, {});
   for (double s : t.missed_at) std::printf("missed at %.2f detection sigmas\n", s);
