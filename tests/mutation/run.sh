@@ -71,7 +71,11 @@ while IFS= read -r line; do
       [ $status -eq 77 ] && status=0
     fi
     if [ $status -ne 0 ]; then
-      result=$(grep -m1 -E "failed|FAILED|error" <<<"$out" | sed -E 's/^([^:]+:[0-9]+).*/\1/')
+      # The compact reporter's failure line ("FILE:LINE: failed: ..."), not a warning that
+      # mentions an error; else the first line that says what stopped the run.
+      result=$(grep -m1 -E "^[^ :]+:[0-9]+: (failed|FAILED)" <<<"$out" ||
+        grep -m1 -E "failed|FAILED|error" <<<"$out")
+      result=$(sed -E 's/^([^:]+:[0-9]+).*/\1/' <<<"$result")
       caught=$((caught + 1))
     fi
   fi
