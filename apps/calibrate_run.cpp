@@ -2,6 +2,7 @@
 // tables and verdicts to the terminal.
 #include <chrono>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -109,17 +110,21 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
     if (monitor || live) {
       run.monitor_interval = o.monitor_interval;
       run.monitor = [&](const MonitorRecord& rec) {
-        if (monitor) *monitor << monitor_line(rec) << "\n" << std::flush;
+        // One write per line, flushed: a kill leaves every complete line (a cut last one at
+        // worst, which read_monitor skips).
+        if (monitor) *monitor << (monitor_line(rec) + "\n") << std::flush;
         if (live) print_live_table(rec, profile.sigma_targets);
       };
     }
     kr = run_kalman(session, ko, stdin_reader.get(), run);
   };
-  if (monitor_path.empty())
+  if (monitor_path.empty()) {
     calibrate(nullptr);
-  else
-    write_atomically(
-        monitor_path, [&](std::ostream& m) { calibrate(&m); }, true);
+  } else {
+    std::ofstream m = open_append_log(monitor_path);
+    calibrate(&m);
+    if (!m.flush()) throw std::runtime_error(monitor_path + ": write failed");
+  }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const ResultCoefficients coefficients = result_coefficients(kr);

@@ -14,6 +14,11 @@
 
 namespace sinscal::cli {
 
+namespace {
+SessionSummary calibrate_six_face_loaded(const CalibrateOptions& o, const Session& session,
+                                         const std::string& out_path, bool verbose);
+}  // namespace
+
 SessionSummary calibrate_six_face_session(const CalibrateOptions& o,
                                           const std::string& session_path,
                                           const std::string& out_path, bool verbose) {
@@ -23,6 +28,16 @@ SessionSummary calibrate_six_face_session(const CalibrateOptions& o,
                       ": --method six-face needs a [six_face] section (the labels of the faces "
                       "and turns, docs/formats.md \"Six-face sessions\")");
   refuse_overwrite(session_inputs(session), {{"--out", out_path}});
+  try {
+    return calibrate_six_face_loaded(o, session, out_path, verbose);
+  } catch (const SixFaceError& e) {
+    throw SixFaceError(six_face_where(session) + e.what());
+  }
+}
+
+namespace {
+SessionSummary calibrate_six_face_loaded(const CalibrateOptions& o, const Session& session,
+                                         const std::string& out_path, bool verbose) {
   SixFaceOptions so = six_face_options(session);
   if (o.gravity > 0.0) so.gravity = o.gravity;
   const auto t0 = std::chrono::steady_clock::now();
@@ -70,5 +85,7 @@ SessionSummary calibrate_six_face_session(const CalibrateOptions& o,
               seconds);
   return row;
 }
+
+}  // namespace
 
 }  // namespace sinscal::cli

@@ -2,6 +2,7 @@
 
 #include <signal.h>  // sigaction: Ctrl-C ends a streaming run with its results written
 
+#include <cctype>
 #include <cstdio>
 #include <iostream>
 #include <sstream>
@@ -10,16 +11,32 @@
 
 namespace sinscal::cli {
 
+namespace {
+// Whether `arg` holds '%' letters-digits-underscores '%' (a Boost.Program_options placeholder).
+bool has_placeholder(const std::string& arg) {
+  for (std::size_t open = arg.find('%'); open != std::string::npos;) {
+    std::size_t k = open + 1;
+    while (k < arg.size() && (std::isalnum(static_cast<unsigned char>(arg[k])) || arg[k] == '_'))
+      ++k;
+    if (k < arg.size() && arg[k] == '%' && k > open + 1) return true;
+    open = arg.find('%', open + 1);
+  }
+  return false;
+}
+}  // namespace
+
 std::optional<po::variables_map> parse(const std::vector<std::string>& args,
                                        const po::options_description& desc,
                                        const std::string& usage,
                                        const po::positional_options_description* positional) {
   // Boost.Program_options substitutes user text into its error messages and loops forever when
-  // that text contains one of its placeholders (e.g. "%value%"): no argument may carry a '%'.
+  // that text contains one of its placeholders ("%value%", "%option%", ...): an argument may
+  // hold a '%' (a file "50%.csv"), not a '%word%'.
   for (std::size_t i = 0; i < args.size(); ++i)
-    if (args[i].find('%') != std::string::npos)
+    if (has_placeholder(args[i]))
       throw UsageError("argument " + std::to_string(i + 1) +
-                       " contains '%', which sinscal does not accept in arguments");
+                       " contains a '%name%' placeholder, which sinscal does not accept in "
+                       "arguments");
   po::variables_map vm;
   po::command_line_parser parser(args);
   parser.options(desc);
@@ -57,6 +74,10 @@ std::vector<std::pair<std::string, std::string>> session_inputs(const Session& s
     in.emplace_back("log", log.file);
   }
   return in;
+}
+
+std::string six_face_where(const Session& session) {
+  return session.log.file + " (session " + session.path + "): ";
 }
 
 std::string fmt(const char* format, double v) {

@@ -23,6 +23,7 @@ constexpr int kUsageError = 1;
 constexpr int kDataError = 2;
 constexpr int kDisagree = 3;       // compare: the results differ beyond the given tolerance
 constexpr int kPartial = 4;        // report: the HTML page written, the PDF not
+constexpr int kTargetsNotMet = 5;  // design --optimize: no plan found meets every target
 constexpr int kInterrupted = 130;  // SIGINT / SIGTERM: stopped, what was computed written
 
 struct UsageError : std::runtime_error {
@@ -43,6 +44,9 @@ std::vector<std::pair<std::string, std::string>> session_inputs(const Session& s
 /// --min-pose and --pose-accel-only into `detector`, --edge-trim into `edge_trim` (if not null).
 void apply_table_free_settings(const TableFreeSettings& session, const po::variables_map& vm,
                                PoseDetectorOptions& detector, double* edge_trim);
+
+/// "LOG (session S): ", the prefix that names a six-face session's files in its errors.
+std::string six_face_where(const Session& session);
 
 /// printf-style formatting of one number.
 std::string fmt(const char* format, double v);

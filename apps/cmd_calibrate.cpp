@@ -8,6 +8,7 @@
 
 #include "apps/calibrate.hpp"
 #include "apps/commands.hpp"
+#include "report/duplicates.hpp"
 #include "report/output.hpp"
 
 namespace sinscal::cli {
@@ -105,8 +106,31 @@ void check_method_options(const po::variables_map& vm, CalibrateOptions& o) {
   check_kf_values(o);
 }
 
+namespace {
+// One session named twice (two paths to it, a copied folder, a copied log) would count as two
+// independent units in the summary: refused before any calibration, naming both.
+void refuse_repeated_sessions(const std::vector<std::string>& sessions) {
+  std::vector<DataSet> sets;
+  for (const auto& path : sessions) {
+    DataSet set{path, {{"session", path}}};
+    try {
+      set.files = session_inputs(Session::load(path, Session::PlanNeed::Optional));
+    } catch (const std::exception&) {
+      // A session that does not load fails in its own row; its path is still compared.
+    }
+    sets.push_back(set);
+  }
+  try {
+    refuse_duplicate_data(sets);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("batch: ") + e.what());
+  }
+}
+}  // namespace
+
 int calibrate_batch(const CalibrateOptions& o, const std::vector<std::string>& sessions,
                     const std::string& out_dir, unsigned jobs) {
+  refuse_repeated_sessions(sessions);
   std::filesystem::create_directories(out_dir);
   const auto stems = result_stems(sessions);
   const auto t0 = std::chrono::steady_clock::now();

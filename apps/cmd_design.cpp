@@ -57,6 +57,13 @@ std::map<std::string, double> design_targets(const DesignCliOptions& o,
   std::error_code ec;
   if (std::filesystem::is_regular_file(o.targets, ec))
     return read_sigma_targets(IniFile(o.targets));
+  // Inline targets hold "family = value unit"; without '=' the text names a file.
+  if (o.targets.find('=') == std::string::npos) {
+    if (std::filesystem::exists(o.targets, ec))
+      throw UsageError("--targets " + o.targets + ": not a regular file");
+    throw UsageError("--targets " + o.targets +
+                     ": no such file (inline targets read \"family = value unit; ...\")");
+  }
   std::string text = "[targets]\n";
   for (char c : o.targets) text += c == ';' ? '\n' : c;
   try {
@@ -108,6 +115,8 @@ void check_design_options(const DesignCliOptions& o, const po::variables_map& vm
     throw UsageError(
         "--budget-s, --compare, --targets, --require, --beam and --search-rate belong to "
         "--optimize");
+  if (given("targets") && o.targets.find_first_not_of(" \t;") == std::string::npos)
+    throw UsageError("--targets is empty: give \"family = value unit; ...\" or a file");
 }
 
 int design_one(const DesignCliOptions& o) {

@@ -39,6 +39,11 @@ int cmd_plot_convergence(const std::vector<std::string>& args) {
       {{"monitor file", monitor_path}, {"session", session_path}, {"sensor profile", sensor_path}},
       {{"--out", out_path}, {"gnuplot script", convergence_script_path(out_path)}});
   const MonitorSeries series = read_monitor(monitor_path);
+  if (series.cut_last_line)
+    std::fprintf(stderr,
+                 "sinscal plot-convergence: note: %s: the last line is cut (the run writing it was "
+                 "killed): drawn up to the line before\n",
+                 monitor_path.c_str());
   o.families = families;
   if (!session_path.empty()) {
     const Session session = Session::load(session_path);

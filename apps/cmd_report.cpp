@@ -11,6 +11,24 @@
 
 namespace sinscal::cli {
 
+namespace {
+// The input files the result records, as recorded and against the calibration's working
+// directory (a relative path there).
+std::vector<std::pair<std::string, std::string>> recorded_inputs(const Certificate& c) {
+  std::string cwd;
+  for (const auto& [label, value] : c.identity)
+    if (label == "Working directory") cwd = value;
+  std::vector<std::pair<std::string, std::string>> in;
+  for (const auto& f : c.files) {
+    if (f.path.empty() || f.path == "<stdin>") continue;
+    in.emplace_back(f.role, f.path);
+    if (!cwd.empty() && std::filesystem::path(f.path).is_relative())
+      in.emplace_back(f.role, (std::filesystem::path(cwd) / f.path).string());
+  }
+  return in;
+}
+}  // namespace
+
 int cmd_report(const std::vector<std::string>& args) {
   po::options_description d("sinscal report options");
   std::string result_path, diagnosis_dir, out_path, pdf_path, monitor_path;
@@ -46,6 +64,20 @@ int cmd_report(const std::vector<std::string>& args) {
     for (const char* f : {"diagnosis.json", "residuals.png", "report.md"})
       inputs.emplace_back("diagnosis", (std::filesystem::path(diagnosis_dir) / f).string());
   refuse_overwrite(inputs, {{"--out", out_path}, {"--pdf", pdf_path}});
+  CertificateOptions o;
+  o.result_path = result_path;
+  o.diagnosis_dir = diagnosis_dir;
+  o.monitor_path = monitor_path;
+  const Certificate c = read_certificate(o);
+  // The calibration's own inputs (its session, logs, profile) are never replaced either.
+  refuse_overwrite(recorded_inputs(c), {{"--out", out_path}, {"--pdf", pdf_path}});
+  if (!pdf_path.empty()) {
+    try {
+      check_writable(pdf_path);  // before chromium, which would only say it failed
+    } catch (const std::runtime_error& e) {
+      throw UsageError(std::string("--pdf ") + e.what());
+    }
+  }
   if (vm->count("force") == 0) {
     std::error_code ec;
     for (const auto& [option, path] : {std::pair{"--out", out_path}, std::pair{"--pdf", pdf_path}})
@@ -53,11 +85,6 @@ int cmd_report(const std::vector<std::string>& args) {
         throw UsageError(std::string(option) + " " + path +
                          ": exists; sinscal report does not replace a file without --force");
   }
-  CertificateOptions o;
-  o.result_path = result_path;
-  o.diagnosis_dir = diagnosis_dir;
-  o.monitor_path = monitor_path;
-  const Certificate c = read_certificate(o);
   const std::string html = certificate_html(c);
   write_atomically(out_path, [&](std::ostream& out) { out << html; });
   std::printf("%s: calibration certificate of %s (%s; %zu coefficients, %zu sections)\n",

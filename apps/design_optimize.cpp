@@ -1,14 +1,23 @@
 // sinscal design --optimize: the search for the shortest plan on a table whose predicted sigmas
 // meet every target (filter/design/search.hpp), confirmed by a covariance pass at the design
 // rate, compared with reference plans, written as a plan file that simulate and calibrate run.
+#include <unistd.h>  // isatty: the progress line on a terminal only
+
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
 #include <iostream>
+#include <limits>
+#include <mutex>
+#include <thread>
 
 #include "apps/design.hpp"
 #include "filter/design/search.hpp"
 #include "models/coefficient_families.hpp"
+#include "models/units.hpp"
 #include "report/output.hpp"
 
 namespace sinscal::cli {
@@ -80,6 +89,91 @@ nlohmann::ordered_json search_json(const SearchResult& r, const SearchOptions& s
           {"comparison", cmp}};
 }
 
+// A plan needs about this many turns to observe the full model (docs/methods/design.md); a table
+// too slow to make them within the search's longest plan is refused before the search.
+constexpr int kTurnsNeeded = 9;
+// A target this far below what noise averaging allows over the longest plan (the reference
+// plan's sigma scaled by sqrt(T_ref / T_max)) is not reachable: refused before the search.
+constexpr double kUnreachableFactor = 100.0;
+
+// The table's time for a 90 deg turn at its rate and acceleration limits.
+double quarter_turn_s(const TableSpec& table) {
+  const double angle = units::pi / 2.0;
+  const double a = table.max_acceleration, w = table.max_rate;
+  if (!(a > 0.0 && w > 0.0)) return std::numeric_limits<double>::infinity();
+  return angle * a > w * w ? angle / w + w / a : 2.0 * std::sqrt(angle / a);
+}
+
+// Refuses, before the search, a table too slow for any plan within the search's limit and
+// targets no plan within it can reach (from the reference plan's predicted sigmas).
+void refuse_unsearchable(const SearchOptions& so, const TableSpec& table, const Plan& reference,
+                         const PlanPrediction& ref) {
+  const double turn = quarter_turn_s(table);
+  if (!(kTurnsNeeded * turn <= so.max_duration))
+    throw UsageError(table.name + ": the table turns 90 deg in " + fmt("%.0f", turn) + " s: the " +
+                     std::to_string(kTurnsNeeded) +
+                     " turns a calibration needs take longer than "
+                     "the search's longest plan (" +
+                     fmt("%.0f", so.max_duration) + " s)");
+  const auto& cat = coefficient_catalog();
+  const double scale = std::sqrt(std::max(ref.duration, 1.0) / so.max_duration);
+  for (const auto& [family, target] : so.targets) {
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < cat.size(); ++i)
+      if (cat[i].family == family &&
+          ref.run.estimates[i].status == CoefficientEstimate::Status::Estimated)
+        best = std::min(best, ref.run.estimates[i].sigma * scale / kUnreachableFactor);
+    if (!(std::isfinite(best) && target < best)) continue;
+    const CoefficientFamily& info = coefficient_family_info(family);
+    const double u = info.si_per_unit();
+    throw UsageError("target of " + family + " " + fmt("%.3g", target / u) + " " + info.unit() +
+                     " is below " + fmt("%.3g", best / u) + " " + info.unit() + ", " +
+                     fmt("%g", kUnreachableFactor) + " times under what " + reference.name +
+                     " would reach if noise averaging alone went on to the search's longest "
+                     "plan (" +
+                     fmt("%.0f", so.max_duration) + " s): no plan can meet it");
+  }
+}
+
+// On a terminal, a line on standard error every second while the search runs: elapsed time and
+// the bound. The search itself (filter/design/search.hpp) has no progress callback yet.
+class SearchProgress {
+ public:
+  explicit SearchProgress(std::string bound) : bound_(std::move(bound)) {
+    if (!::isatty(STDERR_FILENO)) return;
+    thread_ = std::thread([this] { tick(); });
+  }
+  ~SearchProgress() {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    wake_.notify_all();
+    if (thread_.joinable()) {
+      thread_.join();
+      std::fprintf(stderr, "\r\033[K");
+    }
+  }
+  SearchProgress(const SearchProgress&) = delete;
+  SearchProgress& operator=(const SearchProgress&) = delete;
+
+ private:
+  void tick() {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (!wake_.wait_for(lock, std::chrono::seconds(1), [this] { return done_; })) {
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::fprintf(stderr, "\rsearching: %.0f s elapsed (%s)\033[K", s, bound_.c_str());
+      std::fflush(stderr);
+    }
+  }
+  std::string bound_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool done_ = false;
+  std::thread thread_;
+};
+
 }  // namespace
 
 int design_optimize(const DesignCliOptions& o) {
@@ -105,21 +199,43 @@ int design_optimize(const DesignCliOptions& o) {
       throw UsageError(std::string("--require: ") + e.what());
     }
   }
+  if (so.targets.empty() && !o.targets.empty())
+    throw UsageError("--targets " + o.targets + ": no targets in it");
   if (so.targets.empty())
     throw UsageError(o.sensor + ": no [targets] in the profile: give --targets or --require");
+  {
+    DesignOptions d;
+    d.rate_hz = so.rate_hz;
+    refuse_unsearchable(so, table, reference, predict_plan(reference, ko, so.targets, d));
+  }
   std::filesystem::create_directories(o.out);
   const std::string plan_path = o.out + "/optimized.ini";
-  check_outputs({{"plan", o.plan}, {"sensor", o.sensor}, {"table", o.table}},
-                {{"optimized.ini", plan_path},
-                 {"design.json", o.out + "/design.json"},
-                 {"sigma.jsonl", o.out + "/sigma.jsonl"}});
+  std::vector<std::pair<std::string, std::string>> inputs = {
+      {"plan", o.plan}, {"sensor", o.sensor}, {"table", o.table}};
+  for (const auto& f : o.compare) inputs.emplace_back("--compare plan", f);
+  if (o.targets.find('=') == std::string::npos) inputs.emplace_back("targets", o.targets);
+  refuse_overwrite(inputs, {{"optimized.ini", plan_path},
+                            {"best_unmet.ini", o.out + "/best_unmet.ini"},
+                            {"design.json", o.out + "/design.json"},
+                            {"sigma.jsonl", o.out + "/sigma.jsonl"}});
+  const std::string bound =
+      "plans up to " + fmt("%.0f", so.max_duration) + " s" +
+      (so.budget_s > 0.0 ? ", budget " + fmt("%.0f", so.budget_s) + " s" : "") + ", beam " +
+      std::to_string(so.beam) + ", " + std::to_string(so.targets.size()) + " targeted families";
+  std::printf("Searching the shortest plan that meets the targets: %s\n", bound.c_str());
+  std::fflush(stdout);
   const std::clock_t c0 = std::clock();
-  const SearchResult r = search_plan(ko, table, reference.site, SearchSpace{}, so);
+  const SearchResult r = [&] {
+    const SearchProgress progress(bound);
+    return search_plan(ko, table, reference.site, SearchSpace{}, so);
+  }();
   const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
-  write_atomically(plan_path, [&](std::ostream& s) {
-    s << plan_text(r.best, table, reference.site, "optimized");
+  // A plan that misses a target is not written as the optimized plan.
+  const std::string written = r.meets ? plan_path : o.out + "/best_unmet.ini";
+  write_atomically(written, [&](std::ostream& s) {
+    s << plan_text(r.best, table, reference.site, r.meets ? "optimized" : "best_unmet");
   });
-  const Plan best = Plan::load(plan_path);
+  const Plan best = Plan::load(written);
   DesignOptions d;
   d.rate_hz = o.rate_hz;
   const PlanPrediction p = predict_plan(best, ko, so.targets, d);
@@ -127,10 +243,10 @@ int design_optimize(const DesignCliOptions& o) {
       "Searched rotation plans on %s: %d covariance passes, %.1f s CPU; %.1f s before "
       "refinement, %.1f s after.\n\n",
       table.name.c_str(), r.evaluations, cpu, r.duration_before_refinement, p.duration);
-  const DesignInputs in{plan_path,  o.sensor,          o.table,   "optimized", profile.name,
+  const DesignInputs in{written,    o.sensor,          o.table,   "optimized", profile.name,
                         table.name, ko.attitude_sigma, o.rate_hz, cpu};
   std::cout << design_tables(p, in);
-  std::vector<Compared> rows = {compare_plan(best, plan_path, ko, table, so.targets, o.rate_hz),
+  std::vector<Compared> rows = {compare_plan(best, written, ko, table, so.targets, o.rate_hz),
                                 compare_plan(reference, o.plan, ko, table, so.targets, o.rate_hz)};
   for (const auto& f : o.compare)
     rows.push_back(compare_plan(Plan::load(f), f, ko, table, so.targets, o.rate_hz));
@@ -147,6 +263,11 @@ int design_optimize(const DesignCliOptions& o) {
     extra["search"]["required"] = required_json(o.require, p, so.targets);
   }
   write_design_files(o.out, p, in, extra);
+  if (!r.meets) {
+    std::cout << "Wrote " << written << " (the best plan found; it does not meet the targets), "
+              << "not " << plan_path << "\n";
+    return kTargetsNotMet;
+  }
   std::cout << "Wrote " << plan_path << " (runs unchanged through simulate and calibrate)\n";
   return 0;
 }

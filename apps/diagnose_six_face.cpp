@@ -21,7 +21,12 @@ int diagnose_six_face_session(const Session& session, const std::string& out_dir
   SixFaceOptions o = six_face_options(session);
   o.g_sensitivity = true;
   o.alpha = alpha;
-  const SixFaceResult r = six_face_calibrate(read_parts(session), o);
+  SixFaceResult r;
+  try {
+    r = six_face_calibrate(read_parts(session), o);
+  } catch (const SixFaceError& e) {
+    throw SixFaceError(six_face_where(session) + e.what());
+  }
   const GSensitivityTest& t = *r.g_test;
   const CoefficientFamily& info = coefficient_family_info("gyro.g_sensitivity");
   const double per = info.si_per_unit();

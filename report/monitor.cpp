@@ -62,6 +62,12 @@ MonitorSeries read_monitor(const std::string& path) {
         value[it->second].back() = pair[0].get<double>();
         sigma[it->second].back() = pair[1].get<double>();
       }
+    } catch (const nlohmann::json::parse_error& e) {
+      if (in.eof()) {  // the last line, without its newline: cut by a kill of the writer
+        m.cut_last_line = true;
+        break;
+      }
+      throw std::runtime_error(where + "not a monitor record: " + e.what());
     } catch (const nlohmann::json::exception& e) {
       throw std::runtime_error(where + "not a monitor record: " + e.what());
     } catch (const std::runtime_error& e) {

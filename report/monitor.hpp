@@ -24,6 +24,9 @@ struct MonitorSeries {
   std::vector<std::string> names;          // coefficients, catalog order
   std::vector<std::vector<double>> value;  // [coefficient][record]
   std::vector<std::vector<double>> sigma;  // [coefficient][record]
+  /// The last line had no newline and was not a record: cut by a kill of the process writing
+  /// it (a complete last line without a newline is a record); that line is skipped.
+  bool cut_last_line = false;
 };
 
 /// One monitor record as a JSON line (docs/formats.md): t, NIS per dof, converged, body frame,
@@ -31,7 +34,8 @@ struct MonitorSeries {
 std::string monitor_line(const MonitorRecord& record);
 
 /// Reads a monitor file; throws std::runtime_error naming file and line on a malformed record,
-/// an unknown coefficient or time going backwards.
+/// an unknown coefficient or time going backwards. A last line without a newline that is not
+/// valid JSON is a line cut by a crash: skipped (cut_last_line), the records before it kept.
 MonitorSeries read_monitor(const std::string& path);
 
 struct ConvergencePlotOptions {

@@ -4,9 +4,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>  // renameat2, RENAME_EXCHANGE (glibc 2.28)
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <stdexcept>
 #include <system_error>
 
@@ -14,14 +17,89 @@ namespace sinscal {
 
 namespace fs = std::filesystem;
 
+namespace {
+// The file a path names: its canonical form when it exists, else the normalized absolute path
+// (links resolved in the part that exists).
+fs::path identity(const std::string& path) {
+  std::error_code ec;
+  const fs::path p = fs::weakly_canonical(fs::absolute(path), ec);
+  return ec ? fs::absolute(path).lexically_normal() : p;
+}
+
+struct Protected {
+  std::string what, path;
+  fs::path id;
+};
+std::mutex g_protected_mutex;
+std::vector<Protected>& protected_inputs() {
+  static std::vector<Protected> inputs;
+  return inputs;
+}
+
+// Whether `inner` is `outer` or lies below it.
+bool within(const fs::path& inner, const fs::path& outer) {
+  const fs::path rel = inner.lexically_relative(outer);
+  return !rel.empty() && *rel.begin() != "..";
+}
+}  // namespace
+
+void protect_inputs(const std::vector<std::pair<std::string, std::string>>& inputs) {
+  const std::lock_guard<std::mutex> lock(g_protected_mutex);
+  for (const auto& [what, path] : inputs)
+    if (!path.empty() && path != "-" && path != "<stdin>")
+      protected_inputs().push_back({what, path, identity(path)});
+}
+
+void refuse_protected(const std::string& what, const std::string& path, bool directory) {
+  const fs::path out = identity(path);
+  const std::lock_guard<std::mutex> lock(g_protected_mutex);
+  for (const auto& in : protected_inputs()) {
+    std::error_code ec;
+    const bool same = in.id == out || fs::equivalent(in.path, path, ec);
+    if (same || (directory && within(in.id, out)))
+      throw std::invalid_argument(what + " " + path + (same ? " is the " : " holds the ") +
+                                  in.what + " " + in.path + ": an output never replaces an input");
+  }
+}
+
+void check_writable(const std::string& path) {
+  fs::path dir = fs::path(path).parent_path();
+  if (dir.empty()) dir = ".";
+  std::error_code ec;
+  if (fs::is_directory(path, ec))
+    throw std::runtime_error(path + ": cannot create: it is a directory");
+  if (!fs::exists(dir, ec))
+    throw std::runtime_error(path + ": cannot create: its directory " + dir.string() +
+                             " does not exist");
+  if (!fs::is_directory(dir, ec))
+    throw std::runtime_error(path + ": cannot create: " + dir.string() + " is not a directory");
+  if (::access(dir.c_str(), W_OK | X_OK) != 0)
+    throw std::runtime_error(path + ": cannot create: its directory " + dir.string() +
+                             " is not writable (" + std::strerror(errno) + ")");
+}
+
+std::ofstream open_append_log(const std::string& path) {
+  refuse_protected("the log", path);
+  check_writable(path);
+  std::ofstream out(path, std::ios::out | std::ios::trunc);
+  if (!out) throw std::runtime_error(path + ": cannot create: " + std::strerror(errno));
+  out << std::unitbuf;  // every write reaches the file at once: a kill loses no complete line
+  return out;
+}
+
 void write_atomically(const std::string& path, const std::function<void(std::ostream&)>& write,
                       bool keep_partial) {
+  refuse_protected("the output", path);
   const fs::path target(path);
   fs::path temp = target;
   temp += ".tmp-" + std::to_string(::getpid());
   {
     std::ofstream out(temp);
-    if (!out) throw std::runtime_error(path + ": cannot create (its directory must exist)");
+    if (!out) {
+      const std::string cause = std::strerror(errno);
+      check_writable(path);  // names the real cause: no directory, not writable
+      throw std::runtime_error(path + ": cannot create: " + cause);
+    }
     try {
       write(out);
     } catch (...) {
@@ -49,17 +127,9 @@ void write_atomically(const std::string& path, const std::function<void(std::ost
   }
 }
 
-namespace {
-// The file a path names: its canonical form when it exists, else the normalized absolute path.
-fs::path identity(const std::string& path) {
-  std::error_code ec;
-  const fs::path p = fs::weakly_canonical(fs::absolute(path), ec);
-  return ec ? fs::absolute(path).lexically_normal() : p;
-}
-}  // namespace
-
 void check_outputs(const std::vector<std::pair<std::string, std::string>>& inputs,
                    const std::vector<std::pair<std::string, std::string>>& outputs) {
+  protect_inputs(inputs);
   for (std::size_t i = 0; i < outputs.size(); ++i) {
     const auto& [what, path] = outputs[i];
     if (path.empty()) continue;
@@ -110,6 +180,8 @@ void put_in_place(const fs::path& tmp, const fs::path& target, DirectoryState st
     }
     fs::remove_all(tmp, ec);  // the exchange left the old directory there
   } else if (merge) {
+    for (const auto& e : fs::directory_iterator(tmp))
+      refuse_protected("the output", (target / e.path().filename()).string(), true);
     for (const auto& e : fs::directory_iterator(tmp)) {
       fs::rename(e.path(), target / e.path().filename(), ec);
       if (ec)
@@ -138,13 +210,23 @@ DirectoryState directory_state(const std::string& dir, const std::string& marker
   const std::vector<std::string> listed =
       has_marker ? marker_list(p / marker) : std::vector<std::string>{};
   bool empty = true;
-  for (const auto& e : fs::directory_iterator(p)) {
+  // Every file below, by its path relative to the directory: an earlier output's own files
+  // (a chamber's soak-K/imu.csv too) are listed in its marker; one it did not write is foreign.
+  for (auto it = fs::recursive_directory_iterator(p); it != fs::recursive_directory_iterator();
+       ++it) {
     empty = false;
-    const std::string name = e.path().filename().string();
+    const std::string name = it->path().lexically_relative(p).generic_string();
     if (name == marker) continue;
-    // The earlier output's own files and folders (a chamber's soak-K) are listed in its marker.
-    const bool own = (e.is_regular_file() || e.is_directory()) &&
-                     std::find(listed.begin(), listed.end(), name) != listed.end();
+    if (it->is_directory()) {  // own when it holds a listed file (an empty one is foreign)
+      const std::string prefix = name + "/";
+      if (std::none_of(listed.begin(), listed.end(), [&](const std::string& l) {
+            return l.compare(0, prefix.size(), prefix) == 0;
+          }))
+        foreign.push_back(name + "/");
+      continue;
+    }
+    const bool own =
+        it->is_regular_file() && std::find(listed.begin(), listed.end(), name) != listed.end();
     if (!own) foreign.push_back(name);
   }
   std::sort(foreign.begin(), foreign.end());
@@ -157,6 +239,9 @@ void write_directory_whole(const std::string& dir, const std::string& marker,
   std::vector<std::string> foreign;
   const DirectoryState state = directory_state(dir, marker, foreign);
   const fs::path target = plain(dir);
+  // Replaced whole, it must hold no input; merged into, its files are renamed over one by one
+  // (each checked below).
+  refuse_protected("the output directory", target.string(), !merge);
   fs::path tmp = target;
   tmp += ".sinscal-tmp-" + std::to_string(::getpid());
   std::error_code ec;
@@ -166,8 +251,9 @@ void write_directory_whole(const std::string& dir, const std::string& marker,
     throw std::runtime_error(tmp.string() + ": cannot create: " + ec.message());
   try {
     build(tmp.string());
-    std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(tmp)) names.push_back(e.path().filename().string());
+    std::vector<std::string> names;  // every file, relative path (docs/formats.md)
+    for (const auto& e : fs::recursive_directory_iterator(tmp))
+      if (!e.is_directory()) names.push_back(e.path().lexically_relative(tmp).generic_string());
     std::sort(names.begin(), names.end());
     write_atomically((tmp / marker).string(), [&](std::ostream& out) {
       for (const auto& n : names) out << n << "\n";

@@ -3,6 +3,7 @@
 // one), and a run refuses an output path that is one of its inputs or another of its outputs.
 #pragma once
 
+#include <fstream>
 #include <functional>
 #include <ostream>
 #include <string>
@@ -17,6 +18,22 @@ namespace sinscal {
 /// (a file of rows written as they are computed keeps the rows before the error).
 void write_atomically(const std::string& path, const std::function<void(std::ostream&)>& write,
                       bool keep_partial = false);
+
+/// Registers files this run reads (role, path): from then on write_atomically,
+/// open_append_log and write_directory_whole refuse (std::invalid_argument naming both) to write
+/// over any of them, or a directory holding one, resolved through links. check_outputs
+/// registers its inputs, so a command that checks its outputs protects its inputs everywhere.
+void protect_inputs(const std::vector<std::pair<std::string, std::string>>& inputs);
+/// Throws std::invalid_argument when `path` is (or, for a directory, holds) a protected input.
+void refuse_protected(const std::string& what, const std::string& path, bool directory = false);
+/// Throws std::runtime_error naming the real cause when a file cannot be created at `path`: its
+/// directory missing, not a directory, or not writable (permission denied, read-only).
+void check_writable(const std::string& path);
+
+/// Opens `path` for a log written line by line (a monitor): created or truncated, every line the
+/// caller writes is flushed to the file at once, so a process killed (SIGKILL) leaves every
+/// complete line before the kill. Throws std::runtime_error with the real cause.
+std::ofstream open_append_log(const std::string& path);
 
 /// Throws std::invalid_argument naming both when an output is (resolves to the same file as) an
 /// input or another output. Paths that do not exist yet are compared by their absolute,

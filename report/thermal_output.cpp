@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 
 #include "models/coefficient_families.hpp"
 #include "models/imu_error_model.hpp"
@@ -62,6 +64,14 @@ void write_thermal_table(const std::string& path, const ThermalFit& fit, double 
   for (int c : fit.catalog)
     if (!coefficient_family_info(cat[static_cast<std::size_t>(c)].family).thermal())
       base.push_back(c);
+  // The row count as a double first: a tiny step gives a count no int holds.
+  const double span = std::floor((to_c - from_c) / step_c + 1e-9);
+  if (!(std::isfinite(span) && step_c > 0.0 && span >= 0.0 && span < kMaxThermalTableRows))
+    throw std::invalid_argument(path + ": a table from " + std::to_string(from_c) + " to " +
+                                std::to_string(to_c) + " C every " + std::to_string(step_c) +
+                                " C would exceed " + std::to_string(kMaxThermalTableRows) +
+                                " rows (or its bounds are not numbers)");
+  const int steps = static_cast<int>(span);
   write_atomically(path, [&](std::ostream& out) {
     out << "# sinscal thermal compensation table: each coefficient at the temperature of the row "
            "(deg C), value and 1-sigma, from the thermal fit (T0 = "
@@ -74,7 +84,6 @@ void write_thermal_table(const std::string& path, const ThermalFit& fit, double 
       out << "," << cat[static_cast<std::size_t>(c)].name << ","
           << cat[static_cast<std::size_t>(c)].name << ".sigma";
     out << "\n";
-    const int steps = static_cast<int>(std::floor((to_c - from_c) / step_c + 1e-9));
     char buf[64];
     for (int k = 0; k <= steps; ++k) {
       const double T = from_c + k * step_c;

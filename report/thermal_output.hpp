@@ -24,9 +24,13 @@ struct SoakRecord {
 /// The "thermal" section of result.json.
 nlohmann::ordered_json thermal_section(const ThermalFit& fit, const std::vector<SoakRecord>& soaks);
 
+/// The most rows a compensation table holds (-55 ... 125 C every 0.01 C is 18001).
+constexpr int kMaxThermalTableRows = 100000;
+
 /// The compensation table: every fitted coefficient (not the thermal ones) at each temperature
 /// from `from_c` to `to_c` in steps of `step_c`, value and sigma, engineering units. Written
-/// atomically.
+/// atomically. Throws std::invalid_argument, before writing, when the bounds are not finite, the
+/// step not positive or the table would hold more than kMaxThermalTableRows rows.
 void write_thermal_table(const std::string& path, const ThermalFit& fit, double from_c, double to_c,
                          double step_c);
 

@@ -715,7 +715,8 @@ new plot-out-is-the-monitor; cp "$base/mini/monitor.jsonl" "$d/"
 fixed 1 "monitor.jsonl" S plot-convergence --monitor monitor.jsonl --out monitor.jsonl
 # A batch: x/a, y/a and z/a-2 must give three result files (y/a and z/a-2 both write a-2.json).
 new batch-result-names-collide
-for s in x/a y/a z/a-2; do mkdir -p "$d/runs/$s"; cp "$base"/mini/{session.ini,plan.ini,sensor.ini,truth.json,imu.csv} "$d/runs/$s/"; done
+# (each log one sample apart: the same data twice is refused, see batch-session-copied)
+k=0; for s in x/a y/a z/a-2; do mkdir -p "$d/runs/$s"; cp "$base"/mini/{session.ini,plan.ini,sensor.ini,truth.json,imu.csv} "$d/runs/$s/"; k=$((k + 1)); set_field "$d/runs/$s/imu.csv" 200 2 "${k}e-12"; done
 POST='test "$(ls out/batch/*.json | wc -l)" -eq 3'
 fixed 0 "" S calibrate --method closed-form --session runs/x/a --session runs/y/a --session runs/z/a-2 --out out/batch
 # A monitor file name with a newline must not put a command into the gnuplot script.
@@ -1058,6 +1059,74 @@ POST='test -s out/d/diagnosis.json'
 control 0 "" S diagnose --session soaks/chamber.ini --out out/d
 new profile-reference-temperature-kelvin; cp "$therm" "$d/p.ini"; set_key "$d/p.ini" reference_temperature "293 C"
 fixed 2 "p.ini:$L: 'thermal.reference_temperature'|expected a temperature within -60 ... 130 C" S simulate --plan "$base/mini.ini" --sensor p.ini --out out/s --rate 10
+
+# --- issue 35: outputs a lab can trust --------------------------------------------------------
+# Duplicates: the same soak or session given twice (same path, a link to it, a copied folder) is
+# refused before any fit, naming both (one data set fitted as two: sigmas sqrt(2) too small).
+new thermal-soak-listed-twice; cp -r "$base/soaks" "$d/soaks"; set_key "$d/soaks/chamber.ini" soaks "soak-1/session.ini, soak-2/session.ini, soak-1/session.ini"
+fixed 1 "chamber.ini|soak 3 (|and soak 1 (|are the same data|the same file" S thermal --chamber soaks/chamber.ini --out out/t
+new thermal-soak-through-a-link; cp -r "$base/soaks" "$d/soaks"; ln -s soak-2 "$d/soaks/again"; set_key "$d/soaks/chamber.ini" soaks "soak-1/session.ini, soak-2/session.ini, again/session.ini"
+fixed 1 "again/session.ini|soak-2/session.ini|are the same data" S thermal --chamber soaks/chamber.ini --out out/t
+new thermal-soak-copied-folder; cp -r "$base/soaks" "$d/soaks"; cp -r "$d/soaks/soak-3" "$d/soaks/soak-4"; set_key "$d/soaks/chamber.ini" soaks "soak-1/session.ini, soak-2/session.ini, soak-3/session.ini, soak-4/session.ini"
+fixed 1 "soak 4 (|and soak 3 (|the same bytes (SHA-256" S thermal --chamber soaks/chamber.ini --out out/t
+new batch-session-copied; for s in a b; do mkdir -p "$d/runs/$s"; cp "$base"/mini/{session.ini,plan.ini,sensor.ini,truth.json,imu.csv} "$d/runs/$s/"; done
+fixed 1 "batch: runs/b/session.ini and runs/a/session.ini are the same data|the same bytes (SHA-256" S calibrate --method closed-form --session runs/a --session runs/b --out out/batch
+new batch-session-twice-through-a-link; mkdir -p "$d/runs/a"; cp "$base"/mini/{session.ini,plan.ini,sensor.ini,truth.json,imu.csv} "$d/runs/a/"; ln -s a "$d/runs/b"
+fixed 1 "are the same data|the same file" S calibrate --method closed-form --session runs/a --session runs/b --out out/batch
+# Bounded work: absurd options refused when parsed (--grid-step 1e-5 wrote 4.6 GB; 1e-9 converted
+# 1e11 to int).
+new thermal-grid-step-tiny; cp -r "$base/soaks" "$d/soaks"
+fixed 1 "--grid-step must be from 0.01 to 100 C" S thermal --chamber soaks/chamber.ini --out out/t --grid-step 1e-5
+new thermal-grid-step-1e-9; cp -r "$base/soaks" "$d/soaks"
+fixed 1 "--grid-step must be from 0.01 to 100 C" S thermal --chamber soaks/chamber.ini --out out/t --grid-step 1e-9
+new design-optimize-targets-empty; cp "$tab" "$d/table.ini"
+fixed 1 "--targets is empty" dz --optimize --out out/o --targets ""
+new design-optimize-targets-1e-9; cp "$tab" "$d/table.ini"
+fixed 1 "target of gyro.scale|no plan can meet it" dz --optimize --out out/o --targets "gyro.scale = 1e-9 ppm"
+new design-optimize-table-very-slow; cp "$tab" "$d/table.ini"; set_key "$d/table.ini" max_rate "0.01 deg/s"; set_key "$d/table.ini" max_acceleration "0.01 deg/s^2"
+fixed 1 "table turns 90 deg in|longer than the search's longest plan" dz --optimize --out out/o --targets "gyro.scale = 3 ppm"
+new design-targets-missing-file; cp "$tab" "$d/table.ini"
+fixed 1 "--targets /nonexistent/targets.ini: no such file" dz --optimize --out out/o --targets /nonexistent/targets.ini
+# No output overwrites an input, the calibration's own inputs included (resolved through links).
+new report-out-is-the-session-log; mini; (cd "$d" && S calibrate --method kf --session session.ini --out r.json > /dev/null 2>&1)
+fixed 1 "--out imu.csv is the log|an output never replaces an input" S report --result r.json --out imu.csv --force
+new report-pdf-is-session-ini; mini; (cd "$d" && S calibrate --method kf --session session.ini --out r.json > /dev/null 2>&1)
+fixed 1 "--pdf session.ini is the session|an output never replaces an input" S report --result r.json --out out/r.html --pdf session.ini --force
+new report-out-is-the-log-through-a-link; mini; (cd "$d" && S calibrate --method kf --session session.ini --out r.json > /dev/null 2>&1); ln -s ../imu.csv "$d/out/page.html"
+fixed 1 "is the log|an output never replaces an input" S report --result r.json --out out/page.html --force
+new report-pdf-directory-missing; cp "$base/s8/cf.json" "$d/r.json"
+fixed 1 "--pdf nodir/r.pdf: cannot create: its directory nodir does not exist" S report --result r.json --out out/r.html --pdf nodir/r.pdf
+new thermal-out-is-the-chamber; cp -r "$base/soaks" "$d/soaks"
+fixed 1 "--out soaks holds the|an output never replaces an input" S thermal --chamber soaks/chamber.ini --out soaks
+new thermal-out-holds-an-earlier-result; cp -r "$base/soaks" "$d/soaks"; mkdir -p "$d/res"; cp "$base/s8/cf.json" "$d/res/result.json"
+fixed 1 "--out res: not empty and not an earlier thermal output (it holds result.json)" S thermal --chamber soaks/chamber.ini --out res
+new simulate-chamber-over-a-file-it-did-not-write; cp -r "$base/soaks" "$d/soaks"; echo "my notes" > "$d/soaks/soak-1/notes.txt"
+fixed 1 "--out soaks|not an earlier simulate output|soak-1/notes.txt" S simulate --plan "$base/mini.ini" --sensor "$therm" --chamber "$base/soaks3.ini" --out soaks --rate 10
+new simulate-chamber-over-an-empty-folder-it-did-not-make; cp -r "$base/soaks" "$d/soaks"; mkdir "$d/soaks/soak-1/mine"
+fixed 1 "--out soaks|not an earlier simulate output|soak-1/mine/" S simulate --plan "$base/mini.ini" --sensor "$therm" --chamber "$base/soaks3.ini" --out soaks --rate 10
+# Smaller ones: a complete last line without a line end is a line; a '%' in a real file name;
+# the real cause of a file that cannot be written; six-face errors name the log.
+new control-log-last-line-without-line-end; mini; truncate -s -1 "$d/imu.csv"
+control 0 "" nav
+new control-log-last-line-without-line-end-stream; mini; truncate -s -1 "$d/imu.csv"
+control 0 "" sh -c "'$bin' calibrate --method kf --session session.ini --stream --out out/r.json < imu.csv"
+new log-last-number-cut-without-line-end; mini; truncate -s -10 "$d/imu.csv"
+fixed 2 "imu.csv:$(wc -l < "$base/mini/imu.csv"): truncated line|fewer digits" nav
+new control-percent-in-a-file-name; mini; mv "$d/session.ini" "$d/50%.ini"
+control 0 "" S navigate --session "50%.ini" --out out/nav.csv
+new argument-with-a-placeholder; mini
+fixed 1 "contains a '%name%' placeholder" S navigate --session "%value%.ini" --out out/nav.csv
+new calibrate-out-directory-missing; mini
+fixed 2 "out/no/r.json: cannot create: its directory out/no does not exist" S calibrate --method closed-form --session session.ini --out out/no/r.json
+if [ "$(id -u)" != 0 ]; then  # root writes into a read-only folder: these run as a user only
+  new calibrate-out-permission-denied; mini; mkdir -p "$d/out/ro"; chmod a-w "$d/out/ro"
+  fixed 2 "out/ro/r.json: cannot create: its directory out/ro is not writable (Permission denied)" S calibrate --method closed-form --session session.ini --out out/ro/r.json
+  new report-pdf-read-only-folder; cp "$base/s8/cf.json" "$d/r.json"; mkdir -p "$d/out/ro"; chmod a-w "$d/out/ro"
+  fixed 1 "--pdf out/ro/r.pdf: cannot create: its directory out/ro is not writable" S report --result r.json --out out/r.html --pdf out/ro/r.pdf
+  chmod u+w "$work"/c/*/out/ro
+fi
+sfnew six-face-error-names-the-log; set_key "$d/session.ini" faces "x_p x_a y_p y_a z_p z_down"
+fixed 2 "annotated_session.csv (session session.ini): six-face: no part labelled 'z_down'" sf
 
 # =============================================================================================
 # KNOWN: bad input still accepted or mishandled; the fix belongs to apps/, filter/ or the result

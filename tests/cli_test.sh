@@ -314,6 +314,16 @@ check "design --robustness exits 0" test $? -eq 0
 check "... prints the table 2x worse row" grep -qE '^table 2x worse +[0-9]' "$work/robust.txt"
 check "... and writes it to design.json" python3 -c "import json,sys; d=json.load(open('$work/robust/design.json')); sys.exit(len(d['robustness']['runs']) != 4)"
 
+# design --optimize when no plan meets the targets (a 60 s budget): exit 5, the best plan written
+# as best_unmet.ini, never as optimized.ini.
+"$bin" design --optimize --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog-extended.ini" \
+  --table "$src/config/tables/two-axis-20.ini" --targets "gyro.scale = 3 ppm; accel.scale = 3 ppm; accel.lever_arm = 2 mm" \
+  --search-rate 10 --beam 2 --budget-s 60 --out "$work/unmet" > "$work/unmet.txt"
+check "design --optimize exits 5 when no plan meets the targets" test $? -eq 5
+check "... writes no optimized.ini" test ! -e "$work/unmet/optimized.ini"
+check "... writes the best as best_unmet.ini" test -s "$work/unmet/best_unmet.ini"
+check "... and says it" grep -q "No plan found within the budget meets every target" "$work/unmet.txt"
+
 # design --optimize --require: the shortest plan that determines the lever arms (they show only in
 # turns), confirmed observed by the final pass.
 "$bin" design --optimize --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog-extended.ini" \

@@ -328,6 +328,13 @@ TEST_CASE("Log: a native log's last line without a line end was cut", "[input][l
              Contains("imu.csv:3: truncated line"));
   test::write_file(path, header + "0.01,0,0,0,0,0,0.0980665\n0.02,0,0,0,0,0,0.098\n");
   CHECK(read_error(LogFormat::native_format(path, 100.0)) == "no error");
+  // A complete last line without its line end (a logger that does not end it) is a line.
+  test::write_file(path, header + "0.01,0,0,0,0,0,0.0980665\n0.02,0,0,0,0,0,0.0980671");
+  CHECK(read_error(LogFormat::native_format(path, 100.0)) == "no error");
+  // Round-trip numbers vary in length line to line: a shorter one past 12 digits is complete.
+  test::write_file(
+      path, header + "0.01,0,0,0,0,0,0.09806650000000012\n0.02,0,0,0,0,0,0.0980665000000001");
+  CHECK(read_error(LogFormat::native_format(path, 100.0)) == "no error");
   // A foreign log may lack the last line end (hand-written files often do).
   test::write_file(dir + "/s.ini",
                    "[log]\nfile = f.txt\nformat = custom\ncolumns = t gx gy gz ax ay az\n");

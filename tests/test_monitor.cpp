@@ -65,6 +65,30 @@ TEST_CASE("Monitor file errors name file and line", "[monitor]") {
   CHECK_THROWS_WITH(read_monitor(dir + "/empty.jsonl"), Catch::Contains("no monitor records"));
 }
 
+TEST_CASE("Monitor file: a last line cut by a kill is skipped, a complete one is a record",
+          "[monitor]") {
+  const std::string dir = test::temp_dir("monitor_cut");
+  const std::string all = kMonitor;
+  const std::string two = all.substr(0, all.rfind('\n', all.size() - 2) + 1);  // first two lines
+  // Killed while writing the third record: no line end, not JSON.
+  test::write_file(dir + "/killed.jsonl", two + all.substr(two.size(), 40));
+  const MonitorSeries killed = read_monitor(dir + "/killed.jsonl");
+  CHECK(killed.t == std::vector<double>{10.0, 20.0});
+  CHECK(killed.cut_last_line);
+  // The whole third record without its line end is a record.
+  test::write_file(dir + "/no_end.jsonl", all.substr(0, all.size() - 1));
+  const MonitorSeries whole = read_monitor(dir + "/no_end.jsonl");
+  CHECK(whole.t == std::vector<double>{10.0, 20.0, 30.0});
+  CHECK_FALSE(whole.cut_last_line);
+  // A cut line followed by another is not a kill's: an error naming its line.
+  test::write_file(dir + "/middle.jsonl", all.substr(0, 40) + "\n" + two);
+  CHECK_THROWS_WITH(read_monitor(dir + "/middle.jsonl"),
+                    Catch::Contains("middle.jsonl:1: not a monitor record"));
+  // Killed before its first record was whole: nothing to draw, said so.
+  test::write_file(dir + "/first.jsonl", all.substr(0, 40));
+  CHECK_THROWS_WITH(read_monitor(dir + "/first.jsonl"), Catch::Contains("no monitor records"));
+}
+
 TEST_CASE("Convergence plot: a row per family, targets and truth drawn, PNG of that size",
           "[monitor]") {
   const std::string dir = test::temp_dir("monitor_plot");

@@ -76,16 +76,46 @@ void read_custom_format(const IniFile& ini, const std::string& base_dir, double 
 
 }  // namespace log_keys
 
+namespace {
+// The significant digits of a line's last field (its mantissa's digits, leading zeros not
+// counted): "0.0980665" 6, "25" 2, "1.5e-3" 2.
+int last_field_digits(const std::string& line, char delimiter) {
+  std::size_t start = delimiter == ' ' ? line.find_last_of(" \t") : line.rfind(delimiter);
+  start = start == std::string::npos ? 0 : start + 1;
+  int digits = 0;
+  bool leading = true;
+  for (std::size_t i = start; i < line.size(); ++i) {
+    const char c = line[i];
+    if (c == 'e' || c == 'E') break;
+    if (c < '0' || c > '9') continue;
+    if (leading && c == '0') continue;
+    leading = false;
+    ++digits;
+  }
+  return digits;
+}
+}  // namespace
+
 bool LogReader::read_record() {
   if (f_.kind == LogFormat::Kind::NovAtel) return read_novatel_record();
   if (f_.split()) return read_split_record();
   loc_ = &main_;
   bool nl = true;
   if (!read_data_line(main_, text_, nl)) return false;
-  // sinscal writes a line end after every sample: a last line without one was cut (its last
-  // number may be cut short and still read as a number).
-  if (f_.native && !nl)
-    fail("truncated line: the last line has no line end (the file was cut while being written?)");
+  // sinscal writes a line end after every sample: a last line without one is complete unless
+  // its last number has fewer digits than the line before's, which a cut while writing would
+  // make (and still read as a number). A cut past the 12th digit changes nothing measurable
+  // (round-trip numbers hold 15 to 17, varying line to line).
+  if (f_.native) {
+    constexpr int kHarmlessDigits = 12;
+    const int digits = last_field_digits(text_, f_.delimiter);
+    if (!nl && digits < std::min(last_field_digits_, kHarmlessDigits))
+      fail(
+          "truncated line: the last line has no line end and its last number has fewer digits "
+          "than the line before's (the file was cut while being written?); if the line is "
+          "complete, end it with a line end");
+    last_field_digits_ = digits;
+  }
   split_fields(text_, nl, f_.columns.size(), fields_, &text_cols_, f_.columns);
   return true;
 }

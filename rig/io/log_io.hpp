@@ -296,6 +296,9 @@ class LogReader : public SampleSource {
   double t_prev_ = 0.0;
   std::vector<double> fields_, acc_, gyr_;  // a record; a split log's two lines
   std::string text_, text2_;
+  // A native log's last field's significant digits on the line before (a last line without a
+  // line end is complete when its last number is not shorter; -1: no line yet).
+  int last_field_digits_ = -1;
   // split: where t, x, y, z are in each file's columns (-1: absent)
   std::array<int, 4> acc_cols_{-1, -1, -1, -1}, gyr_cols_{-1, -1, -1, -1};
   int acc_temp_col_ = -1, gyr_temp_col_ = -1;
