@@ -98,7 +98,7 @@ table.facts td { border-bottom: 1px solid #edf0f3; }
 ul.reasons { margin: 6px 0 0 18px; padding: 0; }
 p.note { color: var(--muted); margin: 6px 0; }
 .changed { color: #9b1c1c; font-weight: 700; }
-td.sign { height: 26px; border-bottom: 1px solid var(--ink); }
+table.facts td.sign { height: 28px; border-bottom: 1px solid var(--ink); min-width: 300px; }
 figure { margin: 8px 0; text-align: center; }
 figure img { max-width: 100%; border: 1px solid var(--rule); }
 footer { margin-top: 26px; border-top: 1px solid var(--rule); padding-top: 8px;

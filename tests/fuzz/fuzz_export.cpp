@@ -35,8 +35,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (!force && !r.forced.empty()) sinscal::fuzz::finding("an override without --force", path);
     const sinscal::FirmwareExport e = sinscal::read_result_for_export(path, {force});
     if (!force) within_range(e);
-    for (auto format : {sinscal::ExportFormat::Json, sinscal::ExportFormat::Yaml,
-                        sinscal::ExportFormat::CHeader})
+    for (auto format :
+         {sinscal::ExportFormat::Json, sinscal::ExportFormat::Yaml, sinscal::ExportFormat::CHeader})
       sinscal::render_export(e, format);
   } catch (const std::runtime_error& e) {
     sinscal::fuzz::check_message(e, path);

@@ -29,8 +29,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   if ((a & 0x01) != 0 && !label_first) f.columns.push_back("label");
   using Unit = sinscal::TemperatureColumns::Unit;
-  f.temperature.unit = (a & 0x08) != 0 ? Unit::Kelvin : (a & 0x10) != 0 ? Unit::Fahrenheit
-                                                                        : Unit::Celsius;
+  f.temperature.unit = (a & 0x08) != 0   ? Unit::Kelvin
+                       : (a & 0x10) != 0 ? Unit::Fahrenheit
+                                         : Unit::Celsius;
   if ((a & 0x20) != 0) {
     f.temperature.scale = 0.01;
     f.temperature.offset = 1000.0;
