@@ -7,6 +7,32 @@
 
 namespace sinscal::cli {
 
+namespace {
+// Coefficients beyond their family's physical range, compared with --force: named in the output.
+void print_overrides(const ResultFile& f, const char* which) {
+  for (const auto& o : f.forced) {
+    std::printf("WARNING (--force): %s: %s\n", which, o.c_str());
+    std::fprintf(stderr, "sinscal compare: WARNING (--force): %s: %s\n", which, o.c_str());
+  }
+}
+
+// Coefficients in one result only: named (they have no difference to show).
+void print_one_sided(const ResultCoefficients& a, const ResultCoefficients& b,
+                     const std::vector<std::string>& files) {
+  for (int side = 0; side < 2; ++side) {
+    const ResultCoefficients &x = side ? b : a, &y = side ? a : b;
+    std::string only;
+    for (const auto& [name, c] : x)
+      if (!y.count(name)) only += (only.empty() ? "" : ", ") + name;
+    if (only.empty()) continue;
+    std::printf("only in %s (%s): %s\n", side ? "B" : "A",
+                files[static_cast<std::size_t>(side)].c_str(), only.c_str());
+    std::fprintf(stderr, "sinscal compare: note: coefficients only in %s, not compared: %s\n",
+                 files[static_cast<std::size_t>(side)].c_str(), only.c_str());
+  }
+}
+}  // namespace
+
 int cmd_compare(const std::vector<std::string>& args) {
   po::options_description d("sinscal compare options");
   std::vector<std::string> files;
@@ -18,16 +44,20 @@ int cmd_compare(const std::vector<std::string>& args) {
       ("max-sigma", po::value(&max_sigma),
        "fail (exit 3) if a difference exceeds this many sigma of the difference")
       ("max-relative", po::value(&max_relative),
-       "fail (exit 3) if a value or sigma differs by more than this fraction");
+       "fail (exit 3) if a value or sigma differs by more than this fraction")
+      ("force", "compare coefficients beyond their family's physical range (each named in the "
+                "output)");
   // clang-format on
   po::positional_options_description pos;
   pos.add("result", 2);
-  const auto vm = parse(args, d,
-                        "Usage: sinscal compare A.json B.json [--max-sigma K] [--max-relative R]\n"
-                        "Two calibration results side by side: difference, difference over its "
-                        "sigma\n(sigma from both results, taken as independent) and relative "
-                        "difference.",
-                        &pos);
+  const auto vm =
+      parse(args, d,
+            "Usage: sinscal compare A.json B.json [--max-sigma K] [--max-relative R] [--force]\n"
+            "Two calibration results side by side: difference, difference over its "
+            "sigma\n(sigma from both results, taken as independent) and relative "
+            "difference. Every coefficient name must be sinscal's (a mistyped one is "
+            "refused);\nthose in one file only are named.",
+            &pos);
   if (!vm) return 0;
   if (files.size() != 2) throw UsageError("give two result files");
   CompareTolerances tolerances;
@@ -36,16 +66,21 @@ int cmd_compare(const std::vector<std::string>& args) {
   if ((tolerances.max_sigma && !(max_sigma >= 0.0)) ||
       (tolerances.max_relative && !(max_relative >= 0.0)))
     throw UsageError("--max-sigma and --max-relative must be numbers >= 0");
-  const ResultCoefficients a = read_result_json(files[0]);
-  const ResultCoefficients b = read_result_json(files[1]);
+  const bool force = vm->count("force") > 0;
+  const ResultFile fa = read_result_file(files[0], force), fb = read_result_file(files[1], force);
+  const ResultCoefficients &a = fa.coefficients, &b = fb.coefficients;
   std::vector<CoefficientComparison> rows;
   try {
     rows = compare_results(a, b, tolerances);
   } catch (const std::runtime_error& e) {
     throw std::runtime_error(files[0] + " and " + files[1] + ": " + e.what());
   }
-  std::printf("A = %s\nB = %s\n\n%-28s %14s %14s %12s %8s %10s %-8s\n", files[0].c_str(),
-              files[1].c_str(), "coefficient", "A", "B", "A - B", "z", "relative", "unit");
+  std::printf("A = %s\nB = %s\n", files[0].c_str(), files[1].c_str());
+  print_overrides(fa, "A");
+  print_overrides(fb, "B");
+  print_one_sided(a, b, files);
+  std::printf("\n%-28s %14s %14s %12s %8s %10s %-8s\n", "coefficient", "A", "B", "A - B", "z",
+              "relative", "unit");
   int failures = 0;
   for (const auto& c : rows) {
     auto num = [](const std::optional<double>& v, const char* f) {

@@ -21,8 +21,9 @@ int cmd_export(const std::vector<std::string>& args) {
       ("format", po::value(&format_name)->required(), "json | yaml | c-header")
       ("out", po::value(&out_path), "file to write (default: standard output); never an input")
       ("force", "export a result whose own checks failed (plausibility gate, divergence, early "
-                "stop, no convergence) and coefficients the data did not determine (as zero, "
-                "listed in the export)");
+                "stop, no convergence), coefficients the data did not determine (as zero, "
+                "listed in the export) and coefficients beyond their family's physical range "
+                "(each recorded in the export's warnings)");
   // clang-format on
   po::positional_options_description pos;
   pos.add("result", 1);

@@ -31,7 +31,8 @@ std::vector<std::pair<std::string, std::string>> recorded_inputs(const Certifica
 
 int cmd_report(const std::vector<std::string>& args) {
   po::options_description d("sinscal report options");
-  std::string result_path, diagnosis_dir, out_path, pdf_path, monitor_path;
+  std::string result_path, diagnosis_dir, out_path, pdf_path, monitor_path, approver;
+  double coverage_factor = 2.0;
   // clang-format off
   d.add_options()
       ("help,h", "this help")
@@ -43,21 +44,29 @@ int cmd_report(const std::vector<std::string>& args) {
        "the monitor file of the run (default: the one the result records)")
       ("out", po::value(&out_path)->required(), "the HTML page to write")
       ("pdf", po::value(&pdf_path), "also print the page to this PDF (needs Debian's chromium)")
-      ("force", "replace existing output files");
+      ("coverage-factor", po::value(&coverage_factor),
+       "k of the expanded uncertainty U = k sigma beside each value (default 2: about 95 %)")
+      ("approved-by", po::value(&approver),
+       "the name of the person who approves the certificate (default: a blank to fill in)")
+      ("force", "replace existing output files, and certify coefficients beyond their family's "
+                "physical range (noted on the page, the verdict failed)");
   // clang-format on
   po::positional_options_description pos;
   pos.add("result", 1);
   const auto vm = parse(
       args, d,
       "Usage: sinscal report --result result.json [--diagnosis DIR] --out report.html "
-      "[--pdf report.pdf] [--force]\n"
+      "[--pdf report.pdf] [--coverage-factor K] [--approved-by NAME] [--force]\n"
       "The calibration certificate: the unit and its data (SHA-256 of the logs), the\n"
-      "coefficients with sigma and unit, the verdict, the installation, the convergence plot,\n"
+      "conditions, the coefficients with the expanded uncertainty U = k sigma (k = 2) and unit,\n"
+      "the verdict, the installation, the convergence plot,\n"
       "the residuals and the noise when the result has them, the diagnosis summary; one HTML\n"
       "page that prints to A4 (docs/formats.md \"Calibration certificate\"). Exit 4: the page\n"
       "was written but not the PDF (chromium missing or failed).",
       &pos);
   if (!vm) return 0;
+  if (!(coverage_factor >= 1.0 && coverage_factor <= 10.0))
+    throw UsageError("--coverage-factor must be 1 to 10 (2: about 95 % coverage)");
   std::vector<std::pair<std::string, std::string>> inputs = {{"result", result_path},
                                                              {"monitor file", monitor_path}};
   if (!diagnosis_dir.empty())
@@ -68,6 +77,9 @@ int cmd_report(const std::vector<std::string>& args) {
   o.result_path = result_path;
   o.diagnosis_dir = diagnosis_dir;
   o.monitor_path = monitor_path;
+  o.force = vm->count("force") > 0;
+  o.coverage_factor = coverage_factor;
+  o.approver = approver;
   const Certificate c = read_certificate(o);
   // The calibration's own inputs (its session, logs, profile) are never replaced either.
   refuse_overwrite(recorded_inputs(c), {{"--out", out_path}, {"--pdf", pdf_path}});
@@ -85,6 +97,9 @@ int cmd_report(const std::vector<std::string>& args) {
         throw UsageError(std::string(option) + " " + path +
                          ": exists; sinscal report does not replace a file without --force");
   }
+  for (const auto& f : c.forced)
+    std::cerr << "sinscal report: WARNING (--force): " << result_path << ": certified beyond the "
+              << "physical range: " << f << "\n";
   const std::string html = certificate_html(c);
   write_atomically(out_path, [&](std::ostream& out) { out << html; });
   std::printf("%s: calibration certificate of %s (%s; %zu coefficients, %zu sections)\n",

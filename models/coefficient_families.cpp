@@ -1,5 +1,6 @@
 #include "models/coefficient_families.hpp"
 
+#include <cmath>
 #include <stdexcept>
 #include <utility>
 
@@ -9,6 +10,19 @@
 namespace sinscal {
 
 namespace {
+
+// The physical ranges (CoefficientFamily::plausible_max, SI), generous for the coarsest sensors
+// calibrated here (consumer MEMS: a gyro zero-rate offset of tens of deg/s, an accelerometer offset
+// of 150 mg, sensitivity errors of a few percent, cross-axis sensitivity of 2 %), so that only a
+// figure no sensor can have is beyond them: a gyro bias of 100 deg/s, an accelerometer bias of
+// 1 g, a scale-factor error of 20 % (a scale of -1, i.e. -100 %, is a sensor that reads nothing),
+// a misalignment of 10 deg (the table frame's includes the IMU's mounting). The thermal and drift
+// terms: the same change over kSpan degrees C or one hour; the extended ones: see each entry.
+constexpr double kMaxGyroBias = 100.0 * units::deg_per_s;
+constexpr double kMaxAccelBias = units::g0;
+constexpr double kMaxScale = 0.2;
+constexpr double kMaxMisalignment = 10.0 * units::deg;
+constexpr double kSpan = 100.0;  // deg C
 
 // Row and column of the k-th off-diagonal entry in the order xy xz yx yz zx zy.
 int off_row(int k) { return k / 2; }
@@ -66,7 +80,8 @@ void add_thermal_families(std::vector<CoefficientFamily>& t) {
                   false,
                   "gyro bias, " + degree + " in the temperature",
                   gyro_bias[d],
-                  chamber});
+                  chamber,
+                  kMaxGyroBias / std::pow(kSpan, d + 1)});
     t.push_back(F{"accel.bias_temp" + n,
                   "accel.bias_temp" + n,
                   kAxes,
@@ -78,7 +93,8 @@ void add_thermal_families(std::vector<CoefficientFamily>& t) {
                   false,
                   "accelerometer bias, " + degree + " in the temperature",
                   accel_bias[d],
-                  chamber});
+                  chamber,
+                  kMaxAccelBias / std::pow(kSpan, d + 1)});
     t.push_back(F{"gyro.scale_temp" + n,
                   "gyro.scale_temp" + n,
                   kAxes,
@@ -90,7 +106,8 @@ void add_thermal_families(std::vector<CoefficientFamily>& t) {
                   false,
                   "gyro scale factor, " + degree + " in the temperature",
                   gyro_scale[d],
-                  chamber});
+                  chamber,
+                  kMaxScale / std::pow(kSpan, d + 1)});
     t.push_back(F{"accel.scale_temp" + n,
                   "accel.scale_temp" + n,
                   kAxes,
@@ -102,7 +119,8 @@ void add_thermal_families(std::vector<CoefficientFamily>& t) {
                   false,
                   "accelerometer scale factor, " + degree + " in the temperature",
                   accel_scale[d],
-                  chamber});
+                  chamber,
+                  kMaxScale / std::pow(kSpan, d + 1)});
     if (d > 0) continue;
     const std::vector<UnitToken> angle_per_c = {{"arcsec/C", arcsec}, {"rad/C", 1.0}};
     t.push_back(F{"gyro.misalignment_temp1", "gyro.misalignment_temp1", kOffDiagonal, angle_per_c,
@@ -111,14 +129,14 @@ void add_thermal_families(std::vector<CoefficientFamily>& t) {
                   [](ImuErrorModel& m, int k) -> double& {
                     return m.gyro.misalignment_temp(off_row(k), off_col(k));
                   },
-                  chamber});
+                  chamber, kMaxMisalignment / kSpan});
     t.push_back(F{"accel.misalignment_temp1", "accel.misalignment_temp1", kOffDiagonal, angle_per_c,
                   O::Accel, false, terms[0], 1 * arcsec, false,
                   "accelerometer misalignment, linear in the temperature",
                   [](ImuErrorModel& m, int k) -> double& {
                     return m.accel.misalignment_temp(off_row(k), off_col(k));
                   },
-                  chamber});
+                  chamber, kMaxMisalignment / kSpan});
     t.push_back(F{"gyro.bias_temp_rate",
                   "gyro.bias_temp_rate",
                   kAxes,
@@ -130,7 +148,8 @@ void add_thermal_families(std::vector<CoefficientFamily>& t) {
                   false,
                   "gyro bias in the rate of change of temperature",
                   [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias_temp_rate(k); },
-                  "a chamber ramp (the temperature changing while the plan runs)"});
+                  "a chamber ramp (the temperature changing while the plan runs)",
+                  kMaxGyroBias / (1.0 / 60.0)});
   }
 }
 
@@ -153,29 +172,31 @@ std::vector<CoefficientFamily> make_families() {
   std::vector<F> t;
   // Base: bias, scale factor and misalignment of each triad.
   t.push_back(F{"gyro.bias", "gyro.bias", kAxes, rate, O::Gyro, true, "", 1.0 * deg_per_h, true,
-                "gyro bias", [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias(k); },
-                ""});
+                "gyro bias", [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias(k); }, "",
+                kMaxGyroBias});
   t.push_back(F{"gyro.scale", "gyro.scale", kAxes, ratio, O::Gyro, true, "", 300 * ppm, false,
                 "gyro scale-factor error",
-                [](ImuErrorModel& m, int k) -> double& { return m.gyro.scale(k); }, ""});
+                [](ImuErrorModel& m, int k) -> double& { return m.gyro.scale(k); }, "", kMaxScale});
   t.push_back(F{"gyro.misalignment", "gyro.misalignment", kOffDiagonal, angle, O::Gyro, true, "",
                 300 * arcsec, false, "gyro misalignment (axis i towards body axis j)",
                 [](ImuErrorModel& m, int k) -> double& {
                   return m.gyro.misalignment(off_row(k), off_col(k));
                 },
-                ""});
+                "", kMaxMisalignment});
   t.push_back(F{"accel.bias", "accel.bias", kAxes, accel, O::Accel, true, "", 1000 * ug, true,
                 "accelerometer bias",
-                [](ImuErrorModel& m, int k) -> double& { return m.accel.bias(k); }, ""});
+                [](ImuErrorModel& m, int k) -> double& { return m.accel.bias(k); }, "",
+                kMaxAccelBias});
   t.push_back(F{"accel.scale", "accel.scale", kAxes, ratio, O::Accel, true, "", 300 * ppm, false,
                 "accelerometer scale-factor error",
-                [](ImuErrorModel& m, int k) -> double& { return m.accel.scale(k); }, ""});
+                [](ImuErrorModel& m, int k) -> double& { return m.accel.scale(k); }, "",
+                kMaxScale});
   t.push_back(F{"accel.misalignment", "accel.misalignment", kOffDiagonal, angle, O::Accel, true, "",
                 300 * arcsec, false, "accelerometer misalignment (axis i towards body axis j)",
                 [](ImuErrorModel& m, int k) -> double& {
                   return m.accel.misalignment(off_row(k), off_col(k));
                 },
-                ""});
+                "", kMaxMisalignment});
   // Extended terms.
   t.push_back(F{"accel.k2",
                 "accel.k2",
@@ -189,16 +210,18 @@ std::vector<CoefficientFamily> make_families() {
                 "accelerometer quadratic scale factor",
                 [](ImuErrorModel& m, int k) -> double& { return m.accel.k2(k); },
                 "each axis horizontal and at two or more specific-force levels (e.g. along gravity "
-                "and at 45 deg): one level makes K2 look like the scale asymmetry"});
+                "and at 45 deg): one level makes K2 look like the scale asymmetry",
+                1e5 * ug_per_g2});  // 0.1 per g: 10 % at 1 g
   t.push_back(F{"gyro.scale_asym", "gyro.scale_asym", kAxes, ratio, O::Gyro, false, "scale_asym",
                 300 * ppm, false, "gyro scale-factor asymmetry",
                 [](ImuErrorModel& m, int k) -> double& { return m.gyro.scale_asym(k); },
-                "each gyro axis turned both ways at a known rate (a rotation plan)"});
+                "each gyro axis turned both ways at a known rate (a rotation plan)", kMaxScale});
   t.push_back(F{"accel.scale_asym", "accel.scale_asym", kAxes, ratio, O::Accel, false, "scale_asym",
                 300 * ppm, false, "accelerometer scale-factor asymmetry",
                 [](ImuErrorModel& m, int k) -> double& { return m.accel.scale_asym(k); },
                 "each accelerometer axis both up and down, at two or more specific-force levels "
-                "(to tell it from K2)"});
+                "(to tell it from K2)",
+                kMaxScale});
   t.push_back(
       F{"gyro.g_sensitivity",
         "gyro.g_sensitivity",
@@ -211,7 +234,8 @@ std::vector<CoefficientFamily> make_families() {
         false,
         "gyro g-sensitivity (gyro axis i, specific force along j)",
         [](ImuErrorModel& m, int k) -> double& { return m.gyro_g_sensitivity(k / 3, k % 3); },
-        "orientations with gravity along each axis (static), or turns"});
+        "orientations with gravity along each axis (static), or turns",
+        1.0 * deg_per_s / g0});  // MEMS: 0.1 deg/s/g
   t.push_back(
       F{"accel.lever_arm",
         "accel.lever_arm",
@@ -224,7 +248,8 @@ std::vector<CoefficientFamily> make_families() {
         false,
         "inner lever arm (accelerometer i's proof mass, component j)",
         [](ImuErrorModel& m, int k) -> double& { return m.accel_lever_arm_b(k % 3, k / 3); },
-        "turns with rate and angular acceleration (a rotation plan)"});
+        "turns with rate and angular acceleration (a rotation plan)",
+        1.0});  // m: a proof mass a metre from the reference point is not in the IMU
   t.push_back(F{"time_delay",
                 "timing.time_delay",
                 {},
@@ -236,7 +261,8 @@ std::vector<CoefficientFamily> make_families() {
                 false,
                 "gyro-to-accelerometer time delay (accelerometer late is positive)",
                 [](ImuErrorModel& m, int) -> double& { return m.time_delay; },
-                "turns (a rotation plan): the delay only acts while the attitude changes"});
+                "turns (a rotation plan): the delay only acts while the attitude changes",
+                1.0});  // s: a second between gyro and accelerometer samples
   t.push_back(F{"gyro.bias_drift",
                 "gyro.bias_drift",
                 kAxes,
@@ -248,7 +274,8 @@ std::vector<CoefficientFamily> make_families() {
                 false,
                 "gyro bias drift (linear in the time since the start of the plan)",
                 [](ImuErrorModel& m, int k) -> double& { return m.gyro.bias_drift(k); },
-                "orientations revisited later in the session"});
+                "orientations revisited later in the session",
+                kMaxGyroBias / hour});
   t.push_back(F{"accel.bias_drift",
                 "accel.bias_drift",
                 kAxes,
@@ -260,7 +287,8 @@ std::vector<CoefficientFamily> make_families() {
                 false,
                 "accelerometer bias drift (linear in the time since the start of the plan)",
                 [](ImuErrorModel& m, int k) -> double& { return m.accel.bias_drift(k); },
-                "orientations revisited later in the session"});
+                "orientations revisited later in the session",
+                kMaxAccelBias / hour});
   add_thermal_families(t);
   return t;
 }

@@ -48,6 +48,11 @@ struct CoefficientFamily {
   /// Extended families: the plan feature that separates the family from the base coefficients
   /// (named by the diagnosis when a plan cannot).
   std::string separated_by;
+  /// Physical range: the largest magnitude (SI) a coefficient of the family (and its sigma) can
+  /// have for any sensor this tool calibrates, consumer MEMS included, with a margin. Beyond it
+  /// the figure is not a calibration (a wrong unit or scale, a broken estimate, a damaged file):
+  /// results are refused by every reader of outputs (report/result.hpp check_plausible).
+  double plausible_max = 0.0;
 
   /// A thermal family (terms thermal, thermal2, thermal3): it needs the sensors' temperatures.
   bool thermal() const { return term.rfind("thermal", 0) == 0; }

@@ -55,6 +55,13 @@ struct Certificate {
   std::vector<std::string> verdict_reasons;
   std::vector<CertificateSection> sections;
   std::string issued;  // "sinscal 1.2.0, 2026-12-01T09:30:00Z"
+  /// The coverage factor k of the expanded uncertainty U = k sigma shown beside each value.
+  double coverage_factor = 2.0;
+  /// The conditions of the calibration: label, value (the log's temperature, the soaks', ...).
+  std::vector<std::pair<std::string, std::string>> conditions;
+  /// Coefficients beyond their family's physical range, certified with --force (each with why).
+  std::vector<std::string> forced;
+  std::string approver;  // the person who approves the certificate (empty: a blank to sign)
 };
 
 struct CertificateOptions {
@@ -62,11 +69,16 @@ struct CertificateOptions {
   std::string diagnosis_dir;  // empty: none
   std::string monitor_path;   // empty: the one the result records
   std::string gnuplot = "gnuplot";
+  /// Certify coefficients beyond their family's physical range (noted on the page).
+  bool force = false;
+  double coverage_factor = 2.0;  // k of U = k sigma; 1 <= k <= 10
+  std::string approver;          // --approved-by
 };
 
 /// Reads a result file (every method's) and, when given, a diagnosis directory. Throws
 /// std::runtime_error naming the file and the cause: not JSON, not a result (no coefficients, a
-/// truth file, an unknown coefficient), a diagnosis directory without diagnosis.json.
+/// truth file, an unknown coefficient, a coefficient beyond its family's physical range unless
+/// `force`: read_result_file), a diagnosis directory without diagnosis.json.
 Certificate read_certificate(const CertificateOptions& options);
 
 /// The convergence section: the largest sigma of each coefficient family over time, drawn by
@@ -79,6 +91,16 @@ CertificateSection convergence_section(const std::string& monitor_path,
 /// residual plot. Throws std::runtime_error naming the directory when diagnosis.json is missing
 /// or not a diagnosis.
 CertificateSection diagnosis_section(const std::string& dir);
+
+/// The conditions of a calibration as its result (and its log) give them: the temperature of
+/// the log where it has temperature columns (read through the session the provenance names, when
+/// the log is unchanged), the soaks' temperatures of a thermal result, the site.
+std::vector<std::pair<std::string, std::string>> calibration_conditions(
+    const nlohmann::json& result);
+
+/// A result's method key as a reader of the certificate says it ("attitude_from": "Attitude
+/// updates from"); unknown keys in words, their unit suffix in brackets ("window_s": "Window [s]").
+std::string method_label(const std::string& key);
 
 /// The page: one HTML document, CSS inline, pictures as data: URIs, no script, an A4 print style.
 std::string certificate_html(const Certificate& certificate);

@@ -1,5 +1,6 @@
 // certificate_html: the page. One HTML document, no script, no network: the CSS inline, pictures
 // as data: URIs; a print style for A4 (tables' headers repeated, rows and figures kept whole).
+#include <cstdio>
 #include <sstream>
 
 #include "models/coefficient_families.hpp"
@@ -97,6 +98,7 @@ table.facts td { border-bottom: 1px solid #edf0f3; }
 ul.reasons { margin: 6px 0 0 18px; padding: 0; }
 p.note { color: var(--muted); margin: 6px 0; }
 .changed { color: #9b1c1c; font-weight: 700; }
+table.facts td.sign { height: 28px; border-bottom: 1px solid var(--ink); min-width: 300px; }
 figure { margin: 8px 0; text-align: center; }
 figure img { max-width: 100%; border: 1px solid var(--rule); }
 footer { margin-top: 26px; border-top: 1px solid var(--rule); padding-top: 8px;
@@ -161,30 +163,68 @@ void identity(std::ostringstream& h, const Certificate& c) {
   h << "</section>\n";
 }
 
+std::string k_text(double k) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", k);
+  return b;
+}
+
 void coefficients(std::ostringstream& h, const Certificate& c) {
+  const std::string k = k_text(c.coverage_factor);
   h << "<section><h2>Calibration coefficients</h2>\n"
        "<table class=\"data coefficients\">\n<thead><tr><th>coefficient</th>"
-       "<th class=\"num\">value</th><th class=\"num\">1-sigma</th><th>unit</th></tr></thead>\n"
+       "<th class=\"num\">value</th><th class=\"num\">U (k = "
+    << k
+    << ")</th><th class=\"num\">1-sigma</th><th>unit</th></tr></thead>\n"
        "<tbody>\n";
   std::string family;
   for (const CoefficientRow& r : coefficient_rows(c.coefficients)) {
     if (r.family != family) {
       family = r.family;
-      h << "<tr class=\"family\"><td colspan=\"4\">" << html_escaped(family) << "<span>"
+      h << "<tr class=\"family\"><td colspan=\"5\">" << html_escaped(family) << "<span>"
         << html_escaped(coefficient_family_info(family).help) << "</span></td></tr>\n";
     }
     h << "<tr><td>" << html_escaped(r.name) << "</td>";
     if (r.kind == CoefficientRow::Kind::Estimated)
-      h << "<td class=\"num\">" << html_escaped(r.value) << "</td><td class=\"num\">± "
-        << html_escaped(r.sigma) << "</td>";
+      h << "<td class=\"num\">" << html_escaped(r.value) << "</td><td class=\"num u\">± "
+        << coefficient_number(c.coverage_factor * *c.coefficients.at(r.name).sigma)
+        << "</td><td class=\"num sigma\">" << html_escaped(r.sigma) << "</td>";
     else
-      h << "<td class=\"na\" colspan=\"2\">" << html_escaped(r.value) << "</td>";
+      h << "<td class=\"na\" colspan=\"3\">" << html_escaped(r.value) << "</td>";
     h << "<td>" << html_escaped(r.unit) << "</td></tr>\n";
   }
   h << "</tbody></table>\n<p class=\"note\">Values in the display units of the result file "
-       "(docs/conventions.md); 1-sigma uncertainties. \"unobservable\": the data do not "
-       "determine the coefficient and no value is given; \"0 (convention)\": fixed by the "
-       "body-frame convention, not estimated.</p>\n</section>\n";
+       "(docs/conventions.md). U is the expanded uncertainty U = k &#183; u, u the standard "
+       "(1-sigma) uncertainty of the estimate, with the coverage factor k = "
+    << k
+    << (c.coverage_factor == 2.0 ? " (a coverage probability of about 95 % for a normal "
+                                   "distribution)"
+                                 : "")
+    << ". \"unobservable\": the data do not determine the coefficient and no value is given; "
+       "\"0 (convention)\": fixed by the body-frame convention, not estimated.</p>\n";
+  if (!c.forced.empty()) {
+    h << "<p class=\"changed\" id=\"forced\">Certified with --force although beyond the "
+         "physical range of their family (models/coefficient_families.cpp):</p>\n<ul "
+         "class=\"reasons\">\n";
+    for (const auto& f : c.forced) h << "<li>" << html_escaped(f) << "</li>\n";
+    h << "</ul>\n";
+  }
+  h << "</section>\n";
+}
+
+void conditions(std::ostringstream& h, const Certificate& c) {
+  if (c.conditions.empty()) return;
+  h << "<section class=\"keep\"><h2>Conditions of the calibration</h2>\n";
+  facts(h, c.conditions);
+  h << "</section>\n";
+}
+
+void approval(std::ostringstream& h, const Certificate& c) {
+  h << "<section class=\"keep approval\"><h2>Approval</h2>\n<table class=\"facts\">\n"
+       "<tr><th>Approved by (name, function)</th><td class=\"sign\" id=\"approver\">"
+    << html_escaped(c.approver)
+    << "</td></tr>\n<tr><th>Signature</th><td class=\"sign\"></td></tr>\n"
+       "<tr><th>Date</th><td class=\"sign\"></td></tr>\n</table>\n</section>\n";
 }
 
 void section(std::ostringstream& h, const CertificateSection& s) {
@@ -219,8 +259,10 @@ std::string certificate_html(const Certificate& c) {
     h << "</ul></section>\n";
   }
   identity(h, c);
+  conditions(h, c);
   coefficients(h, c);
   for (const auto& s : c.sections) section(h, s);
+  approval(h, c);
   h << "<footer><span>Issued by " << html_escaped(c.issued)
     << "</span><span>sinscal calibration certificate</span></footer>\n</div>\n</body>\n</html>\n";
   return h.str();

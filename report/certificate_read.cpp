@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <utility>
 
 #include "models/imu_error_model.hpp"
 #include "report/certificate.hpp"
@@ -186,7 +187,8 @@ CertificateSection method_section(const Json& j) {
   for (const char* key : {"method", "consistency", "data"}) {
     if (!j.contains(key) || !j[key].is_object()) continue;
     for (const auto& [k, v] : j[key].items())
-      if (!v.is_object() && !(v.is_array() && v.size() > 6)) s.facts.emplace_back(k, text(v));
+      if (!v.is_object() && !(v.is_array() && v.size() > 6))
+        s.facts.emplace_back(method_label(k), text(v));
   }
   return s;
 }
@@ -307,32 +309,28 @@ std::optional<CertificateSection> noise_section(const Json& j) {
 
 Certificate read_certificate(const CertificateOptions& o) {
   const std::string& path = o.result_path;
-  std::ifstream in(path);
-  if (!in) fail(path, "cannot open");
-  Json j;
-  try {
-    j = Json::parse(in);
-  } catch (const Json::exception& e) {
-    fail(path, std::string("not a sinscal result file (not JSON: ") + e.what() + ")");
-  }
-  if (!j.is_object() || !j.contains("coefficients") || !j["coefficients"].is_object())
-    fail(path, "not a sinscal result file (no \"coefficients\" object)");
+  if (!(o.coverage_factor >= 1.0 && o.coverage_factor <= 10.0))
+    throw std::invalid_argument("the coverage factor k must be 1 to 10");
+  ResultFile r = read_result_file(path, o.force);
+  const Json& j = r.json;
   if (!j.contains("method") || !j["method"].is_object())
     fail(path, j.contains("note") ? "a truth file (simulate's), not a calibration result: report "
                                     "takes the result of calibrate"
                                   : "not a calibration result (no \"method\" section)");
-  for (const auto& [name, e] : j["coefficients"].items()) {
-    try {
-      coefficient_info(name);
-    } catch (const std::exception&) {
-      fail(path, "unknown coefficient '" + name + "'");
-    }
-    (void)e;
-  }
   Certificate c;
-  c.coefficients = read_result_json(path);
+  c.coefficients = std::move(r.coefficients);
+  c.forced = std::move(r.forced);
+  c.coverage_factor = o.coverage_factor;
+  c.approver = o.approver;
   identity_and_files(j, path, c);
   verdict(j, c);
+  if (!c.forced.empty()) {
+    c.verdict = Verdict::Fail;
+    c.verdict_title = "Implausible coefficients (certified with --force)";
+    for (const auto& f : c.forced)
+      c.verdict_reasons.push_back("beyond what a sensor can have: " + f);
+  }
+  c.conditions = calibration_conditions(j);
   c.sections.push_back(method_section(j));
   if (auto s = installation_section(j)) c.sections.push_back(*s);
   const Json p = j.value("provenance", Json::object());

@@ -13,6 +13,7 @@
 
 #include "models/coefficient_families.hpp"
 #include "models/units.hpp"
+#include "report/result.hpp"
 
 #ifndef SINSCAL_VERSION
 #define SINSCAL_VERSION "unknown"
@@ -390,11 +391,25 @@ struct sinscal_imu_calibration {
   return h;
 }
 
-// The export of a parsed result file `path`.
-FirmwareExport export_of(const std::string& path, const nlohmann::json& j,
+// The coefficients of a result read (and checked) by read_result_file into the export's models.
+std::vector<std::string> take_coefficients(const ResultFile& r, FirmwareExport& e) {
+  std::vector<std::string> present;
+  for (const auto& [name, c] : r.coefficients) {
+    if (c.fixed_by_convention)
+      e.fixed_by_convention.push_back(name);
+    else if (!c.observable)
+      e.unobservable.push_back(name);
+    e.model.set(name, c.fixed_by_convention || !c.observable ? 0.0 : c.value);
+    e.sigma.set(name, c.sigma.value_or(0.0));
+    present.push_back(name);
+  }
+  return present;
+}
+
+// The export of a result file `path` read by read_result_file.
+FirmwareExport export_of(const std::string& path, const ResultFile& r,
                          const FirmwareExportOptions& options) {
-  if (!j.is_object() || !j.contains("coefficients") || !j["coefficients"].is_object())
-    fail(path, "not a sinscal result file (no \"coefficients\" object)");
+  const nlohmann::json& j = r.json;
   if (!j.contains("method") || !j["method"].is_object() || !j["method"].contains("name") ||
       !j["method"]["name"].is_string())
     fail(path, j.contains("note")
@@ -407,46 +422,7 @@ FirmwareExport export_of(const std::string& path, const nlohmann::json& j,
   e.source_bytes = std::filesystem::file_size(path, ec);
   e.method = j["method"]["name"].get<std::string>();
   body_frame_of(j["method"], e);
-
-  // Every coefficient: known name and unit, a value (or the reason for none), a sane sigma.
-  std::vector<std::string> present;
-  for (const auto& [name, c] : j["coefficients"].items()) {
-    const CoefficientInfo* info = nullptr;
-    try {
-      info = &coefficient_info(name);
-    } catch (const std::invalid_argument&) {
-      fail(path, "unknown coefficient '" + name +
-                     "': this sinscal cannot export a term it does not know");
-    }
-    if (!c.is_object()) fail(path, "coefficient '" + name + "' is not an object");
-    const std::string unit =
-        c.contains("unit") && c["unit"].is_string() ? c["unit"].get<std::string>() : info->unit;
-    if (unit != info->unit)
-      fail(path, "coefficient '" + name + "' is in '" + unit + "', results give it in '" +
-                     info->unit + "'");
-    const bool fixed = c.value("fixed_by_convention", false);
-    const bool observable = c.value("observable", true);
-    double value = 0.0, sigma = 0.0;
-    if (c.contains("sigma")) {
-      if (!c["sigma"].is_number() || !std::isfinite(c["sigma"].get<double>()) ||
-          c["sigma"].get<double>() < 0.0)
-        fail(path, "coefficient '" + name + "': a sigma must be a finite number >= 0");
-      sigma = c["sigma"].get<double>();
-    }
-    if (fixed) {
-      e.fixed_by_convention.push_back(name);
-    } else if (!observable) {
-      e.unobservable.push_back(name);
-    } else {
-      if (!c.contains("value") || !c["value"].is_number() ||
-          !std::isfinite(c["value"].get<double>()))
-        fail(path, "coefficient '" + name + "' has no finite value");
-      value = c["value"].get<double>();
-    }
-    e.model.set(name, value);
-    e.sigma.set(name, sigma);
-    present.push_back(name);
-  }
+  const std::vector<std::string> present = take_coefficients(r, e);
   // Families whole or absent; the base ones required.
   std::vector<std::string> missing;
   for (const auto& f : coefficient_families()) {
@@ -509,6 +485,8 @@ FirmwareExport export_of(const std::string& path, const nlohmann::json& j,
     fail(path, "the calibration failed its own checks: " + joined(verdicts) +
                    "; a firmware must not apply it (--force exports it anyway)");
   e.warnings = verdicts;
+  for (const auto& f : r.forced)
+    e.warnings.push_back("implausible coefficient exported as given: " + f);
   if (!e.unobservable.empty()) {
     if (!options.force)
       fail(path, std::to_string(e.unobservable.size()) +
@@ -530,16 +508,9 @@ bool FirmwareExport::has(const std::string& family) const {
 
 FirmwareExport read_result_for_export(const std::string& path,
                                       const FirmwareExportOptions& options) {
-  std::ifstream in(path);
-  if (!in) fail(path, "cannot open");
-  nlohmann::json j;
+  const ResultFile r = read_result_file(path, options.force);
   try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& x) {
-    fail(path, std::string("not a sinscal result file (not JSON: ") + x.what() + ")");
-  }
-  try {
-    return export_of(path, j, options);
+    return export_of(path, r, options);
   } catch (const nlohmann::json::exception& x) {  // a field of the wrong type
     fail(path, std::string("not a sinscal result file (") + x.what() + ")");
   }

@@ -26,7 +26,8 @@ namespace sinscal {
 
 struct FirmwareExportOptions {
   /// Export a result whose verdict failed (plausibility gate, divergence, an early stop, no
-  /// convergence) and coefficients the data did not determine (exported as zero, listed).
+  /// convergence), coefficients the data did not determine (exported as zero, listed) and
+  /// coefficients beyond their family's physical range (exported as given, in `warnings`).
   bool force = false;
 };
 
@@ -46,15 +47,17 @@ struct FirmwareExport {
   std::vector<std::string> families;
   std::vector<std::string> fixed_by_convention;  // zero by the result's convention
   std::vector<std::string> unobservable;         // not determined: exported as zero (--force)
-  std::vector<std::string> warnings;             // failed verdicts exported with --force
+  std::vector<std::string> warnings;  // failed verdicts, implausible coefficients (--force)
 
   bool has(const std::string& family) const;
 };
 
-/// Reads a calibration result (any method) for export. Throws std::runtime_error naming the file
-/// and the cause: not a result (not JSON, no coefficients, no method: a truth file), an unknown
-/// coefficient or unit, a family with coefficients missing (the base 24 are required), a failed
-/// verdict or coefficients the data did not determine (both unless `force`).
+/// Reads a calibration result (any method) for export, through read_result_file
+/// (report/result.hpp). Throws std::runtime_error naming the file and the cause: not a result (not
+/// JSON, no coefficients, no method: a truth file), an unknown coefficient or unit, a family with
+/// coefficients missing (the base 24 are required), a coefficient beyond its family's physical
+/// range, a failed verdict or coefficients the data did not determine (the last three unless
+/// `force`: then listed in `warnings` and `unobservable`).
 FirmwareExport read_result_for_export(const std::string& path,
                                       const FirmwareExportOptions& options = {});
 

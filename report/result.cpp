@@ -295,38 +295,6 @@ void write_result_json(const std::string& path, const ResultCoefficients& coeffi
   write_atomically(path, [&](std::ostream& out) { out << j.dump(2) << "\n"; });
 }
 
-namespace {
-ResultCoefficient read_coefficient(const std::string& path, const std::string& name,
-                                   const nlohmann::json& e) {
-  ResultCoefficient r;
-  r.observable = e.value("observable", true);
-  r.fixed_by_convention = e.value("fixed_by_convention", false);
-  if (r.observable) r.value = e.at("value").get<double>();
-  if (e.contains("sigma")) r.sigma = e.at("sigma").get<double>();
-  r.unit = e.value("unit", "");
-  if (!std::isfinite(r.value))
-    throw std::runtime_error(path + ": coefficient '" + name + "': the value is not finite");
-  if (r.sigma && !(std::isfinite(*r.sigma) && *r.sigma >= 0.0))
-    throw std::runtime_error(path + ": coefficient '" + name +
-                             "': a sigma must be a finite number >= 0");
-  return r;
-}
-}  // namespace
-
-ResultCoefficients read_result_json(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open");
-  ResultCoefficients out;
-  try {
-    const auto j = nlohmann::json::parse(in);
-    for (const auto& [name, e] : j.at("coefficients").items())
-      out[name] = read_coefficient(path, name, e);
-  } catch (const nlohmann::json::exception& e) {
-    throw std::runtime_error(path + ": not a sinscal result file: " + e.what());
-  }
-  return out;
-}
-
 ResultCoefficients load_truth(const Session& session, bool accel_triad_frame,
                               const std::string& lever_arm_reference) {
   std::error_code ec;

@@ -45,9 +45,33 @@ nlohmann::ordered_json result_sections(const ClosedFormReport& report);
 /// temporary name beside `path` and renamed when complete.
 void write_result_json(const std::string& path, const ResultCoefficients& coefficients,
                        const nlohmann::ordered_json& extra = nlohmann::ordered_json::object());
-/// Reads a result or truth file; throws std::runtime_error naming the file on a bad file (not
-/// JSON, no coefficients, an unknown coefficient name, a negative or non-finite sigma).
+/// A result or truth file read whole by the one reader of results (report/result_read.cpp):
+/// export, report, compare, the truth of simulations.
+struct ResultFile {
+  nlohmann::json json;  // the document (every section)
+  ResultCoefficients coefficients;
+  /// With `force`: each implausible coefficient and why, the override the output must record.
+  std::vector<std::string> forced;
+};
+
+/// Reads a result or truth file and checks every coefficient; throws std::runtime_error naming the
+/// file, the coefficient and the cause.
+/// - Always refused (malformed): not JSON, no "coefficients" object, an unknown coefficient name,
+///   a unit other than the one results give it in (docs/conventions.md), a value that is not a
+///   finite number, a sigma that is not a finite number >= 0.
+/// - Refused unless `force` (implausible, check_plausible): a value or sigma beyond the family's
+///   physical range, a sigma of 0, an estimate without a sigma in a calibration result (a file
+///   with a "method"; truth files have none).
+ResultFile read_result_file(const std::string& path, bool force = false);
+/// read_result_file(path).coefficients: every check, no override.
 ResultCoefficients read_result_json(const std::string& path);
+
+/// Why a coefficient cannot be a calibration's (empty: plausible): its value or its sigma beyond
+/// the physical range of its family (CoefficientFamily::plausible_max), a sigma of 0, or no
+/// sigma when `sigma_required` (an estimate of a calibration result). `c` is in the unit results
+/// give `name` in.
+std::string check_plausible(const std::string& name, const ResultCoefficient& c,
+                            bool sigma_required);
 
 /// The session's truth (simulations), empty when it has none. With `accel_triad_frame` the truth
 /// is converted to the body frame of the accelerometer triad, as results without table attitude

@@ -606,7 +606,7 @@ new compare-no-coefficients-key; cp "$base/s8/cf.json" "$d/a.json"; echo '{"x": 
 fixed 2 "b.json: not a sinscal result file" S compare a.json b.json
 new compare-value-not-a-number; cp "$base/s8/cf.json" "$d/a.json"
 sed 's/"value": [-0-9.e]*/"value": "abc"/' "$base/s8/cf.json" > "$d/b.json"
-fixed 2 "b.json: not a sinscal result file" S compare a.json b.json
+fixed 2 "b.json: coefficient 'accel.bias.x' has no finite value" S compare a.json b.json
 new compare-one-file; cp "$base/s8/cf.json" "$d/a.json"
 fixed 1 "give two result files" S compare a.json
 
@@ -669,7 +669,7 @@ fixed 2 "truth.json: a truth file (simulate's), not a calibration result" S repo
 new report-unknown-coefficient; sed 's/"gyro.bias.x"/"gyro.wobble.x"/' "$base/s8/cf.json" > "$d/r.json"
 fixed 2 "r.json: unknown coefficient 'gyro.wobble.x'" S report --result r.json --out out/r.html
 new report-value-not-a-number; sed '0,/"value": [-0-9.e]*/s//"value": "abc"/' "$base/s8/cf.json" > "$d/r.json"
-fixed 2 "r.json: not a sinscal result file" S report --result r.json --out out/r.html
+fixed 2 "r.json: coefficient 'gyro.bias.x' has no finite value" S report --result r.json --out out/r.html
 new report-diagnosis-without-json; cp "$base/s8/cf.json" "$d/r.json"; mkdir -p "$d/diag"
 POST='! test -e out/r.html'
 fixed 2 "diag/diagnosis.json: cannot open|sinscal diagnose" S report --result r.json --diagnosis diag --out out/r.html
@@ -684,6 +684,67 @@ POST='grep -q kept out/r.html'
 fixed 1 "--out out/r.html: exists|--force" S report --result r.json --out out/r.html
 new report-out-is-the-input; cp "$base/s8/cf.json" "$d/r.json"
 fixed 1 "is the result: an output never replaces an input" S report --result r.json --out r.json --force
+
+# --- what leaves the tool: every coefficient against its family's physical range ---------------
+# (models/coefficient_families.cpp plausible_max; report/result_read.cpp). export, report and
+# compare refuse (exit 2, naming the file, the coefficient and the cause) a bias of 1e308, a scale
+# factor of -1 (-100 %), a misalignment or sigma of 1e308, a missing sigma, a unit of rad/s where
+# deg/h belongs; --force records the override in the output. compare refuses a mistyped name.
+# implausible NAME SED-EXPR MESSAGE: a copy of the closed-form result edited by SED-EXPR, refused by
+# export, report and compare with MESSAGE and nothing written.
+implausible() {
+  local name=$1 expr=$2 msg=$3 cmd
+  for cmd in export report compare; do
+    new "$cmd-$name"; sed "$expr" "$base/s8/cf.json" > "$d/r.json"; cp "$base/s8/cf.json" "$d/a.json"
+    POST='test -z "$(ls out | grep -v -e stdout -e stderr)"'
+    case $cmd in
+      export) fixed 2 "r.json: $msg" S export --result r.json --format c-header --out out/e.h ;;
+      report) fixed 2 "r.json: $msg" S report --result r.json --out out/r.html ;;
+      compare) fixed 2 "r.json: $msg" S compare a.json r.json ;;
+    esac
+  done
+}
+implausible bias-1e308 '0,/"value": [-0-9.e]*/s//"value": 1e308/' \
+  "coefficient 'gyro.bias.x': value 1e+308 deg/h is beyond the physical range of gyro.bias"
+implausible scale-minus-100-percent '/"gyro.scale.x"/,/value/s/"value": [-0-9.e]*/"value": -1000000/' \
+  "coefficient 'gyro.scale.x': value -1e+06 ppm is beyond the physical range of gyro.scale"
+implausible misalignment-1e308 '/"accel.misalignment.zy"/,/value/s/"value": [-0-9.e]*/"value": 1e308/' \
+  "coefficient 'accel.misalignment.zy': value 1e+308 arcsec is beyond"
+implausible sigma-1e308 '/"accel.bias.y"/,/sigma/s/"sigma": [-0-9.e]*/"sigma": 1e308/' \
+  "coefficient 'accel.bias.y': sigma 1e+308 ug is beyond the physical range of accel.bias"
+implausible sigma-zero '/"accel.bias.y"/,/sigma/s/"sigma": [-0-9.e]*/"sigma": 0/' \
+  "coefficient 'accel.bias.y': sigma 0"
+implausible missing-sigma '/"gyro.bias.z"/,/sigma/{/"sigma"/d}' \
+  "coefficient 'gyro.bias.z': no sigma"
+implausible unit-rad-per-s '0,/"unit": "deg\/h"/s//"unit": "rad\/s"/' \
+  "coefficient 'gyro.bias.x' is in 'rad/s', results give it in 'deg/h'"
+# --force: written, the override recorded in the output (header comment, JSON field, page).
+new export-bias-1e308-forced; sed '0,/"value": [-0-9.e]*/s//"value": 1e308/' "$base/s8/cf.json" > "$d/r.json"
+POST='grep -q "WARNING (--force): implausible coefficient exported as given: gyro.bias.x: value 1e+308" out/e.h'
+fixed 0 "WARNING (--force)|gyro.bias.x" S export --result r.json --format c-header --out out/e.h --force
+new export-json-sigma-1e308-forced; sed '/"accel.bias.y"/,/sigma/s/"sigma": [-0-9.e]*/"sigma": 1e308/' "$base/s8/cf.json" > "$d/r.json"
+POST='grep -A3 "\"warnings\"" out/e.json | grep -q "accel.bias.y: sigma 1e+308"'
+fixed 0 "WARNING (--force)" S export --result r.json --format json --out out/e.json --force
+new export-yaml-scale-forced; sed '/"gyro.scale.x"/,/value/s/"value": [-0-9.e]*/"value": -1000000/' "$base/s8/cf.json" > "$d/r.json"
+POST='grep -A3 "^warnings:" out/e.yaml | grep -q "gyro.scale.x: value -1e+06 ppm"'
+fixed 0 "WARNING (--force)" S export --result r.json --format yaml --out out/e.yaml --force
+new report-bias-1e308-forced; sed '0,/"value": [-0-9.e]*/s//"value": 1e308/' "$base/s8/cf.json" > "$d/r.json"
+POST='grep -q "Certified with --force" out/r.html && grep -q "Implausible coefficients (certified with --force)" out/r.html'
+fixed 0 "WARNING (--force)|gyro.bias.x" S report --result r.json --out out/r.html --force
+new compare-bias-1e308-forced; sed '0,/"value": [-0-9.e]*/s//"value": 1e308/' "$base/s8/cf.json" > "$d/r.json"; cp "$base/s8/cf.json" "$d/a.json"
+POST='grep -q "WARNING (--force): B: gyro.bias.x: value 1e+308" out/stdout'
+fixed 0 "WARNING (--force)" S compare a.json r.json --force
+# The unit and a mistyped name are never overridden.
+new export-unit-rad-per-s-forced; sed '0,/"unit": "deg\/h"/s//"unit": "rad\/s"/' "$base/s8/cf.json" > "$d/r.json"
+fixed 2 "r.json: coefficient 'gyro.bias.x' is in 'rad/s'" S export --result r.json --format json --out out/e.json --force
+new compare-mistyped-names; sed 's/"gyro.bias.x"/"gyro.bais.x"/' "$base/s8/cf.json" > "$d/a.json"; cp "$d/a.json" "$d/b.json"
+fixed 2 "a.json: unknown coefficient 'gyro.bais.x'" S compare a.json b.json
+new compare-mistyped-name-forced; cp "$base/s8/cf.json" "$d/a.json"; sed 's/"accel.scale.z"/"accel.scael.z"/' "$base/s8/cf.json" > "$d/b.json"
+fixed 2 "b.json: unknown coefficient 'accel.scael.z'" S compare a.json b.json --force
+# A coefficient in one file only is named (not silently left out of the comparison).
+new compare-coefficient-in-one-file; cp "$base/s8/cf.json" "$d/a.json"
+sed '/"gyro.bias.x": {/,/}/d' "$base/s8/cf.json" > "$d/b.json"
+fixed 0 "coefficients only in a.json, not compared: gyro.bias.x" S compare a.json b.json
 
 # --- plot-convergence (monitor JSONL) -----------------------------------------------------------
 new plot-monitor-missing
@@ -724,14 +785,14 @@ new plot-monitor-name-with-newline; nl_name=$'m\nsystem "touch pwned"\n#.jsonl'
 cp "$base/mini/monitor.jsonl" "$d/$nl_name"
 POST='! grep -q "^system" out/conv.gp && ! test -e pwned'
 fixed "0,1,2" "" S plot-convergence --monitor "$nl_name" --out out/conv.png
-# compare: a negative sigma is not a result (exit 2 naming the file); two files without a single
-# known coefficient name have nothing in common (exit 2).
+# compare: a negative sigma is not a result (exit 2 naming the file); a name that is not a
+# coefficient is refused (exit 2).
 new compare-negative-sigma; cp "$base/s8/cf.json" "$d/a.json"
 sed '0,/"sigma": [0-9.e-]*/s//"sigma": -1/' "$base/s8/cf.json" > "$d/b.json"
 fixed 2 "b.json|sigma" S compare a.json b.json --max-sigma 3
 new compare-no-known-coefficients
 echo '{"coefficients": {"foo": {"value": 1, "sigma": 1}}}' > "$d/a.json"; cp "$d/a.json" "$d/b.json"
-fixed 2 "no known coefficient" S compare a.json b.json --max-sigma 3
+fixed 2 "a.json: unknown coefficient 'foo'" S compare a.json b.json --max-sigma 3
 # Options a method does not use must be refused (exit 1), not silently ignored.
 new kf-arw-vrw-ignored; mini
 fixed 1 "--arw" kf --arw 0.5 --vrw 50

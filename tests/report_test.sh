@@ -84,6 +84,29 @@ else
     "$(grep -c '<tr><td>[a-z_]*\.[a-z_.]*</td><td class="num">' "$work/dom.html")" -ge \
     "$(grep -c '"unit":' "$work/r19/kf.json")"
   check "no console message from the page" lacks "$work/console.txt" 'CONSOLE\|Uncaught\|Failed to load'
+  # ISO/IEC 17025: the expanded uncertainty U = k sigma with its coverage factor beside every
+  # value, the conditions, readable method labels, the approval field, in the rendered page.
+  check "the rendered page states the coverage factor" contains "$work/dom.html" '<th class="num">U (k = 2)</th>'
+  check "the rendered page has the conditions" contains "$work/dom.html" 'Conditions of the calibration'
+  check "the rendered page labels the method in words" contains "$work/dom.html" 'Attitude updates taken from'
+  check "the rendered page has no raw method key" lacks "$work/dom.html" '<th>attitude_from</th>\|<th>prior_scale</th>'
+  check "the rendered page has the approval field" contains "$work/dom.html" 'id="approver"'
+  if command -v python3 > /dev/null; then
+    # Every estimated coefficient of the result (a value and a sigma) has a row whose U is k
+    # times its 1-sigma (each printed to 4 decimals), and no other row has a U.
+    python3 - "$work/r19/kf.json" "$work/dom.html" > "$work/u.txt" 2>&1 <<'PY'
+import json, re, sys
+coefficients = json.load(open(sys.argv[1]))["coefficients"]
+want = {n for n, c in coefficients.items() if "value" in c and "sigma" in c and not c.get("fixed_by_convention")}
+dom = open(sys.argv[2]).read()
+rows = re.findall(r'<tr><td>([a-z_0-9.]+)</td><td class="num">[^<]*</td><td class="num u">± ([^<]*)</td><td class="num sigma">([^<]*)</td>', dom)
+bad = [n for n, u, s in rows if abs(float(u) - 2 * float(s)) > 1.5e-4]
+print(len(want), len(rows), sorted(want ^ {n for n, _, _ in rows}), bad)
+sys.exit(0 if want == {n for n, _, _ in rows} and len(rows) == len(want) and not bad and want else 1)
+PY
+    u_status=$?
+    check "the rendered page shows U (k = 2) = 2 sigma for every coefficient ($(cat "$work/u.txt"))" test "$u_status" -eq 0
+  fi
   run_chromium --hide-scrollbars --window-size=1100,1400 --screenshot="$work/r19/screenshot.png" \
     "file://$page" > /dev/null 2>&1
   check "the screenshot is taken" test -s "$work/r19/screenshot.png"

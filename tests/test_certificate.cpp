@@ -89,7 +89,7 @@ TEST_CASE("Certificate: every coefficient of a result with its value, sigma and 
     const std::string tail = html.substr(html.find(row), 400);
     if (r.kind == CoefficientRow::Kind::Estimated) {
       CHECK(tail.find(">" + r.value + "<") != std::string::npos);
-      CHECK(tail.find("± " + r.sigma + "<") != std::string::npos);
+      CHECK(tail.find("<td class=\"num sigma\">" + r.sigma + "<") != std::string::npos);
     } else {
       CHECK(tail.find(r.value) != std::string::npos);
     }

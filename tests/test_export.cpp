@@ -382,9 +382,9 @@ TEST_CASE("Export: what a result lacks or failed is refused with file and cause"
         "'gyro.bias.y' has no finite value", true);
   cause(variant("type.json",
                 [](Json& v) { v["coefficients"]["gyro.bias.y"]["fixed_by_convention"] = "yes"; }),
-        "not a sinscal result file (", true);
+        "'gyro.bias.y': \"fixed_by_convention\" must be true or false", true);
   cause(variant("sigma.json", [](Json& v) { v["coefficients"]["gyro.bias.y"]["sigma"] = -1; }),
-        "a sigma must be a finite number >= 0", true);
+        "'gyro.bias.y': a sigma must be a finite number > 0", true);
 
   // Failed verdicts: refused, exported with --force and a warning.
   const std::string gate = variant("gate.json", [](Json& v) {

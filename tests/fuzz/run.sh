@@ -19,7 +19,8 @@ shift || true
 case "$seconds" in '' | *[!0-9]*) echo "run.sh: SECONDS_PER_TARGET must be a whole number, got '$seconds'" >&2; exit 2 ;; esac
 
 all_targets=(fuzz_quantities fuzz_ini fuzz_plan fuzz_sensor fuzz_session fuzz_log_native
-  fuzz_log_custom fuzz_log_novatel fuzz_result_json fuzz_monitor)
+  fuzz_log_custom fuzz_log_novatel fuzz_result_json fuzz_monitor fuzz_chamber fuzz_table
+  fuzz_targets fuzz_log_columns fuzz_export)
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=("${all_targets[@]}")
 
