@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "apps/design.hpp"
+#include "filter/design/bound.hpp"
 #include "filter/design/search.hpp"
 #include "models/coefficient_families.hpp"
 #include "report/output.hpp"
@@ -48,6 +49,52 @@ std::string comparison_table(const std::vector<Compared>& rows) {
     out += line;
   }
   return out;
+}
+
+// The relaxation's bound at the found plan's duration, the gap to it, and the table time below
+// which no plan of the library's segments meets every target.
+struct BoundReport {
+  DesignBound at_plan;
+  double time_for_targets = 0.0;
+  double cpu_s = 0.0;
+  int segments = 0, orientations = 0;
+};
+
+BoundReport bound_report(const CalibratorOptions& ko, const TableSpec& table, const Site& site,
+                         const SearchOptions& so, double duration) {
+  const std::clock_t c0 = std::clock();
+  const InformationLibrary lib = information_library(ko, table, site, so.targets, so.rate_hz);
+  BoundReport b;
+  b.at_plan = relaxed_bound(lib, duration);
+  b.time_for_targets = bound_time_for_targets(lib);
+  b.cpu_s = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+  b.segments = static_cast<int>(lib.segments.size());
+  b.orientations = lib.orientations;
+  return b;
+}
+
+void print_bound(const BoundReport& b, const Excess& found) {
+  std::printf(
+      "\nBound (convex relaxation over %d segments at %d orientations, %.1f s CPU): no plan of "
+      "%.1f s does better than worst sigma/target %.2f (relaxed design %.2f, %s); the found plan's "
+      "%.2f (%s) is %.0f %% above it. No plan meets every target in less than %.0f s.\n",
+      b.segments, b.orientations, b.cpu_s, b.at_plan.budget_s, b.at_plan.lower, b.at_plan.upper,
+      b.at_plan.family.c_str(), found.worst_ratio, found.worst_family.c_str(),
+      100.0 * (found.worst_ratio / b.at_plan.lower - 1.0), b.time_for_targets);
+}
+
+nlohmann::ordered_json bound_json(const BoundReport& b, const Excess& found) {
+  return {{"budget_s", b.at_plan.budget_s},
+          {"lower_worst_ratio", b.at_plan.lower},
+          {"relaxed_worst_ratio", b.at_plan.upper},
+          {"relaxed_worst_family", b.at_plan.family},
+          {"found_worst_ratio", found.worst_ratio},
+          {"gap", found.worst_ratio / b.at_plan.lower - 1.0},
+          {"time_for_targets_lower_s", b.time_for_targets},
+          {"segments", b.segments},
+          {"orientations", b.orientations},
+          {"iterations", b.at_plan.iterations},
+          {"cpu_s", b.cpu_s}};
 }
 
 nlohmann::ordered_json search_json(const SearchResult& r, const SearchOptions& so, double cpu,
@@ -135,6 +182,8 @@ int design_optimize(const DesignCliOptions& o) {
   for (const auto& f : o.compare)
     rows.push_back(compare_plan(Plan::load(f), f, ko, table, so.targets, o.rate_hz));
   std::cout << comparison_table(rows);
+  const BoundReport bound = bound_report(ko, table, reference.site, so, p.duration);
+  print_bound(bound, rows.front().excess);
   if (!r.meets)
     std::printf(
         "\nNo plan found%s meets every target: the best leaves %s at %.2f times its "
@@ -142,6 +191,7 @@ int design_optimize(const DesignCliOptions& o) {
         so.budget_s > 0.0 ? " within the budget" : " within the search's limit",
         r.excess.worst_family.c_str(), r.excess.worst_ratio);
   nlohmann::ordered_json extra = search_json(r, so, cpu, rows);
+  extra["bound"] = bound_json(bound, rows.front().excess);
   if (!o.require.empty()) {
     std::cout << required_table(o.require, p, so.targets);
     extra["search"]["required"] = required_json(o.require, p, so.targets);

@@ -7,6 +7,7 @@
 #include <map>
 
 #include "filter/design/advice.hpp"
+#include "filter/design/bound.hpp"
 #include "filter/design/prediction.hpp"
 #include "filter/design/robustness.hpp"
 #include "filter/design/search.hpp"
@@ -461,4 +462,60 @@ TEST_CASE("Design advice: the orientation that separates a family an orientation
   CHECK(scale);
   const Plan seed8 = test::load_plan("seed8.ini");
   CHECK(separation_advice(seed8, ko, predict_plan(seed8, ko, {}, d), 20.0).empty());
+}
+
+TEST_CASE("Design bound: below the best of every plan of three turns, and the beam above it",
+          "[design][bound]") {
+  // Turns of 90 deg about the 6 axes after a 10 s start with body x up, 2.5 s dwells: 6^3 = 216
+  // plans of one duration. The relaxation's certified lower bound at that duration lies below
+  // the best of them on the worst sigma / target, and the beam's plan above.
+  const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
+  const Plan rot19 = test::load_plan("rot19.ini");
+  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
+  CalibratorOptions ko = calibrator_options_from_profile(prof);
+  ko.attitude = CalibratorOptions::AttitudeUpdates::None;  // the toolbox's mode
+  SearchOptions so = lab_targets();
+  so.rate_hz = 10.0;
+  so.minimax = true;
+  SearchSpace space;
+  space.starts = {0};
+  space.start_dwells = {10.0};
+  space.pauses = {2.5};
+  space.angles = {90.0 * units::deg};
+  int scored = 0;
+  const auto best = enumerate_plans(ko, table, rot19.site, space, so, 3, &scored);
+  REQUIRE(scored == 216);
+  const auto found = beam_plans(ko, table, rot19.site, space, so, 3);
+  const double duration =
+      build_motion(plan_of(best.first, table, rot19.site, "best"), rot19.site).duration();
+  const InformationLibrary lib = information_library(ko, table, rot19.site, so.targets, 10.0);
+  CHECK(lib.orientations == 24);
+  CHECK(lib.segments.size() == 24 * 12 + 24);
+  const DesignBound b = relaxed_bound(lib, duration);
+  CAPTURE(duration, b.lower, b.upper, b.family, b.iterations, best.second.worst_ratio,
+          found.second.worst_ratio, lib.cpu_s);
+  CHECK(b.lower > 0.0);
+  CHECK(b.lower <= b.upper);
+  CHECK(b.lower <= best.second.worst_ratio);
+  CHECK(best.second.worst_ratio <= found.second.worst_ratio + 1e-12);
+  WARN("bound " << b.lower << " (relaxed " << b.upper << ", " << b.iterations
+                << " iterations) <= enumerated " << best.second.worst_ratio << " <= beam "
+                << found.second.worst_ratio << "; library " << lib.cpu_s << " s CPU");
+}
+
+TEST_CASE("Design bound: dev", "[.dev]") {
+  const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
+  const Plan rot19 = test::load_plan("rot19.ini");
+  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
+  CalibratorOptions ko = calibrator_options_from_profile(prof);
+  ko.attitude = CalibratorOptions::AttitudeUpdates::None;
+  ko.zero_velocity_in_motion = table.reference_on_axes;
+  SearchOptions so = lab_targets();
+  const InformationLibrary lib = information_library(ko, table, rot19.site, so.targets, 20.0);
+  for (double B : {200.0, 491.0, 1000.0}) {
+    const std::clock_t c0 = std::clock();
+    const DesignBound b = relaxed_bound(lib, B);
+    WARN(B << ": " << b.lower << " " << b.upper << " " << b.family << " it " << b.iterations
+           << " cpu " << double(std::clock() - c0) / CLOCKS_PER_SEC);
+  }
 }

@@ -41,7 +41,13 @@ struct SearchOptions {
   int beam = 4;
   double rate_hz = 20.0;  // of the ideal IMU in the search (the result is confirmed at 50 Hz)
   std::string name = "optimized";
+  /// enumerate_plans: rank by the worst sigma / target instead of J.
+  bool minimax = false;
 };
+
+/// The shortest dwell after a turn the search uses on `table` (its settling, one update, the
+/// margin), on the search's 0.1 s grid.
+double shortest_pause(const TableSpec& table);
 
 /// The plan file of a genome on `table` at `site` (docs/formats.md, type = rotations): turns at
 /// the table's acceleration, durations rounded up to 0.1 s so that every segment starts on a
