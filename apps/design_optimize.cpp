@@ -105,6 +105,9 @@ nlohmann::ordered_json search_json(const SearchResult& r, const SearchOptions& s
                     {"J", s.J},
                     {"worst_ratio", s.worst_ratio},
                     {"worst_family", s.worst_family}});
+  nlohmann::ordered_json seeds = nlohmann::ordered_json::array();
+  for (const auto& [name, ratio] : r.candidates)
+    seeds.push_back({{"plan", name}, {"worst_ratio", ratio}});
   nlohmann::ordered_json cmp = nlohmann::ordered_json::array();
   for (const auto& c : rows)
     cmp.push_back({{"plan", c.name},
@@ -123,6 +126,8 @@ nlohmann::ordered_json search_json(const SearchResult& r, const SearchOptions& s
             {"cpu_s", cpu},
             {"duration_before_refinement_s", r.duration_before_refinement},
             {"meets_targets", r.meets},
+            {"origin", r.origin},
+            {"seeds", seeds},
             {"path", path}}},
           {"comparison", cmp}};
 }
@@ -160,12 +165,13 @@ int design_optimize(const DesignCliOptions& o) {
                 {{"optimized.ini", plan_path},
                  {"design.json", o.out + "/design.json"},
                  {"sigma.jsonl", o.out + "/sigma.jsonl"}});
+  // Every plan given is a seed: the search is at least as good as each, scaled to the budget.
+  so.seeds.push_back(reference);
+  for (const auto& f : o.compare) so.seeds.push_back(Plan::load(f));
   const std::clock_t c0 = std::clock();
   const SearchResult r = search_plan(ko, table, reference.site, SearchSpace{}, so);
   const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
-  write_atomically(plan_path, [&](std::ostream& s) {
-    s << plan_text(r.best, table, reference.site, "optimized");
-  });
+  write_atomically(plan_path, [&](std::ostream& s) { s << r.text; });
   const Plan best = Plan::load(plan_path);
   DesignOptions d;
   d.rate_hz = o.rate_hz;
@@ -174,6 +180,11 @@ int design_optimize(const DesignCliOptions& o) {
       "Searched rotation plans on %s: %d covariance passes, %.1f s CPU; %.1f s before "
       "refinement, %.1f s after.\n\n",
       table.name.c_str(), r.evaluations, cpu, r.duration_before_refinement, p.duration);
+  if (r.origin != "beam")
+    std::printf(
+        "The best plan within the budget is %s, a given plan as it is or with its dwells "
+        "scaled: better than the beam's on the worst sigma/target.\n\n",
+        r.origin.c_str());
   const DesignInputs in{plan_path,  o.sensor,          o.table,   "optimized", profile.name,
                         table.name, ko.attitude_sigma, o.rate_hz, cpu};
   std::cout << design_tables(p, in);

@@ -8,6 +8,7 @@
 
 #include "filter/design/advice.hpp"
 #include "filter/design/bound.hpp"
+#include "filter/design/hand_plans.hpp"
 #include "filter/design/prediction.hpp"
 #include "filter/design/robustness.hpp"
 #include "filter/design/search.hpp"
@@ -501,6 +502,55 @@ TEST_CASE("Design bound: below the best of every plan of three turns, and the be
   WARN("bound " << b.lower << " (relaxed " << b.upper << ", " << b.iterations
                 << " iterations) <= enumerated " << best.second.worst_ratio << " <= beam "
                 << found.second.worst_ratio << "; library " << lib.cpu_s << " s CPU");
+}
+
+TEST_CASE("Plan search: at least as good as every dwell-scaled hand plan, budgets 200-1000 s",
+          "[design][search][long]") {
+  // The toolbox's mode and targets. At each budget the search's worst sigma / target is at most
+  // that of rot19 and seed8, as they are and with their dwells scaled, at every budget of the
+  // sweep up to it. CI runs 200, 500 and 1000 s; SINSCAL_DESIGN_SWEEP=full runs every 100 s.
+  const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
+  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
+  CalibratorOptions ko = calibrator_options_from_profile(prof);
+  ko.attitude = CalibratorOptions::AttitudeUpdates::None;
+  ko.zero_velocity_in_motion = table.reference_on_axes;
+  SearchOptions so = lab_targets();
+  so.rate_hz = 10.0;
+  so.beam = 1;
+  so.seeds = {test::load_plan("rot19.ini"), test::load_plan("seed8.ini")};
+  const char* sweep = std::getenv("SINSCAL_DESIGN_SWEEP");
+  std::vector<double> budgets = {200.0, 500.0, 1000.0};
+  if (sweep && std::string(sweep) == "full")
+    budgets = {200.0, 300.0, 400.0, 500.0, 600.0, 700.0, 800.0, 900.0, 1000.0};
+  DesignOptions d;
+  d.rate_hz = so.rate_hz;
+  d.history_interval = 1e9;
+  auto worst = [&](const Plan& p) {
+    return excess(predict_plan(p, ko, so.targets, d).run.estimates, so.targets).worst_ratio;
+  };
+  // Every hand plan's worst ratio at each budget it fits (as it is, or scaled).
+  std::vector<std::pair<double, double>> hand;  // duration, worst ratio
+  for (const Plan& seed : so.seeds) {
+    hand.emplace_back(build_motion(seed, seed.site).duration(), worst(seed));
+    for (double b : budgets)
+      if (const auto s = dwell_scaled(seed, b, shortest_pause(table)))
+        hand.emplace_back(build_motion(*s, s->site).duration(), worst(*s));
+  }
+  for (double b : budgets) {
+    so.budget_s = b;
+    const SearchResult r = search_plan(ko, table, so.seeds.front().site, SearchSpace{}, so);
+    const double duration = build_motion(r.plan, r.plan.site).duration();
+    CAPTURE(b, duration, r.origin, r.excess.worst_ratio, r.excess.worst_family);
+    CHECK(duration <= b + 1e-6);
+    CHECK(worst(r.plan) == Approx(r.excess.worst_ratio).epsilon(1e-6));
+    for (const auto& [t, ratio] : hand)
+      if (t <= b + 1e-6) {
+        CAPTURE(t, ratio);
+        CHECK(r.excess.worst_ratio <= ratio * (1.0 + 1e-9));
+      }
+    WARN("budget " << b << " s: " << r.origin << ", " << duration << " s, worst "
+                   << r.excess.worst_ratio << " (" << r.excess.worst_family << ")");
+  }
 }
 
 TEST_CASE("Design bound: dev", "[.dev]") {

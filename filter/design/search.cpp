@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "filter/design/grower.hpp"
+#include "filter/design/hand_plans.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/imu_error_model.hpp"
 #include "models/units.hpp"
@@ -151,6 +152,44 @@ PlanGenome refine(PlanGenome g, const Context& c, int& evaluations) {
     }
   }
   return g;
+}
+
+// A plan's excess by the design's pass at the search's rate (no history).
+Excess plan_excess(const Plan& plan, const Context& c) {
+  DesignOptions d;
+  d.rate_hz = c.search.rate_hz;
+  d.history_interval = 1e9;
+  return excess(predict_plan(plan, c.options, c.search.targets, d).run.estimates, c.search.targets);
+}
+
+bool within(const Plan& plan, const Context& c) {
+  const Motion m = build_motion(plan, plan.site);
+  return m.duration() <= c.search.budget_s + 1e-6 &&
+         check_against_table(m, c.table, c.options.static_margin).empty();
+}
+
+// The seeds as they are and scaled to the budget: the best on the worst ratio replaces the
+// beam's plan when it is better.
+void seeded(SearchResult& r, const Context& c) {
+  const double min_dwell = shortest_pause(c.table);
+  for (const Plan& seed : c.search.seeds) {
+    std::vector<Plan> candidates;
+    if (within(seed, c)) candidates.push_back(seed);
+    if (auto scaled = dwell_scaled(seed, c.search.budget_s, min_dwell);
+        scaled && within(*scaled, c))
+      candidates.push_back(*scaled);
+    for (const Plan& p : candidates) {
+      const Excess e = plan_excess(p, c);
+      ++r.evaluations;
+      r.candidates.emplace_back(p.name, e.worst_ratio);
+      if (e.worst_ratio < r.excess.worst_ratio) {
+        r.excess = e;
+        r.plan = p;
+        r.text = p.text;
+        r.origin = p.name;
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -318,8 +357,10 @@ SearchResult search_plan(const CalibratorOptions& options, const TableSpec& tabl
   r.best = best->grower.genome();
   if (meets(best->excess)) r.best = refine(r.best, c, r.evaluations);
   r.plan = plan_of(r.best, table, site, search.name);
+  r.text = plan_text(r.best, table, site, search.name);
   r.excess = evaluate_genome(r.best, options, table, site, search);
   ++r.evaluations;
+  if (search.budget_s > 0.0 && !search.seeds.empty()) seeded(r, c);
   r.meets = meets(r.excess);
   return r;
 }

@@ -43,6 +43,12 @@ struct SearchOptions {
   std::string name = "optimized";
   /// enumerate_plans: rank by the worst sigma / target instead of J.
   bool minimax = false;
+  /// With a budget: hand plans the result must be at least as good as on the worst sigma /
+  /// target. Each, as it is when it fits the budget and with its dwells scaled to the budget
+  /// (dwell_scaled), is a candidate beside the beam's plan, and the best is improved by moving
+  /// time between its dwells (at most `improvement_passes` evaluations, 0: none).
+  std::vector<Plan> seeds;
+  int improvement_passes = 60;
 };
 
 /// The shortest dwell after a turn the search uses on `table` (its settling, one update, the
@@ -76,9 +82,12 @@ struct SearchStep {
 
 struct SearchResult {
   PlanGenome best;
-  Plan plan;                     // `best` as a plan (plan_of)
-  Excess excess;                 // of the best, from the search's pass
-  bool meets = false;            // every target met
+  Plan plan;                    // the result as a plan: `best`'s (plan_of), or a seed's
+  std::string text;             // its plan file
+  std::string origin = "beam";  // "beam", or the seed it comes from
+  std::vector<std::pair<std::string, double>> candidates;  // seeds tried: name, worst ratio
+  Excess excess;                                           // of the best, from the search's pass
+  bool meets = false;                                      // every target met
   int evaluations = 0;           // covariance passes, incremental and full
   std::vector<SearchStep> path;  // the best plan's growth, turn by turn (before refinement)
   double duration_before_refinement = 0.0;
