@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <sstream>
+#include <stdexcept>
 
 namespace sinscal {
 
@@ -21,29 +22,26 @@ std::string key_of(const std::string& line) {
 
 std::string seconds(double s) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3f", s);
+  std::snprintf(buf, sizeof buf, "%.6f", s);
   return buf;
 }
 
-// The plan's text with its dwells times `factor` (at least `min_dwell`).
-std::string scaled_text(const Plan& plan, double factor, double min_dwell,
-                        const std::string& name) {
-  auto dwell = [&](double d) { return seconds(std::max(min_dwell, factor * d)); };
+// The plan's text with the dwells `d` (start dwell then pauses, or the orientations' dwells).
+std::string dwells_text(const Plan& plan, const std::vector<double>& d, const std::string& name) {
+  std::size_t next = plan.type == Plan::Type::Rotations ? 1 : 0;
   std::istringstream in(plan.text);
   std::ostringstream out;
-  out << "# " << name << ": " << plan.name
-      << " with its dwells scaled by sinscal design --optimize (moves and turns unchanged).\n";
+  const std::string note = "# " + name + ": dwells set by sinscal design --optimize";
+  if (plan.text.rfind(note, 0) != 0) out << note << " (moves and turns unchanged).\n";
   std::string line, section;
-  std::size_t orientation = 0;
   while (std::getline(in, line)) {
     const std::string t = trimmed(line);
     if (!t.empty() && t.front() == '[') {
       section = t;
-      if (section.rfind("[orientation.", 0) == 0) ++orientation;
       out << line << '\n';
       if (section == "[rotations]") {
         out << "pauses =";
-        for (const auto& step : plan.steps) out << ' ' << dwell(step.pause);
+        for (std::size_t i = 1; i < d.size(); ++i) out << ' ' << seconds(d[i]);
         out << " s\n";
       }
       continue;
@@ -52,9 +50,9 @@ std::string scaled_text(const Plan& plan, double factor, double min_dwell,
     if (section == "[plan]" && key == "name")
       out << "name = " << name << '\n';
     else if (section == "[start]" && key == "dwell")
-      out << "dwell = " << dwell(plan.start_dwell) << " s\n";
+      out << "dwell = " << seconds(d[0]) << " s\n";
     else if (section.rfind("[orientation.", 0) == 0 && key == "dwell")
-      out << "dwell = " << dwell(plan.orientations[orientation - 1].dwell) << " s\n";
+      out << "dwell = " << seconds(d[next++]) << " s\n";
     else if (section == "[rotations]" && (key == "pause" || key == "pauses"))
       continue;
     else
@@ -63,9 +61,33 @@ std::string scaled_text(const Plan& plan, double factor, double min_dwell,
   return out.str();
 }
 
+std::string scaled_text(const Plan& plan, double factor, double min_dwell,
+                        const std::string& name) {
+  std::vector<double> d = plan_dwells(plan);
+  for (double& x : d) x = std::max(min_dwell, factor * x);
+  return dwells_text(plan, d, name);
+}
+
 double duration_of(const Plan& p) { return build_motion(p, p.site).duration(); }
 
 }  // namespace
+
+std::vector<double> plan_dwells(const Plan& plan) {
+  std::vector<double> d;
+  if (plan.type == Plan::Type::Rotations) {
+    d.push_back(plan.start_dwell);
+    for (const auto& s : plan.steps) d.push_back(s.pause);
+  } else {
+    for (const auto& o : plan.orientations) d.push_back(o.dwell);
+  }
+  return d;
+}
+
+Plan with_dwells(const Plan& plan, const std::vector<double>& dwells) {
+  if (dwells.size() != plan_dwells(plan).size())
+    throw std::invalid_argument(plan.path + ": with_dwells: not one duration per dwell");
+  return Plan::parse(plan.path, dwells_text(plan, dwells, plan.name));
+}
 
 std::optional<Plan> dwell_scaled(const Plan& plan, double duration, double min_dwell) {
   if (plan.text.find("repeat") != std::string::npos) return std::nullopt;

@@ -4,10 +4,18 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "rig/plan.hpp"
 
 namespace sinscal {
+
+/// A plan's dwells (s): a rotation plan's start dwell then its pauses, or an orientation plan's
+/// dwells.
+std::vector<double> plan_dwells(const Plan& plan);
+/// `plan` (from `dwell_scaled`, whose text states every dwell once) with the dwells `dwells`,
+/// in plan_dwells' order. Throws std::invalid_argument for a count that differs.
+Plan with_dwells(const Plan& plan, const std::vector<double>& dwells);
 
 /// `plan` with every dwell (the start dwell and the pauses of a rotation plan, the dwells of an
 /// orientation plan) times one factor, none below `min_dwell` (s), so that the whole lasts

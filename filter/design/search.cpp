@@ -192,6 +192,41 @@ void seeded(SearchResult& r, const Context& c) {
   }
 }
 
+// Time moved between the result's dwells while its worst ratio falls, the total kept: a dwell
+// gains a fraction of itself, taken from the others in proportion to their time above the
+// shortest dwell; the fraction halves when no dwell gains.
+void improve(SearchResult& r, const Context& c) {
+  std::vector<double> d = plan_dwells(r.plan);
+  const double min_dwell = shortest_pause(c.table);
+  int left = c.search.improvement_passes;
+  for (double step = 0.25; left > 0 && step > 0.02;) {
+    bool improved = false;
+    for (std::size_t i = 0; i < d.size() && left > 0; ++i) {
+      double spare = 0.0;
+      for (std::size_t j = 0; j < d.size(); ++j)
+        if (j != i) spare += std::max(0.0, d[j] - min_dwell);
+      const double add = step * d[i];
+      if (spare < 2.0 * add) continue;
+      std::vector<double> t = d;
+      for (std::size_t j = 0; j < d.size(); ++j)
+        t[j] = j == i ? d[j] + add : d[j] - add * std::max(0.0, d[j] - min_dwell) / spare;
+      const Plan p = with_dwells(r.plan, t);
+      if (!within(p, c)) continue;
+      const Excess e = plan_excess(p, c);
+      --left;
+      ++r.evaluations;
+      if (e.worst_ratio < r.excess.worst_ratio) {
+        r.excess = e;
+        r.plan = p;
+        r.text = p.text;
+        d = t;
+        improved = true;
+      }
+    }
+    if (!improved) step *= 0.5;
+  }
+}
+
 }  // namespace
 
 Grower::Grower(const PlanGenome& genome, const Context& c) : g_(genome) {
@@ -361,6 +396,7 @@ SearchResult search_plan(const CalibratorOptions& options, const TableSpec& tabl
   r.excess = evaluate_genome(r.best, options, table, site, search);
   ++r.evaluations;
   if (search.budget_s > 0.0 && !search.seeds.empty()) seeded(r, c);
+  if (search.budget_s > 0.0 && search.improvement_passes > 0 && r.origin != "beam") improve(r, c);
   r.meets = meets(r.excess);
   return r;
 }
