@@ -553,19 +553,32 @@ TEST_CASE("Plan search: at least as good as every dwell-scaled hand plan, budget
   }
 }
 
-TEST_CASE("Design bound: dev", "[.dev]") {
-  const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
+TEST_CASE("Plan search: a hand plan with its dwells scaled to a table time", "[design][search]") {
+  // rot19: 18 turns of 9 s, a 70 s start and 20 s pauses (592 s). Scaled to 479.5 s the turns
+  // stay and the 317.5 s of dwells keep their proportions: 70 f + 18 * 20 f = 317.5 s.
   const Plan rot19 = test::load_plan("rot19.ini");
-  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
-  CalibratorOptions ko = calibrator_options_from_profile(prof);
-  ko.attitude = CalibratorOptions::AttitudeUpdates::None;
-  ko.zero_velocity_in_motion = table.reference_on_axes;
-  SearchOptions so = lab_targets();
-  const InformationLibrary lib = information_library(ko, table, rot19.site, so.targets, 20.0);
-  for (double B : {200.0, 491.0, 1000.0}) {
-    const std::clock_t c0 = std::clock();
-    const DesignBound b = relaxed_bound(lib, B);
-    WARN(B << ": " << b.lower << " " << b.upper << " " << b.family << " it " << b.iterations
-           << " cpu " << double(std::clock() - c0) / CLOCKS_PER_SEC);
+  const auto s = dwell_scaled(rot19, 479.5, 2.5);
+  REQUIRE(s);
+  CHECK(build_motion(*s, s->site).duration() == Approx(479.5).margin(0.05));
+  const double f = 317.5 / 430.0;
+  CHECK(s->start_dwell == Approx(70.0 * f).epsilon(1e-4));
+  REQUIRE(s->steps.size() == rot19.steps.size());
+  for (std::size_t i = 0; i < s->steps.size(); ++i) {
+    CHECK(s->steps[i].pause == Approx(20.0 * f).epsilon(1e-4));
+    CHECK(s->steps[i].duration == rot19.steps[i].duration);
+    CHECK(s->steps[i].axis_name == rot19.steps[i].axis_name);
   }
+  CHECK(s->name == "rot19-480s");
+  // The same plan read back from its text; dwells set one by one.
+  const Plan again = Plan::parse("again.ini", s->text);
+  CHECK(again.start_dwell == Approx(s->start_dwell));
+  std::vector<double> d = plan_dwells(*s);
+  d[0] += 10.0;
+  CHECK(with_dwells(*s, d).start_dwell == Approx(s->start_dwell + 10.0).epsilon(1e-6));
+  // Below the turns and the shortest dwells: none. seed8 (orientations) scales too.
+  CHECK_FALSE(dwell_scaled(rot19, 162.0 + 19 * 2.5 - 1.0, 2.5));
+  const Plan seed8 = test::load_plan("seed8.ini");
+  const auto s8 = dwell_scaled(seed8, 600.0, 2.5);
+  REQUIRE(s8);
+  CHECK(build_motion(*s8, s8->site).duration() == Approx(600.0).margin(0.05));
 }
