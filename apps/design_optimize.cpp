@@ -1,10 +1,12 @@
 // sinscal design --optimize: the search for the shortest plan on a table whose predicted sigmas
 // meet every target (filter/design/search.hpp), confirmed by a covariance pass at the design
 // rate, compared with reference plans, written as a plan file that simulate and calibrate run.
+#include <algorithm>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include "apps/design.hpp"
 #include "filter/design/bound.hpp"
@@ -60,10 +62,14 @@ struct BoundReport {
   int segments = 0, orientations = 0;
 };
 
-BoundReport bound_report(const CalibratorOptions& ko, const TableSpec& table, const Site& site,
-                         const SearchOptions& so, double duration) {
+// None when no targeted family is a state of the filter (nothing to bound).
+std::optional<BoundReport> bound_report(const CalibratorOptions& ko, const TableSpec& table,
+                                        const Site& site, const SearchOptions& so,
+                                        double duration) {
   const std::clock_t c0 = std::clock();
   const InformationLibrary lib = information_library(ko, table, site, so.targets, so.rate_hz);
+  if (std::none_of(lib.targeted.begin(), lib.targeted.end(), [](bool t) { return t; }))
+    return std::nullopt;
   BoundReport b;
   b.at_plan = relaxed_bound(lib, duration);
   b.time_for_targets = bound_time_for_targets(lib);
@@ -192,9 +198,10 @@ int design_optimize(const DesignCliOptions& o) {
                                 compare_plan(reference, o.plan, ko, table, so.targets, o.rate_hz)};
   for (const auto& f : o.compare)
     rows.push_back(compare_plan(Plan::load(f), f, ko, table, so.targets, o.rate_hz));
+  rows.front().name = "optimized";
   std::cout << comparison_table(rows);
-  const BoundReport bound = bound_report(ko, table, reference.site, so, p.duration);
-  print_bound(bound, rows.front().excess);
+  const std::optional<BoundReport> bound = bound_report(ko, table, reference.site, so, p.duration);
+  if (bound) print_bound(*bound, rows.front().excess);
   if (!r.meets)
     std::printf(
         "\nNo plan found%s meets every target: the best leaves %s at %.2f times its "
@@ -202,7 +209,7 @@ int design_optimize(const DesignCliOptions& o) {
         so.budget_s > 0.0 ? " within the budget" : " within the search's limit",
         r.excess.worst_family.c_str(), r.excess.worst_ratio);
   nlohmann::ordered_json extra = search_json(r, so, cpu, rows);
-  extra["bound"] = bound_json(bound, rows.front().excess);
+  if (bound) extra["bound"] = bound_json(*bound, rows.front().excess);
   if (!o.require.empty()) {
     std::cout << required_table(o.require, p, so.targets);
     extra["search"]["required"] = required_json(o.require, p, so.targets);
