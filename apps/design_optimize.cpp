@@ -3,6 +3,7 @@
 // rate, compared with reference plans, written as a plan file that simulate and calibrate run.
 #include <unistd.h>  // isatty: the progress line on a terminal only
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -12,9 +13,11 @@
 #include <iostream>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "apps/design.hpp"
+#include "filter/design/bound.hpp"
 #include "filter/design/search.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/units.hpp"
@@ -59,6 +62,56 @@ std::string comparison_table(const std::vector<Compared>& rows) {
   return out;
 }
 
+// The relaxation's bound at the found plan's duration, the gap to it, and the table time below
+// which no plan of the library's segments meets every target.
+struct BoundReport {
+  DesignBound at_plan;
+  double time_for_targets = 0.0;
+  double cpu_s = 0.0;
+  int segments = 0, orientations = 0;
+};
+
+// None when no targeted family is a state of the filter (nothing to bound).
+std::optional<BoundReport> bound_report(const CalibratorOptions& ko, const TableSpec& table,
+                                        const Site& site, const SearchOptions& so,
+                                        double duration) {
+  const std::clock_t c0 = std::clock();
+  const InformationLibrary lib = information_library(ko, table, site, so.targets, so.rate_hz);
+  if (std::none_of(lib.targeted.begin(), lib.targeted.end(), [](bool t) { return t; }))
+    return std::nullopt;
+  BoundReport b;
+  b.at_plan = relaxed_bound(lib, duration);
+  b.time_for_targets = bound_time_for_targets(lib);
+  b.cpu_s = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+  b.segments = static_cast<int>(lib.segments.size());
+  b.orientations = lib.orientations;
+  return b;
+}
+
+void print_bound(const BoundReport& b, const Excess& found) {
+  std::printf(
+      "\nBound (convex relaxation over %d segments at %d orientations, %.1f s CPU): no plan of "
+      "%.1f s does better than worst sigma/target %.2f (relaxed design %.2f, %s); the found plan's "
+      "%.2f (%s) is %.0f %% above it. No plan meets every target in less than %.0f s.\n",
+      b.segments, b.orientations, b.cpu_s, b.at_plan.budget_s, b.at_plan.lower, b.at_plan.upper,
+      b.at_plan.family.c_str(), found.worst_ratio, found.worst_family.c_str(),
+      100.0 * (found.worst_ratio / b.at_plan.lower - 1.0), b.time_for_targets);
+}
+
+nlohmann::ordered_json bound_json(const BoundReport& b, const Excess& found) {
+  return {{"budget_s", b.at_plan.budget_s},
+          {"lower_worst_ratio", b.at_plan.lower},
+          {"relaxed_worst_ratio", b.at_plan.upper},
+          {"relaxed_worst_family", b.at_plan.family},
+          {"found_worst_ratio", found.worst_ratio},
+          {"gap", found.worst_ratio / b.at_plan.lower - 1.0},
+          {"time_for_targets_lower_s", b.time_for_targets},
+          {"segments", b.segments},
+          {"orientations", b.orientations},
+          {"iterations", b.at_plan.iterations},
+          {"cpu_s", b.cpu_s}};
+}
+
 nlohmann::ordered_json search_json(const SearchResult& r, const SearchOptions& so, double cpu,
                                    const std::vector<Compared>& rows) {
   nlohmann::ordered_json path = nlohmann::ordered_json::array();
@@ -67,6 +120,9 @@ nlohmann::ordered_json search_json(const SearchResult& r, const SearchOptions& s
                     {"J", s.J},
                     {"worst_ratio", s.worst_ratio},
                     {"worst_family", s.worst_family}});
+  nlohmann::ordered_json seeds = nlohmann::ordered_json::array();
+  for (const auto& [name, ratio] : r.candidates)
+    seeds.push_back({{"plan", name}, {"worst_ratio", ratio}});
   nlohmann::ordered_json cmp = nlohmann::ordered_json::array();
   for (const auto& c : rows)
     cmp.push_back({{"plan", c.name},
@@ -85,6 +141,8 @@ nlohmann::ordered_json search_json(const SearchResult& r, const SearchOptions& s
             {"cpu_s", cpu},
             {"duration_before_refinement_s", r.duration_before_refinement},
             {"meets_targets", r.meets},
+            {"origin", r.origin},
+            {"seeds", seeds},
             {"path", path}}},
           {"comparison", cmp}};
 }
@@ -218,6 +276,9 @@ int design_optimize(const DesignCliOptions& o) {
                             {"best_unmet.ini", o.out + "/best_unmet.ini"},
                             {"design.json", o.out + "/design.json"},
                             {"sigma.jsonl", o.out + "/sigma.jsonl"}});
+  // Every plan given is a seed: the search is at least as good as each, scaled to the budget.
+  so.seeds.push_back(reference);
+  for (const auto& f : o.compare) so.seeds.push_back(Plan::load(f));
   const std::string bound =
       "plans up to " + fmt("%.0f", so.max_duration) + " s" +
       (so.budget_s > 0.0 ? ", budget " + fmt("%.0f", so.budget_s) + " s" : "") + ", beam " +
@@ -233,7 +294,7 @@ int design_optimize(const DesignCliOptions& o) {
   // A plan that misses a target is not written as the optimized plan.
   const std::string written = r.meets ? plan_path : o.out + "/best_unmet.ini";
   write_atomically(written, [&](std::ostream& s) {
-    s << plan_text(r.best, table, reference.site, r.meets ? "optimized" : "best_unmet");
+    s << r.text;
   });
   const Plan best = Plan::load(written);
   DesignOptions d;
@@ -243,6 +304,11 @@ int design_optimize(const DesignCliOptions& o) {
       "Searched rotation plans on %s: %d covariance passes, %.1f s CPU; %.1f s before "
       "refinement, %.1f s after.\n\n",
       table.name.c_str(), r.evaluations, cpu, r.duration_before_refinement, p.duration);
+  if (r.origin != "beam")
+    std::printf(
+        "The best plan within the budget is %s, a given plan as it is or with its dwells "
+        "scaled: better than the beam's on the worst sigma/target.\n\n",
+        r.origin.c_str());
   const DesignInputs in{written,    o.sensor,          o.table,   "optimized", profile.name,
                         table.name, ko.attitude_sigma, o.rate_hz, cpu};
   std::cout << design_tables(p, in);
@@ -250,7 +316,10 @@ int design_optimize(const DesignCliOptions& o) {
                                 compare_plan(reference, o.plan, ko, table, so.targets, o.rate_hz)};
   for (const auto& f : o.compare)
     rows.push_back(compare_plan(Plan::load(f), f, ko, table, so.targets, o.rate_hz));
+  rows.front().name = "optimized";
   std::cout << comparison_table(rows);
+  const std::optional<BoundReport> bound = bound_report(ko, table, reference.site, so, p.duration);
+  if (bound) print_bound(*bound, rows.front().excess);
   if (!r.meets)
     std::printf(
         "\nNo plan found%s meets every target: the best leaves %s at %.2f times its "
@@ -258,6 +327,7 @@ int design_optimize(const DesignCliOptions& o) {
         so.budget_s > 0.0 ? " within the budget" : " within the search's limit",
         r.excess.worst_family.c_str(), r.excess.worst_ratio);
   nlohmann::ordered_json extra = search_json(r, so, cpu, rows);
+  if (bound) extra["bound"] = bound_json(*bound, rows.front().excess);
   if (!o.require.empty()) {
     std::cout << required_table(o.require, p, so.targets);
     extra["search"]["required"] = required_json(o.require, p, so.targets);

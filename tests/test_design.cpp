@@ -7,6 +7,8 @@
 #include <map>
 
 #include "filter/design/advice.hpp"
+#include "filter/design/bound.hpp"
+#include "filter/design/hand_plans.hpp"
 #include "filter/design/prediction.hpp"
 #include "filter/design/robustness.hpp"
 #include "filter/design/search.hpp"
@@ -461,4 +463,122 @@ TEST_CASE("Design advice: the orientation that separates a family an orientation
   CHECK(scale);
   const Plan seed8 = test::load_plan("seed8.ini");
   CHECK(separation_advice(seed8, ko, predict_plan(seed8, ko, {}, d), 20.0).empty());
+}
+
+TEST_CASE("Design bound: below the best of every plan of three turns, and the beam above it",
+          "[design][bound]") {
+  // Turns of 90 deg about the 6 axes after a 10 s start with body x up, 2.5 s dwells: 6^3 = 216
+  // plans of one duration. The relaxation's certified lower bound at that duration lies below
+  // the best of them on the worst sigma / target, and the beam's plan above.
+  const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
+  const Plan rot19 = test::load_plan("rot19.ini");
+  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
+  CalibratorOptions ko = calibrator_options_from_profile(prof);
+  ko.attitude = CalibratorOptions::AttitudeUpdates::None;  // the toolbox's mode
+  SearchOptions so = lab_targets();
+  so.rate_hz = 10.0;
+  so.minimax = true;
+  SearchSpace space;
+  space.starts = {0};
+  space.start_dwells = {10.0};
+  space.pauses = {2.5};
+  space.angles = {90.0 * units::deg};
+  int scored = 0;
+  const auto best = enumerate_plans(ko, table, rot19.site, space, so, 3, &scored);
+  REQUIRE(scored == 216);
+  const auto found = beam_plans(ko, table, rot19.site, space, so, 3);
+  const double duration =
+      build_motion(plan_of(best.first, table, rot19.site, "best"), rot19.site).duration();
+  const InformationLibrary lib = information_library(ko, table, rot19.site, so.targets, 10.0);
+  CHECK(lib.orientations == 24);
+  CHECK(lib.segments.size() == 24 * 12 + 24);
+  const DesignBound b = relaxed_bound(lib, duration);
+  CAPTURE(duration, b.lower, b.upper, b.family, b.iterations, best.second.worst_ratio,
+          found.second.worst_ratio, lib.cpu_s);
+  CHECK(b.lower > 0.0);
+  CHECK(b.lower <= b.upper);
+  CHECK(b.lower <= best.second.worst_ratio);
+  CHECK(best.second.worst_ratio <= found.second.worst_ratio + 1e-12);
+  WARN("bound " << b.lower << " (relaxed " << b.upper << ", " << b.iterations
+                << " iterations) <= enumerated " << best.second.worst_ratio << " <= beam "
+                << found.second.worst_ratio << "; library " << lib.cpu_s << " s CPU");
+}
+
+TEST_CASE("Plan search: at least as good as every dwell-scaled hand plan, budgets 200-1000 s",
+          "[design][search][long]") {
+  // The toolbox's mode and targets. At each budget the search's worst sigma / target is at most
+  // that of rot19 and seed8, as they are and with their dwells scaled, at every budget of the
+  // sweep up to it. CI runs 200, 500 and 1000 s; SINSCAL_DESIGN_SWEEP=full runs every 100 s.
+  const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
+  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
+  CalibratorOptions ko = calibrator_options_from_profile(prof);
+  ko.attitude = CalibratorOptions::AttitudeUpdates::None;
+  ko.zero_velocity_in_motion = table.reference_on_axes;
+  SearchOptions so = lab_targets();
+  so.rate_hz = 10.0;
+  so.beam = 1;
+  so.seeds = {test::load_plan("rot19.ini"), test::load_plan("seed8.ini")};
+  const char* sweep = std::getenv("SINSCAL_DESIGN_SWEEP");
+  std::vector<double> budgets = {200.0, 500.0, 1000.0};
+  if (sweep && std::string(sweep) == "full")
+    budgets = {200.0, 300.0, 400.0, 500.0, 600.0, 700.0, 800.0, 900.0, 1000.0};
+  DesignOptions d;
+  d.rate_hz = so.rate_hz;
+  d.history_interval = 1e9;
+  auto worst = [&](const Plan& p) {
+    return excess(predict_plan(p, ko, so.targets, d).run.estimates, so.targets).worst_ratio;
+  };
+  // Every hand plan's worst ratio at each budget it fits (as it is, or scaled).
+  std::vector<std::pair<double, double>> hand;  // duration, worst ratio
+  for (const Plan& seed : so.seeds) {
+    hand.emplace_back(build_motion(seed, seed.site).duration(), worst(seed));
+    for (double b : budgets)
+      if (const auto s = dwell_scaled(seed, b, shortest_pause(table)))
+        hand.emplace_back(build_motion(*s, s->site).duration(), worst(*s));
+  }
+  for (double b : budgets) {
+    so.budget_s = b;
+    const SearchResult r = search_plan(ko, table, so.seeds.front().site, SearchSpace{}, so);
+    const double duration = build_motion(r.plan, r.plan.site).duration();
+    CAPTURE(b, duration, r.origin, r.excess.worst_ratio, r.excess.worst_family);
+    CHECK(duration <= b + 1e-6);
+    CHECK(worst(r.plan) == Approx(r.excess.worst_ratio).epsilon(1e-6));
+    for (const auto& [t, ratio] : hand)
+      if (t <= b + 1e-6) {
+        CAPTURE(t, ratio);
+        CHECK(r.excess.worst_ratio <= ratio * (1.0 + 1e-9));
+      }
+    WARN("budget " << b << " s: " << r.origin << ", " << duration << " s, worst "
+                   << r.excess.worst_ratio << " (" << r.excess.worst_family << ")");
+  }
+}
+
+TEST_CASE("Plan search: a hand plan with its dwells scaled to a table time", "[design][search]") {
+  // rot19: 18 turns of 9 s, a 70 s start and 20 s pauses (592 s). Scaled to 479.5 s the turns
+  // stay and the 317.5 s of dwells keep their proportions: 70 f + 18 * 20 f = 317.5 s.
+  const Plan rot19 = test::load_plan("rot19.ini");
+  const auto s = dwell_scaled(rot19, 479.5, 2.5);
+  REQUIRE(s);
+  CHECK(build_motion(*s, s->site).duration() == Approx(479.5).margin(0.05));
+  const double f = 317.5 / 430.0;
+  CHECK(s->start_dwell == Approx(70.0 * f).epsilon(1e-4));
+  REQUIRE(s->steps.size() == rot19.steps.size());
+  for (std::size_t i = 0; i < s->steps.size(); ++i) {
+    CHECK(s->steps[i].pause == Approx(20.0 * f).epsilon(1e-4));
+    CHECK(s->steps[i].duration == rot19.steps[i].duration);
+    CHECK(s->steps[i].axis_name == rot19.steps[i].axis_name);
+  }
+  CHECK(s->name == "rot19-480s");
+  // The same plan read back from its text; dwells set one by one.
+  const Plan again = Plan::parse("again.ini", s->text);
+  CHECK(again.start_dwell == Approx(s->start_dwell));
+  std::vector<double> d = plan_dwells(*s);
+  d[0] += 10.0;
+  CHECK(with_dwells(*s, d).start_dwell == Approx(s->start_dwell + 10.0).epsilon(1e-6));
+  // Below the turns and the shortest dwells: none. seed8 (orientations) scales too.
+  CHECK_FALSE(dwell_scaled(rot19, 162.0 + 19 * 2.5 - 1.0, 2.5));
+  const Plan seed8 = test::load_plan("seed8.ini");
+  const auto s8 = dwell_scaled(seed8, 600.0, 2.5);
+  REQUIRE(s8);
+  CHECK(build_motion(*s8, s8->site).duration() == Approx(600.0).margin(0.05));
 }

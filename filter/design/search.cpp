@@ -8,6 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "filter/design/grower.hpp"
+#include "filter/design/hand_plans.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/imu_error_model.hpp"
 #include "models/units.hpp"
@@ -32,65 +34,6 @@ double turn_duration(double angle, const TableSpec& table) {
       TrapezoidProfile::by_rate(angle, table.max_rate, table.max_acceleration).duration());
 }
 
-// What a search evaluation needs beside the genome.
-struct Context {
-  const CalibratorOptions& options;
-  const TableSpec& table;
-  const Site& site;
-  const SearchOptions& search;
-  double limit = 1e300;  // s: plans longer than this are not kept
-};
-
-// A covariance pass over a genome's plan that can be extended by further turns: the filter is
-// kept unfinished after the plan's last sample; an extension copies it and runs the new turn
-// and dwell only (the samples before are the same in the longer plan).
-class Grower {
- public:
-  Grower(const PlanGenome& genome, const Context& c) : g_(genome) {
-    const Plan plan = plan_of(g_, c.table, c.site, c.search.name);
-    kf_ = std::make_shared<Calibrator>(PlanTimeline::of(plan, c.site), c.site,
-                                       design_filter_options(c.options));
-    run(plan, c);
-  }
-  Grower extended(const TurnChoice& turn, const Context& c) const {
-    Grower next = *this;
-    next.kf_ = std::make_shared<Calibrator>(*kf_);  // the copy goes on, this one stays
-    next.g_.turns.push_back(turn);
-    const Plan plan = plan_of(next.g_, c.table, c.site, c.search.name);
-    next.kf_->extend_timeline(PlanTimeline::of(plan, c.site));
-    next.run(plan, c);
-    return next;
-  }
-  Excess score(const Context& c) const {
-    Calibrator done = *kf_;
-    done.finish();
-    return excess(done.estimate(), c.search.targets);
-  }
-  const PlanGenome& genome() const { return g_; }
-  double duration() const { return duration_; }
-
- private:
-  void run(const Plan& plan, const Context& c) {
-    const auto shared = std::make_shared<const Motion>(build_motion(plan, c.site));
-    const Motion& motion = *shared;
-    // Along the plan's motion, as run_kalman's pass of the design over the whole plan.
-    if (follows_plan_motion(design_filter_options(c.options))) kf_->set_reference_motion(shared);
-    SimulatorOptions so;
-    so.rate_hz = c.search.rate_hz;
-    so.noise = false;
-    ImuSimulator ideal(motion, ImuErrorModel{}, NoiseModel{}, so);
-    ideal.skip_to(pushed_);
-    ImuSample s;
-    while (ideal.next(s)) kf_->push(s);
-    pushed_ = ideal.total_samples();
-    duration_ = motion.duration();
-  }
-  PlanGenome g_;
-  std::shared_ptr<Calibrator> kf_;  // not shared while it runs: extended() copies it first
-  std::size_t pushed_ = 0;
-  double duration_ = 0.0;
-};
-
 std::vector<TurnChoice> turn_options(const SearchSpace& space) {
   std::vector<TurnChoice> out;
   for (int axis = 0; axis < 6; ++axis)
@@ -101,7 +44,7 @@ std::vector<TurnChoice> turn_options(const SearchSpace& space) {
 
 SearchSpace completed(SearchSpace space, const TableSpec& table) {
   if (space.angles.empty()) space.angles = {90.0 * units::deg, 180.0 * units::deg};
-  if (space.pauses.empty()) space.pauses = {on_grid(table.settling_time + 1.0 + 0.5), 10.0};
+  if (space.pauses.empty()) space.pauses = {shortest_pause(table), 10.0};
   if (space.starts.empty() || space.start_dwells.empty())
     throw std::invalid_argument("plan search: no start orientation or start dwell to search");
   return space;
@@ -179,7 +122,7 @@ PlanGenome refine(PlanGenome g, const Context& c, int& evaluations) {
     ++evaluations;
     return meets(evaluate_genome(trial, c.options, c.table, c.site, c.search));
   };
-  const double min_pause = on_grid(c.table.settling_time + 1.0 + 0.5);
+  const double min_pause = shortest_pause(c.table);
   for (bool changed = true; changed;) {
     changed = false;
     for (std::size_t i = g.turns.size(); i-- > 0 && g.turns.size() > 1;) {
@@ -211,7 +154,129 @@ PlanGenome refine(PlanGenome g, const Context& c, int& evaluations) {
   return g;
 }
 
+// A plan's excess by the design's pass at the search's rate (no history).
+Excess plan_excess(const Plan& plan, const Context& c) {
+  DesignOptions d;
+  d.rate_hz = c.search.rate_hz;
+  d.history_interval = 1e9;
+  return excess(predict_plan(plan, c.options, c.search.targets, d).run.estimates, c.search.targets);
+}
+
+bool within(const Plan& plan, const Context& c) {
+  const Motion m = build_motion(plan, plan.site);
+  return m.duration() <= c.search.budget_s + 1e-6 &&
+         check_against_table(m, c.table, c.options.static_margin).empty();
+}
+
+// The seeds as they are and scaled to the budget: the best on the worst ratio replaces the
+// beam's plan when it is better.
+void seeded(SearchResult& r, const Context& c) {
+  const double min_dwell = shortest_pause(c.table);
+  for (const Plan& seed : c.search.seeds) {
+    std::vector<Plan> candidates;
+    if (within(seed, c)) candidates.push_back(seed);
+    if (auto scaled = dwell_scaled(seed, c.search.budget_s, min_dwell);
+        scaled && within(*scaled, c))
+      candidates.push_back(*scaled);
+    for (const Plan& p : candidates) {
+      const Excess e = plan_excess(p, c);
+      ++r.evaluations;
+      r.candidates.emplace_back(p.name, e.worst_ratio);
+      if (e.worst_ratio < r.excess.worst_ratio) {
+        r.excess = e;
+        r.plan = p;
+        r.text = p.text;
+        r.origin = p.name;
+      }
+    }
+  }
+}
+
+// Time moved between the result's dwells while its worst ratio falls, the total kept: a dwell
+// gains a fraction of itself, taken from the others in proportion to their time above the
+// shortest dwell; the fraction halves when no dwell gains.
+void improve(SearchResult& r, const Context& c) {
+  std::vector<double> d = plan_dwells(r.plan);
+  const double min_dwell = shortest_pause(c.table);
+  int left = c.search.improvement_passes;
+  for (double step = 0.25; left > 0 && step > 0.02;) {
+    bool improved = false;
+    for (std::size_t i = 0; i < d.size() && left > 0; ++i) {
+      double spare = 0.0;
+      for (std::size_t j = 0; j < d.size(); ++j)
+        if (j != i) spare += std::max(0.0, d[j] - min_dwell);
+      const double add = step * d[i];
+      if (spare < 2.0 * add) continue;
+      std::vector<double> t = d;
+      for (std::size_t j = 0; j < d.size(); ++j)
+        t[j] = j == i ? d[j] + add : d[j] - add * std::max(0.0, d[j] - min_dwell) / spare;
+      const Plan p = with_dwells(r.plan, t);
+      if (!within(p, c)) continue;
+      const Excess e = plan_excess(p, c);
+      --left;
+      ++r.evaluations;
+      if (e.worst_ratio < r.excess.worst_ratio) {
+        r.excess = e;
+        r.plan = p;
+        r.text = p.text;
+        d = t;
+        improved = true;
+      }
+    }
+    if (!improved) step *= 0.5;
+  }
+}
+
 }  // namespace
+
+Grower::Grower(const PlanGenome& genome, const Context& c) : g_(genome) {
+  const Plan plan = plan_of(g_, c.table, c.site, c.search.name);
+  kf_ = std::make_shared<Calibrator>(PlanTimeline::of(plan, c.site), c.site,
+                                     design_filter_options(c.options));
+  run(plan, c);
+}
+
+Grower Grower::extended(const TurnChoice& turn, const Context& c) const {
+  Grower next = *this;
+  next.kf_ = std::make_shared<Calibrator>(*kf_);  // the copy goes on, this one stays
+  next.g_.turns.push_back(turn);
+  const Plan plan = plan_of(next.g_, c.table, c.site, c.search.name);
+  next.kf_->extend_timeline(PlanTimeline::of(plan, c.site));
+  next.run(plan, c);
+  return next;
+}
+
+Excess Grower::score(const Context& c) const {
+  Calibrator done = *kf_;
+  done.finish();
+  return excess(done.estimate(), c.search.targets);
+}
+
+Eigen::MatrixXd Grower::coefficient_covariance() const {
+  Calibrator done = *kf_;
+  done.finish();
+  const StateLayout& l = done.layout();
+  const int first = l.nav_size, n = l.coefficient_states();
+  return done.covariance().block(first, first, n, n);
+}
+
+void Grower::run(const Plan& plan, const Context& c) {
+  const auto shared = std::make_shared<const Motion>(build_motion(plan, c.site));
+  const Motion& motion = *shared;
+  // Along the plan's motion, as run_kalman's pass of the design over the whole plan.
+  if (follows_plan_motion(design_filter_options(c.options))) kf_->set_reference_motion(shared);
+  SimulatorOptions so;
+  so.rate_hz = c.search.rate_hz;
+  so.noise = false;
+  ImuSimulator ideal(motion, ImuErrorModel{}, NoiseModel{}, so);
+  ideal.skip_to(pushed_);
+  ImuSample s;
+  while (ideal.next(s)) kf_->push(s);
+  pushed_ = ideal.total_samples();
+  duration_ = motion.duration();
+}
+
+double shortest_pause(const TableSpec& table) { return on_grid(table.settling_time + 1.0 + 0.5); }
 
 std::string plan_text(const PlanGenome& g, const TableSpec& table, const Site& site,
                       const std::string& name) {
@@ -327,8 +392,11 @@ SearchResult search_plan(const CalibratorOptions& options, const TableSpec& tabl
   r.best = best->grower.genome();
   if (meets(best->excess)) r.best = refine(r.best, c, r.evaluations);
   r.plan = plan_of(r.best, table, site, search.name);
+  r.text = plan_text(r.best, table, site, search.name);
   r.excess = evaluate_genome(r.best, options, table, site, search);
   ++r.evaluations;
+  if (search.budget_s > 0.0 && !search.seeds.empty()) seeded(r, c);
+  if (search.budget_s > 0.0 && search.improvement_passes > 0 && r.origin != "beam") improve(r, c);
   r.meets = meets(r.excess);
   return r;
 }
@@ -343,7 +411,7 @@ std::pair<PlanGenome, Excess> enumerate_plans(const CalibratorOptions& options,
   root.start = space.starts.front();
   root.start_dwell = on_grid(space.start_dwells.front());
   const auto options_list = turn_options(space);
-  std::pair<PlanGenome, Excess> best{root, Excess{1e300, 0.0, ""}};
+  std::pair<PlanGenome, Excess> best{root, Excess{1e300, 1e300, ""}};
   int count = 0;
   // Depth first: each prefix's filter is shared by its extensions.
   std::vector<std::pair<Grower, int>> stack;
@@ -358,7 +426,9 @@ std::pair<PlanGenome, Excess> enumerate_plans(const CalibratorOptions& options,
     if (depth == turns) {
       const Excess e = g.score(c);
       ++count;
-      if (e.J < best.second.J) best = {g.genome(), e};
+      const bool better =
+          search.minimax ? e.worst_ratio < best.second.worst_ratio : e.J < best.second.J;
+      if (better) best = {g.genome(), e};
       continue;
     }
     for (const TurnChoice& t : options_list) stack.emplace_back(g.extended(t, c), depth + 1);

@@ -41,7 +41,19 @@ struct SearchOptions {
   int beam = 4;
   double rate_hz = 20.0;  // of the ideal IMU in the search (the result is confirmed at 50 Hz)
   std::string name = "optimized";
+  /// enumerate_plans: rank by the worst sigma / target instead of J.
+  bool minimax = false;
+  /// With a budget: hand plans the result must be at least as good as on the worst sigma /
+  /// target. Each, as it is when it fits the budget and with its dwells scaled to the budget
+  /// (dwell_scaled), is a candidate beside the beam's plan, and the best is improved by moving
+  /// time between its dwells (at most `improvement_passes` evaluations, 0: none).
+  std::vector<Plan> seeds;
+  int improvement_passes = 60;
 };
+
+/// The shortest dwell after a turn the search uses on `table` (its settling, one update, the
+/// margin), on the search's 0.1 s grid.
+double shortest_pause(const TableSpec& table);
 
 /// The plan file of a genome on `table` at `site` (docs/formats.md, type = rotations): turns at
 /// the table's acceleration, durations rounded up to 0.1 s so that every segment starts on a
@@ -70,9 +82,12 @@ struct SearchStep {
 
 struct SearchResult {
   PlanGenome best;
-  Plan plan;                     // `best` as a plan (plan_of)
-  Excess excess;                 // of the best, from the search's pass
-  bool meets = false;            // every target met
+  Plan plan;                    // the result as a plan: `best`'s (plan_of), or a seed's
+  std::string text;             // its plan file
+  std::string origin = "beam";  // "beam", or the seed it comes from
+  std::vector<std::pair<std::string, double>> candidates;  // seeds tried: name, worst ratio
+  Excess excess;                                           // of the best, from the search's pass
+  bool meets = false;                                      // every target met
   int evaluations = 0;           // covariance passes, incremental and full
   std::vector<SearchStep> path;  // the best plan's growth, turn by turn (before refinement)
   double duration_before_refinement = 0.0;
