@@ -95,6 +95,11 @@ std::string rate_table_text(const RateTableResult& r, const std::vector<RateSegm
                 "\n%zu static positions, %zu rate segments; chi2/dof %.3f (%d dof)\n",
                 r.static_segments, r.rate_segments, r.dof > 0 ? r.chi2 / r.dof : 0.0, r.dof);
   out += line;
+  if (r.dof > 0 && r.chi2 / r.dof > 3.0)
+    out +=
+        "The means scatter beyond their noise (chi2/dof above 3): the model or the plan does "
+        "not describe the data (an effect outside the model, a table rate or attitude off its "
+        "command); the sigmas understate the errors.\n";
   if (!r.undetermined.empty()) {
     out += "Not determined by these segments (not estimated):";
     for (const auto& u : r.undetermined) out += " " + u;
