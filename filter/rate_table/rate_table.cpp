@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <utility>
 
 #include "models/attitude.hpp"
 #include "models/units.hpp"
@@ -160,7 +161,7 @@ std::vector<Param> candidate_params(bool gyro_rates) {
   std::vector<Param> p;
   auto add = [&](const std::string& name, int row, std::function<double(const MeanRow&)> v,
                  bool cat = true) {
-    p.push_back({name, cat, [row, v](const MeanRow& r) {
+    p.push_back({name, cat, [row, v = std::move(v)](const MeanRow& r) {
                    V6 c = V6::Zero();
                    c(row) = v(r);
                    return c;
@@ -259,7 +260,8 @@ std::vector<std::size_t> determined(const Eigen::MatrixXd& A) {
 // would absorb the missing ones: else only what needs none of them stays (the gyros' bias and
 // g-sensitivity; nothing of the accelerometers').
 void drop_incomplete(const std::vector<Param>& params, std::vector<std::size_t>& keep) {
-  for (const std::string tr : {"gyro.", "accel."}) {
+  for (const char* prefix : {"gyro.", "accel."}) {
+    const std::string tr = prefix;
     int base = 0;
     for (std::size_t k : keep) {
       const std::string& n = params[k].name;
