@@ -391,6 +391,12 @@ RateTableResult rate_table_calibrate(const std::vector<RateSegment>& segments,
   }
   for (std::size_t k = 0; k < params.size(); ++k)
     if (!used[k]) res.undetermined.push_back(params[k].name);
+  for (const auto& c : res.coefficients)  // no sensor is off by a fifth: the plan is not the data
+    if (c.name.find(".scale.") != std::string::npos && std::abs(c.value) > 0.2)
+      throw RateTableError("rate table: " + c.name + " comes out at " +
+                           std::to_string(c.value * 100.0) +
+                           " %: the plan's attitudes, axes or rates are not what the data show "
+                           "(a face or a turn's direction swapped, a wrong axis, unit or order)");
   return res;
 }
 
