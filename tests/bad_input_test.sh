@@ -899,6 +899,8 @@ fixed 2 "imu.csv: segment 2 (rate 1 (+z)) not found in the log|rate of 80" rtcal
 rtnew rate-table-faces-swapped; cp "$src/config/plans/six-face-3axis.ini" "$d/plan.ini"; (cd "$d" && rtsim > /dev/null) || die "rate-table simulation"
 L=$(lno "$d/sim/plan.ini" '^roll = 180'); awk -v n="$L" 'NR == n { $0 = "roll = 0 deg" } { print }' "$d/sim/plan.ini" > "$d/p" && mv "$d/p" "$d/sim/plan.ini"
 fixed 2 "rate table: accel.scale.z comes out at|the plan's attitudes, axes or rates are not what the data show" rtcal
+rtnew three-axis-plan-two-axis-table; cp "$src/config/plans/six-face-3axis.ini" "$d/plan.ini"; cp "$src/config/tables/two-axis-20.ini" "$d/table.ini"
+fixed 2 "plan.ini: a plan for a three-axis table ([table] axes = 3), and table.ini has 2 axes" S design --plan plan.ini --sensor sensor.ini --table table.ini
 rtnew rate-table-kf-option
 fixed 1 "--passes is not an option of --method rate-table" rtcal --passes 2
 
