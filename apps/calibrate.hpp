@@ -65,6 +65,12 @@ SessionSummary calibrate_six_face_session(const CalibrateOptions& o,
                                           const std::string& session_path,
                                           const std::string& out_path, bool verbose);
 
+/// One session of rate-table segments and static positions, from their means
+/// (apps/calibrate_rate_table.cpp).
+SessionSummary calibrate_rate_table_session(const CalibrateOptions& o,
+                                            const std::string& session_path,
+                                            const std::string& out_path, bool verbose);
+
 /// The gate's report as the result's "plausibility" section (nothing when no check ran).
 void record_gate(nlohmann::ordered_json& sections, const PlausibilityReport& report);
 

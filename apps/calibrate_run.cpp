@@ -259,6 +259,8 @@ SessionSummary calibrate_session(const CalibrateOptions& o, const std::string& s
     return calibrate_table_free_session(o, session_path, out_path, verbose);
   if (o.method == Method::SixFace)
     return calibrate_six_face_session(o, session_path, out_path, verbose);
+  if (o.method == Method::RateTable)
+    return calibrate_rate_table_session(o, session_path, out_path, verbose);
   const Session session = Session::load(session_path);
   refuse_overwrite(session_inputs(session), {{"--out", out_path}, {"--monitor", monitor_path}});
   return o.method == Method::Kf ? calibrate_kf(o, session, out_path, monitor_path, verbose, live)

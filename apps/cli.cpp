@@ -133,7 +133,8 @@ void validate(boost::any& v, const std::vector<std::string>& values, Method*, in
                  {{"closed-form", Method::ClosedForm},
                   {"kf", Method::Kf},
                   {"table-free", Method::TableFree},
-                  {"six-face", Method::SixFace}});
+                  {"six-face", Method::SixFace},
+                  {"rate-table", Method::RateTable}});
 }
 void validate(boost::any& v, const std::vector<std::string>& values, OnBadSample*, int) {
   choose<OnBadSample>(v, values, {{"stop", OnBadSample::Stop}, {"skip", OnBadSample::Skip}});
@@ -146,6 +147,7 @@ std::string name_of(Method m) {
   return m == Method::Kf          ? "kf"
          : m == Method::TableFree ? "table-free"
          : m == Method::SixFace   ? "six-face"
+         : m == Method::RateTable ? "rate-table"
                                   : "closed-form";
 }
 std::string name_of(Stage1Method m) { return m == Stage1Method::Point ? "point" : "fit"; }

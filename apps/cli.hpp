@@ -65,7 +65,7 @@ struct Choice {
 };
 
 /// Calibration method of `calibrate`.
-enum class Method { ClosedForm, Kf, TableFree, SixFace };
+enum class Method { ClosedForm, Kf, TableFree, SixFace, RateTable };
 /// What a bad sample does.
 enum class OnBadSample { Stop, Skip };
 /// The vertical channel of `navigate`.

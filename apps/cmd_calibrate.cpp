@@ -21,7 +21,8 @@ void add_options(po::options_description& d, CalibrateOptions& o) {
   d.add_options()
       ("method", po::value(&o.method)->default_value(Method::ClosedForm, "closed-form"),
        "closed-form | kf (error-state Kalman filter) | table-free (hand-held session, no table) | "
-       "six-face (faces and known turns, labelled)")
+       "six-face (faces and known turns, labelled) | rate-table (constant-rate segments and "
+       "static positions from their means: no integration)")
       ("force", "run even when the plausibility gate fails (docs/formats.md: dwells against gravity, "
        "Earth rate and plan, saturation, fits; rests without a table); the result records it")
       ("table-sigma", po::value(&o.table_sigma)->default_value(2.5),
@@ -91,6 +92,12 @@ void check_method_options(const po::variables_map& vm, CalibrateOptions& o) {
   // clang-format on
   check_table_free_options(vm, o, {closed_form_only, kf_only, {"table-sigma"}});
   if (o.method == Method::TableFree || o.method == Method::SixFace) return;
+  if (o.method == Method::RateTable) {
+    for (const auto& list : {closed_form_only, kf_only})
+      for (const auto& name : list)
+        if (vm.count(name) && !vm[name].defaulted())
+          throw UsageError("--" + name + " is not an option of --method rate-table");
+  }
   const bool kf = o.method == Method::Kf;
   for (const auto& name : kf ? closed_form_only : kf_only)
     if (vm.count(name) && !vm[name].defaulted())
@@ -203,7 +210,7 @@ int cmd_calibrate(const std::vector<std::string>& args) {
   const auto vm = parse(
       args, d,
       "Usage: sinscal calibrate --session DIR/session.ini --method "
-      "closed-form|kf|table-free|six-face "
+      "closed-form|kf|table-free|six-face|rate-table "
       "--out result.json\n"
       "       sinscal calibrate --session DIR_OF_SESSIONS | --session-list FILE [--session ...] "
       "--out OUT_DIR\n"
@@ -215,6 +222,7 @@ int cmd_calibrate(const std::vector<std::string>& args) {
       "table-free: a hand-held session (no plan needed): static poses found in the data, both\n"
       "triads from gravity's magnitude and the turns between poses, the raw-count view.\n"
       "six-face: the six faces and three known turns, labelled in the log ([six_face]).\n"
+      "rate-table: the plan's constant-rate segments and static positions, from their means.\n"
       "Batch (several sessions): OUT_DIR/NAME.json per session and OUT_DIR/summary.csv.");
   if (!vm) return 0;
   o.stream = vm->count("stream") > 0;

@@ -36,6 +36,9 @@ CalibratorOptions design_options(const DesignCliOptions& o, const SensorProfile&
 }
 
 void check_table(const Plan& plan, const TableSpec& table, double margin) {
+  if (plan.table.axes > table.axes)
+    throw ConfigError(plan.path + ": a plan for a three-axis table ([table] axes = 3), and " +
+                      table.path + " has " + std::to_string(table.axes) + " axes");
   const auto violations = check_against_table(build_motion(plan, plan.site), table, margin);
   if (violations.empty()) return;
   std::string msg = plan.path + ": the plan asks more than the table " + table.path + " gives:";

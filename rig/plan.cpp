@@ -142,9 +142,62 @@ void check_step(const std::string& where, double accel, const PlanLimits& limits
                       limits.hint());
 }
 
+// A rate-table segment's angle from its rate and `hold` (time at the rate) or `revolutions`.
+void set_constant_rate(double accel, RotationStep& st) {
+  st.constant_rate = true;
+  st.angle = st.revolutions > 0 ? 2.0 * M_PI * st.revolutions
+                                : st.rate * st.hold + st.rate * st.rate / accel;
+}
+
+// Whole revolutions (1 to 100) of `key`: one value or `n` (0: any count) values.
+std::vector<int> read_revolutions(const IniFile& ini, const std::string& key) {
+  std::istringstream in(ini.get_string(key));
+  std::vector<int> out;
+  for (std::string w; in >> w;) {
+    const bool digits = !w.empty() && w.size() <= 3 && std::all_of(w.begin(), w.end(), [](char c) {
+      return c >= '0' && c <= '9';
+    });
+    const int n = digits ? std::stoi(w) : 0;
+    if (n < 1 || n > 100)
+      throw ConfigError(ini.where(key) + "'" + w + "': expected whole revolutions, 1 to 100");
+    out.push_back(n);
+  }
+  if (out.empty()) throw ConfigError(ini.where(key) + "no revolutions given");
+  return out;
+}
+
+// A [step.N] rate-table segment: `rate` with `hold` or `revolutions`, no angle.
+void read_rate_segment(const IniFile& ini, const std::string& s, double accel,
+                       const PlanLimits& limits, RotationStep& st) {
+  const bool has_revs = ini.has(s + ".revolutions"), has_hold = ini.has(s + ".hold");
+  if (has_revs == has_hold || !ini.has(s + ".rate") || ini.has(s + ".duration"))
+    throw ConfigError(ini.path() + ": [" + s +
+                      "]: a rate-table segment (no 'angle') needs 'rate' and exactly one of "
+                      "'hold' (s at the rate) and 'revolutions', no 'duration'");
+  st.rate = ini.get_quantity(s + ".rate", Q::AngularRate, "deg/s");
+  if (!(st.rate > 0.0))
+    throw ConfigError(ini.where(s + ".rate") + "must be positive (the sign is the axis')");
+  if (has_revs) {
+    const auto revs = read_revolutions(ini, s + ".revolutions");
+    if (revs.size() != 1) throw ConfigError(ini.where(s + ".revolutions") + "expected one value");
+    st.revolutions = revs.front();
+  } else {
+    st.hold = read_static_time(ini, s + ".hold", limits, false);
+  }
+  set_constant_rate(accel, st);
+  check_step(ini.where(s + ".rate"), accel, limits, st);
+  st.pause = ini.has(s + ".pause") ? read_static_time(ini, s + ".pause", limits, true) : 0.0;
+}
+
 // One [step.N] section.
 void read_step_timing(const IniFile& ini, const std::string& s, double accel,
                       const PlanLimits& limits, RotationStep& st) {
+  if (!ini.has(s + ".angle") && (ini.has(s + ".revolutions") || ini.has(s + ".hold")))
+    return read_rate_segment(ini, s, accel, limits, st);
+  if (ini.has(s + ".revolutions") || ini.has(s + ".hold"))
+    throw ConfigError(ini.where(s + (ini.has(s + ".hold") ? ".hold" : ".revolutions")) +
+                      "a turn with an 'angle' has no 'hold' or 'revolutions' (a rate-table "
+                      "segment has no angle)");
   st.angle = ini.get_quantity(s + ".angle", Q::Angle, "deg");
   const bool has_duration = ini.has(s + ".duration"), has_rate = ini.has(s + ".rate");
   if (has_duration == has_rate)
@@ -184,6 +237,138 @@ std::vector<double> per_turn(const IniFile& ini, const std::string& one, const s
     return v;
   }
   return {};
+}
+
+// The [rotations] section: turns listed by axis with per-turn or common timing.
+void read_rotations_section(const IniFile& ini, Plan& p) {
+  const PlanLimits& limits = p.limits;
+  auto check_count = [&](std::size_t n, const char* what) {
+    if (n > limits.max_entries)
+      throw ConfigError(ini.path() + ": " + std::to_string(n) + " " + what +
+                        ", more than the plan limit of " + std::to_string(limits.max_entries) +
+                        limits.hint());
+  };
+  ini.check_keys("rotations", {"axes", "angle", "angles", "duration", "durations", "rate", "rates",
+                               "pause", "pauses", "hold", "holds", "revolutions"});
+  std::istringstream axes(ini.get_string("rotations.axes"));
+  for (std::string a; axes >> a;) {
+    check_count(p.steps.size() + 1, "turns");
+    p.steps.push_back(parse_axis(ini, "rotations.axes", a));
+  }
+  const std::size_t n = p.steps.size();
+  if (n == 0) throw ConfigError(ini.where("rotations.axes") + "no axes given");
+  const auto angles = per_turn(ini, "angle", "angles", n, Q::Angle, "deg");
+  const auto durations = per_turn(ini, "duration", "durations", n, Q::Time, "s");
+  const auto rates = per_turn(ini, "rate", "rates", n, Q::AngularRate, "deg/s");
+  const auto pauses = per_turn(ini, "pause", "pauses", n, Q::Time, "s");
+  const auto holds = per_turn(ini, "hold", "holds", n, Q::Time, "s");
+  std::vector<int> revolutions;
+  if (ini.has("rotations.revolutions")) {
+    revolutions = read_revolutions(ini, "rotations.revolutions");
+    if (revolutions.size() == 1) revolutions.assign(n, revolutions.front());
+    if (revolutions.size() != n)
+      throw ConfigError(ini.where("rotations.revolutions") + "expected 1 or " + std::to_string(n) +
+                        " values, one per turn of 'axes'");
+  }
+  const bool rate_table = !holds.empty() || !revolutions.empty();
+  if (rate_table && (!angles.empty() || !durations.empty() || rates.empty() ||
+                     (!holds.empty() && !revolutions.empty())))
+    throw ConfigError(ini.path() +
+                      ": [rotations]: rate-table segments need 'rate' (or 'rates') and "
+                      "exactly one of 'hold' ('holds') and 'revolutions', no angle or "
+                      "duration");
+  if (angles.empty() && !rate_table)
+    throw ConfigError(ini.path() +
+                      ": [rotations]: missing 'angle' (or 'angles', one per turn; or 'hold' "
+                      "or 'revolutions' for rate-table segments)");
+  if (durations.empty() == rates.empty())
+    throw ConfigError(ini.path() +
+                      ": [rotations]: give exactly one of 'duration', 'durations', 'rate' "
+                      "and 'rates'");
+  auto key_of = [&](const char* one, const char* list) {
+    return ini.has(std::string("rotations.") + one) ? std::string("rotations.") + one
+                                                    : std::string("rotations.") + list;
+  };
+  const std::string timing_key =
+      durations.empty() ? key_of("rate", "rates") : key_of("duration", "durations");
+  for (std::size_t i = 0; i < n; ++i) {
+    RotationStep& st = p.steps[i];
+    const std::string turn = "turn " + std::to_string(i + 1) + " (" + st.axis_name + "): ";
+    if (rate_table) {
+      st.rate = rates[i];
+      if (!(st.rate > 0.0) || !(holds.empty() || holds[i] > 0.0))
+        throw ConfigError(ini.where(timing_key) + turn + "the rate and the hold must be positive");
+      st.hold = holds.empty() ? 0.0 : holds[i];
+      st.revolutions = revolutions.empty() ? 0 : revolutions[i];
+      set_constant_rate(p.move_accel, st);
+    } else if (!durations.empty()) {
+      st.angle = angles[i];
+      st.duration = durations[i];
+      if (!(st.duration > 0.0))
+        throw ConfigError(ini.where(timing_key) + turn + "the duration must be positive");
+    } else {
+      st.angle = angles[i];
+      st.rate = rates[i];
+      if (!(st.rate > 0.0))
+        throw ConfigError(ini.where(timing_key) + turn + "the rate must be positive");
+    }
+    check_step(ini.where(rate_table ? timing_key : key_of("angle", "angles")) + turn, p.move_accel,
+               limits, st);
+    st.pause = pauses.empty() ? 0.0 : pauses[i];
+    const std::string pause_key = key_of("pause", "pauses");
+    if (!(st.pause >= 0.0))
+      throw ConfigError(ini.where(pause_key) + turn + "the pause must not be negative");
+    if (!(st.pause <= limits.max_duration))
+      throw ConfigError(ini.where(pause_key) + turn +
+                        "the pause is longer than the plan "
+                        "limit of " +
+                        days(limits.max_duration) + " days" + limits.hint());
+  }
+  if (!ini.sections_with_prefix("step.").empty())
+    throw ConfigError(ini.path() +
+                      ": give the rotations either as [rotations] axes or as [step.N], not both");
+}
+
+// A three-axis table's move from `from` to `to` starting at t: one turn about the rotation's
+// eigen-axis (navigation frame) at the plan's move rate and acceleration.
+MotionSegment eigen_axis_move(double t, const Eigen::Matrix3d& from, const Eigen::Matrix3d& to,
+                              const Plan& plan) {
+  const Eigen::Vector3d r = rotvec_from_dcm(to * from.transpose());
+  MotionSegment m;
+  m.t0 = t;
+  m.C_b_n_start = from;
+  if (r.norm() > 0.0) m.axis_n = r.normalized();
+  m.alpha = TrapezoidProfile::by_rate(r.norm(), plan.move_rate, plan.move_accel);
+  m.t1 = t + m.alpha.duration();
+  return m;
+}
+
+// The table's dynamics and installation errors applied to the plan's motion.
+void realize_errors(const TableErrors& errors, std::vector<MotionSegment>& segments,
+                    std::vector<Dwell>& dwells) {
+  if (errors.dynamics.any()) {
+    // The table realizes each commanded profile with its dynamics.
+    errors.dynamics.validate();
+    for (auto& s : segments) {
+      if (s.is_static()) continue;
+      s.alpha = errors.dynamics.realize(s.alpha.commanded());
+      s.beta = errors.dynamics.realize(s.beta.commanded());
+      s.gamma = errors.dynamics.realize(s.gamma.commanded());
+    }
+  }
+  if (errors.has_installation_errors()) {
+    // C_b_n_true = R(base) C_b_n R(mounting): nav-fixed axes turn with the base, body-fixed axes
+    // are seen from the mounted IMU.
+    const Eigen::Matrix3d C_base = dcm_from_rotvec(errors.base_n());
+    const Eigen::Matrix3d C_b_p = dcm_from_rotvec(errors.mounting_b);
+    for (auto& s : segments) {
+      s.C_b_n_start = C_base * s.C_b_n_start * C_b_p;
+      s.axis_n = C_base * s.axis_n;
+      s.axis_c_n = C_base * s.axis_c_n;
+      s.axis_b = C_b_p.transpose() * s.axis_b;
+    }
+    for (auto& d : dwells) d.C_b_n_true = C_base * d.C_b_n_true * C_b_p;
+  }
 }
 
 }  // namespace
@@ -243,7 +428,8 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
   p.table.outer_axis_n = read_vector(ini, "table.outer_axis", Eigen::Vector3d::UnitX());
   p.table.inner_axis_p = read_vector(ini, "table.inner_axis", -Eigen::Vector3d::UnitZ());
   p.table.C_b_p = C_b_n_from_euler(p.convention, EulerAngles{});
-  ini.check_keys("table", {"outer_axis", "inner_axis"});
+  p.table.axes = ini.get_int("table.axes", 2, 2, 3);
+  ini.check_keys("table", {"outer_axis", "inner_axis", "axes"});
   auto check_count = [&](std::size_t n, const char* what) {
     if (n > limits.max_entries)
       throw ConfigError(ini.path() + ": " + std::to_string(n) + " " + what +
@@ -298,60 +484,7 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
     p.start = read_angles(ini, "start", p.convention);
     p.start_dwell = read_static_time(ini, "start.dwell", limits, false);
     if (ini.has("rotations.axes")) {
-      ini.check_keys("rotations", {"axes", "angle", "angles", "duration", "durations", "rate",
-                                   "rates", "pause", "pauses"});
-      std::istringstream axes(ini.get_string("rotations.axes"));
-      for (std::string a; axes >> a;) {
-        check_count(p.steps.size() + 1, "turns");
-        p.steps.push_back(parse_axis(ini, "rotations.axes", a));
-      }
-      const std::size_t n = p.steps.size();
-      if (n == 0) throw ConfigError(ini.where("rotations.axes") + "no axes given");
-      const auto angles = per_turn(ini, "angle", "angles", n, Q::Angle, "deg");
-      const auto durations = per_turn(ini, "duration", "durations", n, Q::Time, "s");
-      const auto rates = per_turn(ini, "rate", "rates", n, Q::AngularRate, "deg/s");
-      const auto pauses = per_turn(ini, "pause", "pauses", n, Q::Time, "s");
-      if (angles.empty())
-        throw ConfigError(ini.path() +
-                          ": [rotations]: missing 'angle' (or 'angles', one per turn)");
-      if (durations.empty() == rates.empty())
-        throw ConfigError(ini.path() +
-                          ": [rotations]: give exactly one of 'duration', 'durations', 'rate' "
-                          "and 'rates'");
-      auto key_of = [&](const char* one, const char* list) {
-        return ini.has(std::string("rotations.") + one) ? std::string("rotations.") + one
-                                                        : std::string("rotations.") + list;
-      };
-      const std::string timing_key =
-          durations.empty() ? key_of("rate", "rates") : key_of("duration", "durations");
-      for (std::size_t i = 0; i < n; ++i) {
-        RotationStep& st = p.steps[i];
-        const std::string turn = "turn " + std::to_string(i + 1) + " (" + st.axis_name + "): ";
-        st.angle = angles[i];
-        if (!durations.empty()) {
-          st.duration = durations[i];
-          if (!(st.duration > 0.0))
-            throw ConfigError(ini.where(timing_key) + turn + "the duration must be positive");
-        } else {
-          st.rate = rates[i];
-          if (!(st.rate > 0.0))
-            throw ConfigError(ini.where(timing_key) + turn + "the rate must be positive");
-        }
-        check_step(ini.where(key_of("angle", "angles")) + turn, p.move_accel, limits, st);
-        st.pause = pauses.empty() ? 0.0 : pauses[i];
-        const std::string pause_key = key_of("pause", "pauses");
-        if (!(st.pause >= 0.0))
-          throw ConfigError(ini.where(pause_key) + turn + "the pause must not be negative");
-        if (!(st.pause <= limits.max_duration))
-          throw ConfigError(ini.where(pause_key) + turn +
-                            "the pause is longer than the plan "
-                            "limit of " +
-                            days(limits.max_duration) + " days" + limits.hint());
-      }
-      if (!ini.sections_with_prefix("step.").empty())
-        throw ConfigError(
-            ini.path() +
-            ": give the rotations either as [rotations] axes or as [step.N], not both");
+      read_rotations_section(ini, p);
     } else {
       if (!ini.sections_with_prefix("rotations").empty())
         throw ConfigError(ini.path() + ": [rotations] needs 'axes'");
@@ -359,7 +492,7 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
       check_count(sections.size(), "turns");
       std::vector<std::pair<int, RotationStep>> found;
       for (const auto& s : sections) {
-        ini.check_keys(s, {"axis", "angle", "duration", "rate", "pause"});
+        ini.check_keys(s, {"axis", "angle", "duration", "rate", "pause", "hold", "revolutions"});
         RotationStep st = parse_axis(ini, s + ".axis", ini.get_string(s + ".axis"));
         read_step_timing(ini, s, p.move_accel, limits, st);
         found.emplace_back(section_number(ini, s, "step."), st);
@@ -464,7 +597,18 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
       TableAngles cmd = nominal.angles_for(known);
       cmd.outer += angle_error();
       cmd.inner += angle_error();
-      if (i > 0) {
+      Eigen::Matrix3d commanded = truth.C_b_n(cmd);
+      if (plan.table.axes == 3) {  // its three angles' errors: a small turn of the attitude
+        const Eigen::Vector3d e(angle_error(), angle_error(), angle_error());
+        commanded = dcm_from_rotvec(e) * known;
+      }
+      if (i > 0 && plan.table.axes == 3) {
+        const MotionSegment m = eigen_axis_move(t, actual, commanded, plan);
+        if (m.t1 > t) {
+          segments.push_back(m);
+          t = m.t1;
+        }
+      } else if (i > 0) {
         // Each axis takes the shorter way round; both start together.
         auto wrap = [](double a) { return std::remainder(a, 2.0 * M_PI); };
         MotionSegment m;
@@ -488,12 +632,12 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
         cmd.outer = prev.outer + m.alpha.angle();
         cmd.inner = prev.inner + m.beta.angle();
       }
-      table_known = true;
+      table_known = plan.table.axes == 2;
       table_now = cmd;
       Eigen::Vector3d wobble = Eigen::Vector3d::Zero();
       if (errors.attitude_sigma > 0.0)
         for (int k = 0; k < 3; ++k) wobble(k) = errors.attitude_sigma * normal(rng);
-      const Eigen::Matrix3d target = dcm_from_rotvec(wobble) * truth.C_b_n(cmd);
+      const Eigen::Matrix3d target = dcm_from_rotvec(wobble) * commanded;
       if (i > 0 && segments.back().t1 > segments.back().t0) {
         // The table sets the dwell to its accuracy during the move (the gyros see the
         // correction, as on a real table): a small turn about a navigation-frame axis.
@@ -519,7 +663,7 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
     Eigen::Matrix3d actual = dcm_from_rotvec(start_error) * known;
     try {  // table angles while the steps are table-axis turns from a reachable start
       table_now = truth.angles_for(actual);
-      table_known = true;
+      table_known = plan.table.axes == 2;
     } catch (const UnreachableOrientation&) {
       table_known = false;
     }
@@ -576,29 +720,7 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
                   st.pause);
     }
   }
-  if (errors.dynamics.any()) {
-    // The table realizes each commanded profile with its dynamics.
-    errors.dynamics.validate();
-    for (auto& s : segments) {
-      if (s.is_static()) continue;
-      s.alpha = errors.dynamics.realize(s.alpha.commanded());
-      s.beta = errors.dynamics.realize(s.beta.commanded());
-      s.gamma = errors.dynamics.realize(s.gamma.commanded());
-    }
-  }
-  if (errors.has_installation_errors()) {
-    // C_b_n_true = R(base) C_b_n R(mounting): nav-fixed axes turn with the base, body-fixed axes
-    // are seen from the mounted IMU.
-    const Eigen::Matrix3d C_base = dcm_from_rotvec(errors.base_n());
-    const Eigen::Matrix3d C_b_p = dcm_from_rotvec(errors.mounting_b);
-    for (auto& s : segments) {
-      s.C_b_n_start = C_base * s.C_b_n_start * C_b_p;
-      s.axis_n = C_base * s.axis_n;
-      s.axis_c_n = C_base * s.axis_c_n;
-      s.axis_b = C_b_p.transpose() * s.axis_b;
-    }
-    for (auto& d : dwells) d.C_b_n_true = C_base * d.C_b_n_true * C_b_p;
-  }
+  realize_errors(errors, segments, dwells);
   return Motion(site, std::move(segments), std::move(dwells));
 }
 

@@ -2,7 +2,10 @@
 //   type = orientations: static orientations (heading, pitch, roll in a named convention) each
 //     with a dwell, reached by two-axis table moves at a move rate and acceleration;
 //   type = rotations: a start attitude and dwell, then rotations about body axes (+x ... -z) or
-//     table axes (+outer, -inner, ...), each with an angle, a duration or rate, and a pause.
+//     table axes (+outer, -inner, ...), each with an angle, a duration or rate, and a pause; or a
+//     rate-table segment: a constant rate about a body axis for a time (`hold`) or a whole number
+//     of revolutions, without a known angle (calibrate --method rate-table uses its mean output).
+// `[table] axes = 3`: a three-axis table, any attitude reachable.
 #pragma once
 
 #include <cstdint>
@@ -32,6 +35,11 @@ struct RotationStep {
   double duration = 0.0;  // s; 0: from `rate`
   double rate = 0.0;      // rad/s peak rate when duration is 0
   double pause = 0.0;     // s static after the rotation
+  /// A rate-table segment: `rate` held for `hold` s (the angle follows: rate * hold plus the
+  /// ramps' rate^2 / acceleration) or `revolutions` whole turns (angle 2 pi revolutions).
+  bool constant_rate = false;
+  double hold = 0.0;    // s at the constant rate (0: given by revolutions)
+  int revolutions = 0;  // whole turns (0: given by hold)
 };
 
 /// Size limits of a plan (docs/formats.md): orientations or turns, and the duration of the whole

@@ -19,6 +19,7 @@ Eigen::Matrix3d Table::C_b_n(const TableAngles& a) const {
 Eigen::Vector3d Table::inner_axis_b() const { return g_.C_b_p.transpose() * g_.inner_axis_p; }
 
 TableAngles Table::angles_for(const Eigen::Matrix3d& C_target) const {
+  if (g_.axes == 3) return {};
   const Eigen::Vector3d& u = g_.outer_axis_n;
   const Eigen::Vector3d v0 = g_.inner_axis_p;           // inner axis in NED at outer angle 0
   const Eigen::Vector3d w = C_target * inner_axis_b();  // where the target puts the inner axis

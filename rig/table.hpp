@@ -22,6 +22,9 @@ struct TableGeometry {
   Eigen::Vector3d outer_axis_n = Eigen::Vector3d::UnitX();   // unit, NED
   Eigen::Vector3d inner_axis_p = -Eigen::Vector3d::UnitZ();  // unit, platform frame
   Eigen::Matrix3d C_b_p = Eigen::Matrix3d::Identity();       // IMU mounting
+  /// 2: the tilt-rotation table above; 3: a three-axis table, which reaches every attitude (its
+  /// moves are simulated as one turn about the rotation's eigen-axis; it has no two-axis angles).
+  int axes = 2;
 };
 
 /// How well the table sets the IMU's attitude at a dwell, as every estimator models it: an
@@ -46,6 +49,7 @@ class Table {
   /// Inner axis in body axes (constant).
   Eigen::Vector3d inner_axis_b() const;
   /// Axis angles that put the body at C_b_n (within 1e-9 rad); throws UnreachableOrientation.
+  /// A three-axis table reaches every attitude: zero angles (it has no two-axis angles).
   TableAngles angles_for(const Eigen::Matrix3d& C_b_n) const;
 
  private:

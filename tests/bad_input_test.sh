@@ -535,7 +535,7 @@ fixed 2 "session.ini:$L: 'log.columns': unknown key in [log]" nav
 
 # --- calibrate: options -----------------------------------------------------------------------
 new calibrate-unknown-method; mini
-fixed 1 "--method' must be closed-form | kf | table-free | six-face, not 'magic'" S calibrate --method magic --session session.ini --out out/r.json
+fixed 1 "--method' must be closed-form | kf | table-free | six-face | rate-table, not 'magic'" S calibrate --method magic --session session.ini --out out/r.json
 new calibrate-channels-one; s8
 fixed 1 "--channels' must be a list with at least north,east" cf --channels north
 new calibrate-stream-closed-form; mini
@@ -930,6 +930,41 @@ sfnew six-face-diagnose-turn-other-direction; set_key "$d/session.ini" turn_angl
 fixed 2 "turn 'x_rot' integrates to 367.|declared -360.0 deg" S diagnose --session session.ini --out out/diag
 sfnew six-face-table-option; 
 fixed 1 "--table-sigma is an option of the table methods (closed-form, kf), not of --method six-face" sf --table-sigma 3
+
+# --- issue 34: rate-table segments, three-axis tables, calibrate --method rate-table
+# rtnew NAME: the rate-mixed plan and the tactical-rate profile in $d.
+rtnew() { new "$1"; cp "$src/config/plans/rate-mixed.ini" "$d/plan.ini"; cp "$src/config/sensors/tactical-rate.ini" "$d/sensor.ini"; }
+rtsim() { S simulate --plan plan.ini --sensor sensor.ini --rate 20 --out sim; }
+rtcal() { S calibrate --method rate-table --session sim/session.ini --out out/r.json "$@"; }
+rtnew rate-table-control; (cd "$d" && rtsim > /dev/null) || die "rate-table simulation"
+control 0 "" rtcal
+rtnew rate-table-angle-and-revolutions; L=$(( $(lno "$d/plan.ini" '^revolutions') ))
+sed -i "${L}a angle = 90 deg" "$d/plan.ini"; L=$((L + 1))
+fixed 2 "plan.ini:$((L - 1)): 'step.1.revolutions'|a turn with an 'angle' has no 'hold' or 'revolutions'" sim
+rtnew rate-table-half-revolution; set_key "$d/plan.ini" revolutions "2.5"
+fixed 2 "plan.ini:$L: 'step.1.revolutions'|expected whole revolutions" sim
+rtnew rate-table-hold-and-revolutions; L=$(lno "$d/plan.ini" '^revolutions'); sed -i "${L}a hold = 10 s" "$d/plan.ini"
+fixed 2 "plan.ini: [step.1]: a rate-table segment (no 'angle') needs 'rate' and exactly one of" sim
+rtnew rate-table-no-rate; L=$(lno "$d/plan.ini" '^rate = 25'); sed -i "${L}d" "$d/plan.ini"
+fixed 2 "plan.ini: [step.1]: a rate-table segment (no 'angle') needs 'rate'" sim
+rtnew rate-table-rotations-angle-and-hold; cp "$src/config/plans/rate-table.ini" "$d/plan.ini"; add_line "$d/plan.ini" "angle = 90 deg"
+fixed 2 "plan.ini: [rotations]: rate-table segments need 'rate' (or 'rates') and exactly one of" sim
+rtnew rate-table-rotations-revolutions-count; cp "$src/config/plans/rate-table.ini" "$d/plan.ini"; set_key "$d/plan.ini" revolutions "1 2 3"
+fixed 2 "plan.ini:$L: 'rotations.revolutions'|expected 1 or 12 values" sim
+rtnew three-axis-axes-4; cp "$src/config/plans/six-face-3axis.ini" "$d/plan.ini"; set_key "$d/plan.ini" axes "4"
+fixed 2 "plan.ini:$L: 'table.axes'" sim
+rtnew three-axis-plan-on-two-axes; cp "$src/config/plans/six-face-3axis.ini" "$d/plan.ini"; set_key "$d/plan.ini" axes "2"
+fixed 2 "plan.ini: [orientation.5]: orientation not reachable by the two-axis table" sim
+rtnew rate-table-segment-not-in-log; (cd "$d" && rtsim > /dev/null) || die "rate-table simulation"
+set_key "$d/sim/plan.ini" rate "80 deg/s"
+fixed 2 "imu.csv: segment 2 (rate 1 (+z)) not found in the log|rate of 80" rtcal
+rtnew rate-table-faces-swapped; cp "$src/config/plans/six-face-3axis.ini" "$d/plan.ini"; (cd "$d" && rtsim > /dev/null) || die "rate-table simulation"
+L=$(lno "$d/sim/plan.ini" '^roll = 180'); awk -v n="$L" 'NR == n { $0 = "roll = 0 deg" } { print }' "$d/sim/plan.ini" > "$d/p" && mv "$d/p" "$d/sim/plan.ini"
+fixed 2 "rate table: accel.scale.z comes out at|the plan's attitudes, axes or rates are not what the data show" rtcal
+rtnew three-axis-plan-two-axis-table; cp "$src/config/plans/six-face-3axis.ini" "$d/plan.ini"; cp "$src/config/tables/two-axis-20.ini" "$d/table.ini"
+fixed 2 "plan.ini: a plan for a three-axis table ([table] axes = 3), and table.ini has 2 axes" S design --plan plan.ini --sensor sensor.ini --table table.ini
+rtnew rate-table-kf-option
+fixed 1 "--passes is not an option of --method rate-table" rtcal --passes 2
 
 # --- issue 21: the plausibility gate without a table (filter/plausibility/rest_plausibility.hpp),
 # simulate's output directory, and the messages the probe found weak. The real recordings of

@@ -1,0 +1,54 @@
+// sinscal calibrate --method rate-table: a session of rate-table segments and static positions
+// (a tumble) calibrated from the segments' mean outputs (filter/rate_table/rate_table.hpp): the
+// segments found in the log in the plan's order, the fit, its result file and table.
+#include <cstdio>
+#include <iostream>
+
+#include "apps/calibrate.hpp"
+#include "models/units.hpp"
+#include "report/rate_table_result.hpp"
+
+namespace sinscal::cli {
+
+SessionSummary calibrate_rate_table_session(const CalibrateOptions& o,
+                                            const std::string& session_path,
+                                            const std::string& out_path, bool verbose) {
+  const Session session = Session::load(session_path);
+  refuse_overwrite(session_inputs(session), {{"--out", out_path}});
+  RateTableOptions ro;
+  ro.nominal_rate_hz = session.rate_hz;
+  ro.table_sigma = o.table_sigma * units::arcsec;
+  const auto segments = rate_segments(session.plan, session.site);
+  const auto readings = read_rate_readings(session.log);
+  std::vector<SegmentMean> means;
+  try {
+    means = find_segments(readings, segments, ro);
+  } catch (const RateTableError& e) {
+    throw RateTableError(session.log.file + ": " + e.what());
+  }
+  const RateTableResult r = rate_table_calibrate(segments, means, session.site, 0.0, ro);
+  const ResultCoefficients coefficients = result_coefficients(r);
+  auto sections = result_sections(r, segments);
+  record_provenance(sections, session);
+  write_result_json(out_path, coefficients, sections);
+  const ResultCoefficients truth = load_truth(session);
+  SessionSummary row{session.path,
+                     session.name,
+                     out_path,
+                     "ok",
+                     "",
+                     readings.size(),
+                     static_cast<double>(readings.size()) / session.rate_hz,
+                     std::nullopt,
+                     std::nullopt,
+                     max_error_over_sigma(coefficients, truth),
+                     coefficients};
+  if (!verbose) return row;
+  std::printf("Rate-table calibration of %s: %zu readings, %zu segments from their means\n\n",
+              session.name.c_str(), readings.size(), segments.size());
+  std::cout << rate_table_text(r, segments, truth);
+  std::printf("\nResult written to %s\n", out_path.c_str());
+  return row;
+}
+
+}  // namespace sinscal::cli

@@ -1,0 +1,403 @@
+#include "filter/rate_table/rate_table.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <utility>
+
+#include "models/attitude.hpp"
+#include "models/units.hpp"
+
+namespace sinscal {
+
+namespace {
+
+const char* const kAxis[3] = {"x", "y", "z"};
+
+RateSegment static_segment(const std::string& label, const Eigen::Matrix3d& C, double dwell) {
+  RateSegment s;
+  s.label = label;
+  s.C_b_n_known = C;
+  s.duration = dwell;
+  return s;
+}
+
+// A rotation plan's step: where it leaves the known attitude, and (rate-table segments) the
+// segment it is.
+void walk_step(const Plan& plan, const Table& table, const RotationStep& st, std::size_t i,
+               Eigen::Matrix3d& known, std::vector<RateSegment>& out) {
+  Eigen::Vector3d axis_b = st.axis_b;
+  if (st.kind == RotationStep::Axis::Inner) axis_b = st.sign * table.inner_axis_b();
+  if (st.kind == RotationStep::Axis::Outer)
+    axis_b = known.transpose() * (st.sign * table.geometry().outer_axis_n);
+  if (st.constant_rate) {
+    RateSegment s;
+    s.kind = RateSegment::Kind::Rate;
+    s.label = "rate " + std::to_string(i + 1) + " (" + st.axis_name + ")";
+    s.C_b_n_known = known;
+    s.axis_b = axis_b.normalized();
+    s.rate = st.rate;
+    s.angle = st.angle - st.rate * st.rate / plan.move_accel;
+    s.duration = s.angle / st.rate;
+    out.push_back(s);
+  }
+  known = known * rotation(axis_b, st.angle);
+  if (st.pause > 0.0)
+    out.push_back(static_segment("after " + std::to_string(i + 1) + " (" + st.axis_name + ")",
+                                 known, st.pause));
+}
+
+// The centred moving average of the rates over `w` readings (w odd).
+std::vector<Eigen::Vector3d> smoothed_rates(const std::vector<RateReading>& r, std::size_t w) {
+  std::vector<Eigen::Vector3d> out(r.size(), Eigen::Vector3d::Zero());
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  const std::size_t h = w / 2;
+  std::size_t lo = 0, hi = 0;  // window [lo, hi)
+  for (std::size_t k = 0; k < r.size(); ++k) {
+    const std::size_t want_lo = k >= h ? k - h : 0, want_hi = std::min(r.size(), k + h + 1);
+    for (; hi < want_hi; ++hi) sum += r[hi].omega;
+    for (; lo < want_lo; ++lo) sum -= r[lo].omega;
+    out[k] = sum / static_cast<double>(hi - lo);
+  }
+  return out;
+}
+
+bool matches(const Eigen::Vector3d& w, const RateSegment& s, const RateTableOptions& o) {
+  if (s.kind == RateSegment::Kind::Static) return w.norm() < o.static_threshold;
+  return (w - s.rate * s.axis_b).norm() < o.static_threshold + o.rate_tolerance * s.rate;
+}
+
+SegmentMean mean_of(const std::vector<RateReading>& r, std::size_t a, std::size_t b,
+                    std::size_t trim) {
+  const std::size_t cut = std::max(trim, (b - a) / 20);
+  SegmentMean m;
+  m.first = a + cut;
+  m.last = b > m.first + cut + 2 ? b - cut : m.first + 2;
+  m.last = std::min(m.last, b);
+  m.count = m.last - m.first;
+  for (std::size_t k = m.first; k < m.last; ++k) {
+    m.omega += r[k].omega;
+    m.f += r[k].f;
+  }
+  const double n = static_cast<double>(m.count);
+  m.omega /= n;
+  m.f /= n;
+  for (std::size_t k = m.first; k < m.last; ++k) {
+    m.var_omega += (r[k].omega - m.omega).cwiseAbs2();
+    m.var_f += (r[k].f - m.f).cwiseAbs2();
+  }
+  m.var_omega /= std::max(1.0, n - 1.0);
+  m.var_f /= std::max(1.0, n - 1.0);
+  return m;
+}
+
+// ---- the least squares --------------------------------------------------------------------
+
+// The known inputs of a segment's mean: the gyros' (Earth rate included) and the accelerometers'
+// (static only), and the covariance of the means (noise, table attitude, the Earth rate's part
+// across a rate segment's axis that its unknown start angle leaves).
+struct MeanRow {
+  bool has_f = false;
+  Eigen::Vector3d x_w, x_f, y_w, y_f, f_for_gyro;
+  Eigen::Matrix3d cov_w, cov_f;
+};
+
+// Components below 1e-9 of `size` (the vector's before projection) set to zero: the rounding of a
+// rotated axis is not an input (it would make a coefficient look determined).
+Eigen::Vector3d cleaned(Eigen::Vector3d v, double size) {
+  const double floor = 1e-9 * size;
+  for (int i = 0; i < 3; ++i)
+    if (std::abs(v(i)) < floor) v(i) = 0.0;
+  return v;
+}
+
+MeanRow row_of(const RateSegment& s, const SegmentMean& m, const Eigen::Vector3d& w_ie_n,
+               const Eigen::Vector3d& f_n, const RateTableOptions& o) {
+  MeanRow r;
+  const Eigen::Matrix3d C_n_b = s.C_b_n_known.transpose();
+  const double n = static_cast<double>(m.count);
+  r.y_w = m.omega;
+  r.y_f = m.f;
+  // A floor far below any sensor's noise (noise-free simulations).
+  r.cov_w = (m.var_omega / n + Eigen::Vector3d::Constant(1e-20)).asDiagonal();
+  r.cov_f = (m.var_f / n + Eigen::Vector3d::Constant(1e-16)).asDiagonal();
+  if (s.kind == RateSegment::Kind::Static) {
+    r.has_f = true;
+    r.x_w = C_n_b * w_ie_n;
+    r.x_f = C_n_b * f_n;
+    r.x_f = cleaned(r.x_f, f_n.norm());
+    r.f_for_gyro = r.x_f;
+    const Eigen::Vector3d u = r.x_f.normalized();
+    r.cov_f += o.table_sigma * o.table_sigma * r.x_f.squaredNorm() *
+               (Eigen::Matrix3d::Identity() - u * u.transpose());
+    return r;
+  }
+  const Eigen::Matrix3d P = s.axis_b * s.axis_b.transpose();
+  const Eigen::Matrix3d Q = Eigen::Matrix3d::Identity() - P;
+  r.x_w = s.rate * s.axis_b + P * C_n_b * w_ie_n;
+  r.f_for_gyro = cleaned(P * C_n_b * f_n, f_n.norm());
+  // The readings used span an angle of about theta (their count at the nominal reading rate):
+  // not whole revolutions, its start unknown. The across part's mean over it, with the fraction
+  // of a revolution at random: variance (|omega_across| / theta)^2 per axis across.
+  const double theta =
+      std::max(s.rate * static_cast<double>(m.count) / o.nominal_rate_hz, 0.5 * M_PI);
+  const double across = (Q * C_n_b * w_ie_n).norm() / theta;
+  r.cov_w += across * across * Q;
+  return r;
+}
+
+// One unknown: its name, its scale (SI per unit of the column) and its column (6 rows: gyro,
+// accel) at a segment's inputs.
+struct Param {
+  std::string name;
+  bool in_catalog = true;
+  std::function<Eigen::Matrix<double, 6, 1>(const MeanRow&)> column;
+};
+
+std::vector<Param> candidate_params(bool gyro_rates) {
+  using V6 = Eigen::Matrix<double, 6, 1>;
+  std::vector<Param> p;
+  auto add = [&](const std::string& name, int row, std::function<double(const MeanRow&)> v,
+                 bool cat = true) {
+    p.push_back({name, cat, [row, v = std::move(v)](const MeanRow& r) {
+                   V6 c = V6::Zero();
+                   c(row) = v(r);
+                   return c;
+                 }});
+  };
+  for (int t = 0; t < 2; ++t) {
+    const std::string tr = t == 0 ? "gyro." : "accel.";
+    const int o = 3 * t;
+    auto x = [t](const MeanRow& r) -> const Eigen::Vector3d& { return t == 0 ? r.x_w : r.x_f; };
+    for (int i = 0; i < 3; ++i)
+      add(tr + "bias." + kAxis[i], o + i, [](const MeanRow&) { return 1.0; });
+    if (t == 0 && !gyro_rates) continue;
+    for (int i = 0; i < 3; ++i)
+      add(tr + "scale." + kAxis[i], o + i, [x, i](const MeanRow& r) { return x(r)(i); });
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (i != j)
+          add(tr + "misalignment." + kAxis[i] + kAxis[j], o + i,
+              [x, j](const MeanRow& r) { return x(r)(j); });
+  }
+  for (int i = 0; i < 3; ++i)
+    add(std::string("accel.k2.") + kAxis[i], 3 + i,
+        [i](const MeanRow& r) { return r.x_f(i) * r.x_f(i); });
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      add(std::string("gyro.g_sensitivity.") + kAxis[i] + kAxis[j], i,
+          [j](const MeanRow& r) { return r.f_for_gyro(j); });
+  if (gyro_rates) {
+    for (int i = 0; i < 3; ++i)
+      add(std::string("gyro.scale_asym.") + kAxis[i], i,
+          [i](const MeanRow& r) { return std::abs(r.x_w(i)); });
+    for (int i = 0; i < 3; ++i)
+      add(
+          std::string("gyro.k2.") + kAxis[i], i,
+          [i](const MeanRow& r) { return r.x_w(i) * r.x_w(i); }, false);
+  }
+  for (int i = 0; i < 3; ++i)
+    add(std::string("accel.scale_asym.") + kAxis[i], 3 + i,
+        [i](const MeanRow& r) { return std::abs(r.x_f(i)); });
+  for (int i = 0; i < 3; ++i)
+    add(
+        std::string("accel.k3.") + kAxis[i], 3 + i,
+        [i](const MeanRow& r) { return std::pow(r.x_f(i), 3); }, false);
+  return p;
+}
+
+// The whitened system: rows of every mean (gyro rows of every segment, accel rows of the static
+// ones), y - x against the candidate columns.
+struct System {
+  Eigen::MatrixXd A;  // whitened, all candidates
+  Eigen::VectorXd b;  // whitened
+};
+
+System whitened(const std::vector<MeanRow>& rows, const std::vector<Param>& params,
+                bool accel = true) {
+  std::size_t n = 0;
+  for (const auto& r : rows) n += r.has_f && accel ? 6 : 3;
+  System s{
+      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(params.size())),
+      Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n))};
+  Eigen::Index at = 0;
+  for (const auto& r : rows) {
+    for (int t = 0; t < (r.has_f && accel ? 2 : 1); ++t) {
+      const Eigen::Matrix3d cov = t == 0 ? r.cov_w : r.cov_f;
+      const Eigen::Matrix3d L_inv = cov.llt().matrixL().solve(Eigen::Matrix3d::Identity());
+      Eigen::Matrix3Xd cols(3, params.size());
+      for (std::size_t k = 0; k < params.size(); ++k)
+        cols.col(static_cast<Eigen::Index>(k)) = params[k].column(r).segment<3>(3 * t);
+      s.A.middleRows(at, 3) = L_inv * cols;
+      s.b.segment<3>(at) = L_inv * (t == 0 ? r.y_w - r.x_w : r.y_f - r.x_f);
+      at += 3;
+    }
+  }
+  return s;
+}
+
+// The candidates taken in order while each adds to the rank (columns scaled to unit norm).
+std::vector<std::size_t> determined(const Eigen::MatrixXd& A) {
+  std::vector<std::size_t> keep;
+  Eigen::MatrixXd M(A.rows(), 0);
+  for (Eigen::Index k = 0; k < A.cols(); ++k) {
+    const double norm = A.col(k).norm();
+    if (!(norm > 0.0)) continue;
+    Eigen::MatrixXd T(A.rows(), M.cols() + 1);
+    T << M, A.col(k) / norm;
+    if (T.cols() > T.rows()) continue;
+    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(T).singularValues();
+    if (sv(sv.size() - 1) < 1e-6 * sv(0)) continue;
+    M = T;
+    keep.push_back(static_cast<std::size_t>(k));
+  }
+  return keep;
+}
+
+// A triad's base terms (bias, scale, misalignment) must all be determined, or its other terms
+// would absorb the missing ones: else only what needs none of them stays (the gyros' bias and
+// g-sensitivity; nothing of the accelerometers').
+void drop_incomplete(const std::vector<Param>& params, std::vector<std::size_t>& keep) {
+  for (const char* prefix : {"gyro.", "accel."}) {
+    const std::string tr = prefix;
+    int base = 0;
+    for (std::size_t k : keep) {
+      const std::string& n = params[k].name;
+      base += n.rfind(tr + "bias.", 0) == 0 || n.rfind(tr + "scale.", 0) == 0 ||
+              n.rfind(tr + "misalignment.", 0) == 0;
+    }
+    if (base == 12) continue;
+    keep.erase(std::remove_if(keep.begin(), keep.end(),
+                              [&](std::size_t k) {
+                                const std::string& n = params[k].name;
+                                return n.rfind(tr, 0) == 0 &&
+                                       !(tr == "gyro." && (n.rfind("gyro.bias.", 0) == 0 ||
+                                                           n.rfind("gyro.g_sens", 0) == 0));
+                              }),
+               keep.end());
+  }
+}
+
+}  // namespace
+
+std::vector<RateSegment> rate_segments(const Plan& plan, const Site& site) {
+  (void)site;
+  std::vector<RateSegment> out;
+  if (plan.type == Plan::Type::Orientations) {
+    for (const auto& o : plan.orientations)
+      out.push_back(static_segment(o.label, C_b_n_from_euler(plan.convention, o.angles), o.dwell));
+  } else {
+    const Table table(plan.table);
+    Eigen::Matrix3d known = C_b_n_from_euler(plan.convention, plan.start);
+    out.push_back(static_segment("start", known, plan.start_dwell));
+    for (std::size_t i = 0; i < plan.steps.size(); ++i)
+      walk_step(plan, table, plan.steps[i], i, known, out);
+  }
+  if (out.empty()) throw RateTableError(plan.path + ": no static dwell or rate-table segment");
+  return out;
+}
+
+std::vector<RateReading> read_rate_readings(const LogFormat& log) {
+  LogReader reader(log);
+  std::vector<RateReading> out;
+  ImuSample s;
+  while (reader.next(s)) {
+    if (!(s.dt > 0.0)) throw LogError(log.file, reader.line(), "a reading without an interval");
+    out.push_back({s.dtheta_b / s.dt, s.dv_b / s.dt});
+  }
+  if (out.empty()) throw LogError(log.file, reader.line(), "no readings");
+  return out;
+}
+
+std::vector<SegmentMean> find_segments(const std::vector<RateReading>& readings,
+                                       const std::vector<RateSegment>& segments,
+                                       const RateTableOptions& o) {
+  const std::size_t w = 2 * static_cast<std::size_t>(o.smoothing * o.nominal_rate_hz / 2) + 1;
+  const auto smooth = smoothed_rates(readings, w);
+  std::vector<SegmentMean> out;
+  std::size_t p = 0, start = 0;
+  bool open = false;
+  for (std::size_t k = 0; k <= readings.size() && p < segments.size(); ++k) {
+    const bool m = k < readings.size() && matches(smooth[k], segments[p], o);
+    if (m && !open) {
+      open = true;
+      start = k;
+    }
+    if (m || !open) continue;
+    open = false;
+    const double want = segments[p].duration * o.nominal_rate_hz * o.min_fraction;
+    if (static_cast<double>(k - start) < std::max(want, 3.0 * static_cast<double>(w))) continue;
+    out.push_back(mean_of(readings, start, k, w));
+    ++p;
+    if (k < readings.size()) --k;  // this reading may begin the next segment
+  }
+  if (p < segments.size())
+    throw RateTableError(
+        "segment " + std::to_string(p + 1) + " (" + segments[p].label +
+        ") not found in the log after reading " +
+        std::to_string(out.empty() ? 0 : out.back().last) + ": no run of readings at its " +
+        (segments[p].kind == RateSegment::Kind::Static
+             ? std::string("rest")
+             : "rate of " + std::to_string(segments[p].rate / units::deg) + " deg/s") +
+        " long enough (the plan's order, rates and durations)");
+  return out;
+}
+
+RateTableResult rate_table_calibrate(const std::vector<RateSegment>& segments,
+                                     const std::vector<SegmentMean>& means, const Site& site,
+                                     double gravity, const RateTableOptions& options) {
+  if (means.size() != segments.size())
+    throw RateTableError("rate table: the segments and their means differ in number");
+  const Earth& earth = Earth::wgs84();
+  Eigen::Vector3d g_n = earth.gravity_n(site.lat_rad, site.h_m);
+  if (gravity > 0.0) g_n = g_n.normalized() * gravity;
+  RateTableResult res;
+  res.means = means;
+  // The rank test on the commanded inputs alone: gravity straight down, no Earth rate (their
+  // small parts, a few deg/h or a normal gravity's tilt at height, determine nothing).
+  std::vector<MeanRow> rows, commanded;
+  const Eigen::Vector3d down(0.0, 0.0, g_n.norm());
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    rows.push_back(row_of(segments[i], means[i], earth.omega_ie_n(site.lat_rad), -g_n, options));
+    commanded.push_back(row_of(segments[i], means[i], Eigen::Vector3d::Zero(), -down, options));
+    ++(segments[i].kind == RateSegment::Kind::Static ? res.static_segments : res.rate_segments);
+  }
+  const auto params = candidate_params(res.rate_segments > 0);
+  auto keep = determined(whitened(commanded, params).A);
+  drop_incomplete(params, keep);
+  // A triad without coefficients has no rows (the accelerometers; the gyros keep their biases).
+  const bool accel = std::any_of(keep.begin(), keep.end(), [&](std::size_t k) {
+    return params[k].name.rfind("accel.", 0) == 0;
+  });
+  const System sys = whitened(rows, params, accel);
+  if (keep.empty()) throw RateTableError("rate table: the segments determine no coefficient");
+  Eigen::MatrixXd A(sys.A.rows(), static_cast<Eigen::Index>(keep.size()));
+  for (std::size_t k = 0; k < keep.size(); ++k)
+    A.col(static_cast<Eigen::Index>(k)) = sys.A.col(static_cast<Eigen::Index>(keep[k]));
+  const Eigen::MatrixXd N = A.transpose() * A;
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(N);
+  const Eigen::VectorXd x = ldlt.solve(A.transpose() * sys.b);
+  const Eigen::MatrixXd P = ldlt.solve(Eigen::MatrixXd::Identity(N.rows(), N.cols()));
+  res.chi2 = (A * x - sys.b).squaredNorm();
+  res.dof = static_cast<int>(A.rows() - A.cols());
+  std::vector<bool> used(params.size(), false);
+  for (std::size_t k = 0; k < keep.size(); ++k) {
+    const auto e = static_cast<Eigen::Index>(k);
+    used[keep[k]] = true;
+    res.coefficients.push_back({params[keep[k]].name, x(e), std::sqrt(std::max(0.0, P(e, e))),
+                                params[keep[k]].in_catalog});
+  }
+  for (std::size_t k = 0; k < params.size(); ++k)
+    if (!used[k]) res.undetermined.push_back(params[k].name);
+  for (const auto& c : res.coefficients)  // no sensor is off by a fifth: the plan is not the data
+    if (c.name.find(".scale.") != std::string::npos && std::abs(c.value) > 0.2)
+      throw RateTableError("rate table: " + c.name + " comes out at " +
+                           std::to_string(c.value * 100.0) +
+                           " %: the plan's attitudes, axes or rates are not what the data show "
+                           "(a face or a turn's direction swapped, a wrong axis, unit or order)");
+  return res;
+}
+
+}  // namespace sinscal

@@ -1,0 +1,103 @@
+// Rate-table and tumble calibration from segment means (the practice of IEEE Std 952 / 1431 for
+// gyros and IEEE Std 1293 for accelerometers): a plan's constant-rate segments about body axes
+// and its static positions (dwells, pauses, the faces of a tumble), each found in the log in the
+// plan's order without using the log's time, reduced to its mean outputs; one weighted linear
+// least squares over every mean gives both triads' biases, scale factors, misalignments (with
+// cross-axis sensitivity: from means alone they are one 3x3 matrix), gyro scale-factor asymmetry
+// and nonlinearity across rates, gyro g-sensitivity, and the accelerometers' K2 and K3 (the
+// polynomial in f), each only when the segments determine it. The Earth rate is in the model.
+// Means need no integration, so a log with irregular or no time works. docs/methods/rate-table.md.
+#pragma once
+
+#include <Eigen/Core>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "models/earth.hpp"
+#include "rig/io/log_io.hpp"
+#include "rig/plan.hpp"
+
+namespace sinscal {
+
+class RateTableError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// What the plan says of one segment, in the plan's order.
+struct RateSegment {
+  enum class Kind { Static, Rate };
+  Kind kind = Kind::Static;
+  std::string label;
+  Eigen::Matrix3d C_b_n_known = Eigen::Matrix3d::Identity();  // static; rate: at its start
+  Eigen::Vector3d axis_b = Eigen::Vector3d::UnitZ();          // rate: unit, signed
+  double rate = 0.0;                                          // rad/s (rate), positive
+  double duration = 0.0;  // s: the dwell, or the time at the constant rate (plan)
+  double angle = 0.0;     // rad turned at the constant rate (plan)
+};
+
+/// The plan's static dwells and rate-table segments in order (known-angle turns and moves are
+/// not used: their means carry no known input). Throws RateTableError when there is none.
+std::vector<RateSegment> rate_segments(const Plan& plan, const Site& site);
+
+/// One reading of a log: rates (rad/s) and specific force (m/s^2), the sample's increments over
+/// its interval (a log of rates gives them back whatever its time column).
+struct RateReading {
+  Eigen::Vector3d omega = Eigen::Vector3d::Zero();
+  Eigen::Vector3d f = Eigen::Vector3d::Zero();
+};
+
+/// Every reading of a log as rates and specific force (its increments over its interval); throws
+/// LogError naming the file and line (a reading without an interval, no readings).
+std::vector<RateReading> read_rate_readings(const LogFormat& log);
+
+/// The means of one segment found in the log.
+struct SegmentMean {
+  std::size_t first = 0, last = 0;  // reading indices [first, last) used (trimmed)
+  std::size_t count = 0;
+  Eigen::Vector3d omega = Eigen::Vector3d::Zero(), f = Eigen::Vector3d::Zero();          // means
+  Eigen::Vector3d var_omega = Eigen::Vector3d::Zero(), var_f = Eigen::Vector3d::Zero();  // /read
+};
+
+struct RateTableOptions {
+  double nominal_rate_hz = 100.0;  // readings per second, for the segments' expected lengths
+  double static_threshold = 3.0 * M_PI / 180.0;  // rad/s: a mean rate above is motion
+  /// rad/s plus this fraction of the commanded rate: how far a rate segment's reading may be
+  /// from the commanded one (large errors: consumer MEMS).
+  double rate_tolerance = 0.15;
+  double smoothing = 0.5;     // s: the detector's centred moving average (nominal readings)
+  double min_fraction = 0.3;  // a run shorter than this fraction of the plan's segment: skipped
+  double table_sigma = 0.0;   // rad per axis and static position (the table's attitude error)
+};
+
+/// Finds the segments in the readings in order (the k-th run that matches the k-th segment; a
+/// static run: the smoothed rate below static_threshold; a rate run: within the tolerance of the
+/// commanded rate vector), each trimmed by the smoothing window and 5 % at both ends. Throws
+/// RateTableError naming the first segment not found.
+std::vector<SegmentMean> find_segments(const std::vector<RateReading>& readings,
+                                       const std::vector<RateSegment>& segments,
+                                       const RateTableOptions& options);
+
+struct RateCoefficient {
+  std::string name;  // catalog name (e.g. "gyro.scale.x") or rate-table only: gyro.k2.*, accel.k3.*
+  double value = 0.0, sigma = 0.0;  // SI (k2: 1/(rad/s) or 1/(m/s^2); k3 its square)
+  bool in_catalog = true;           // false: gyro.k2, accel.k3 (not in the result schema's model)
+};
+
+struct RateTableResult {
+  std::vector<RateCoefficient> coefficients;
+  std::vector<std::string> undetermined;  // parameter names the segments do not determine
+  double chi2 = 0.0;
+  int dof = 0;
+  std::size_t static_segments = 0, rate_segments = 0;
+  std::vector<SegmentMean> means;
+};
+
+/// The calibration from the segments' means at `site` (gravity: its normal gravity, or
+/// `gravity` m/s^2 when positive). Throws RateTableError when nothing can be estimated.
+RateTableResult rate_table_calibrate(const std::vector<RateSegment>& segments,
+                                     const std::vector<SegmentMean>& means, const Site& site,
+                                     double gravity, const RateTableOptions& options);
+
+}  // namespace sinscal
