@@ -1192,6 +1192,9 @@ new report-out-is-the-log-through-a-link; mini; (cd "$d" && S calibrate --method
 fixed 1 "is the log|an output never replaces an input" S report --result r.json --out out/page.html --force
 new report-pdf-directory-missing; cp "$base/s8/cf.json" "$d/r.json"
 fixed 1 "--pdf nodir/r.pdf: cannot create: its directory nodir does not exist" S report --result r.json --out out/r.html --pdf nodir/r.pdf
+new control-thermal-into-its-earlier-output; cp -r "$base/soaks" "$d/soaks"; cp -r "$base/thermal" "$d/out/t"
+POST='test -s out/t/result.json && grep -qx result.json out/t/.sinscal-thermal'
+control 0 "" S thermal --chamber soaks/chamber.ini --out out/t
 new thermal-out-is-the-chamber; cp -r "$base/soaks" "$d/soaks"
 fixed 1 "--out soaks holds the|an output never replaces an input" S thermal --chamber soaks/chamber.ini --out soaks
 new thermal-out-holds-an-earlier-result; cp -r "$base/soaks" "$d/soaks"; mkdir -p "$d/res"; cp "$base/s8/cf.json" "$d/res/result.json"
