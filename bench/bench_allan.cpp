@@ -4,7 +4,7 @@
 // (getrusage) and the fitted terms against the simulated truth.
 //
 // Usage: bench_allan [HOURS [RATE_HZ]]          (default 24 h at 1000 Hz: 8.64e7 samples)
-//        bench_allan --log HOURS RATE_HZ        writes the record as CSV (ax ay az gx gy gz,
+//        bench_allan --log HOURS RATE_HZ        writes the record as CSV (ax,ay,az,gx,gy,gz:
 //                                               m/s^2 and rad/s) to standard output, e.g. into
 //                                               a FIFO read by `sinscal allan --all`
 #include <sys/resource.h>
@@ -56,8 +56,9 @@ int write_log(double hours, double rate) {
   for (std::size_t k = 0; k < n; ++k) {
     double v[6];
     for (std::size_t c = 0; c < 6; ++c) v[c] = src[c].next();
-    std::printf("%.8g %.8g %.8g %.8g %.8g %.8g\n", v[3], v[4], units::g0 + v[5], v[0], v[1], v[2]);
+    std::printf("%.8g,%.8g,%.8g,%.8g,%.8g,%.8g\n", v[3], v[4], units::g0 + v[5], v[0], v[1], v[2]);
   }
+  std::fflush(stdout);  // before the buffer goes
   return 0;
 }
 

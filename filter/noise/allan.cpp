@@ -501,12 +501,13 @@ struct FragmentWriter {
 std::string AllanAnalysis::profile_fragment() const {
   std::ostringstream s;
   s << std::setprecision(4);
-  s << "# Allan analysis (IEEE Std 952): mean of the three axes, each axis in the comment; the\n"
-    << "# 1-sigma of each fitted term from the estimates' degrees of freedom (a lower bound).\n"
+  s << "# Allan analysis (IEEE Std 952): mean of the three axes, each axis in the comment;\n"
+    << "# the 1-sigma of each fitted term from the estimates' degrees of freedom and the\n"
+    << "# correlation of neighbouring octaves.\n"
     << "# bias_instability: the curve's minimum / 0.664 (IEEE's flicker floor: ADEV =\n"
     << "# sqrt(2 ln 2 / pi) B = 0.664 B). As the profile's Gauss-Markov sigma it is an\n"
-    << "# approximation: a Gauss-Markov bias of sigma q and\n"
-    << "# correlation time T peaks at an Allan deviation of 0.617 q at tau = 1.89 T.\n"
+    << "# approximation: a Gauss-Markov bias of sigma q and correlation time T peaks at an\n"
+    << "# Allan deviation of 0.617 q at tau = 1.89 T.\n"
     << "# sample interval " << tau0 << " s, record about " << static_cast<double>(samples) * tau0
     << " s\n[gyro]\n";
   const double sqrt12 = std::sqrt(12.0);

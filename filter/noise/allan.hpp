@@ -17,8 +17,9 @@
 //             + (2 ln 2 / pi) B^2        bias instability B (flicker floor: ADEV = 0.664 B)
 //             + K^2 tau / 3              rate / acceleration random walk K, slope +1/2
 //             + R^2 tau^2 / 2            rate ramp R, slope +1 (opt-in, as quantization)
-// fitted by weighted least squares of the Allan variances (weights edf / (2 AVAR_model^2), the
-// estimator's variance, iterated once with the model) with every term's variance non-negative
+// fitted by generalised least squares of the Allan variances (variances 2 AVAR_model^2 / edf,
+// the estimator's, iterated once with the model; neighbouring octaves correlated as measured)
+// with every term's variance non-negative
 // (exact: the best of all subsets of terms). The dominant term at each cluster time then sets
 // its degrees of freedom and the fit is repeated.
 //
@@ -81,9 +82,9 @@ struct AllanFit {
   double bias_instability = 0.0;  // B (rate unit)
   double random_walk = 0.0;       // K (rate unit / sqrt(s))
   double rate_ramp = 0.0;         // R (rate unit / s)
-  /// 1-sigma of each, from the weighted fit (the overlapping estimates at neighbouring cluster
-  /// times are correlated, which this ignores: read them as a lower bound). 0 for a term the
-  /// fit dropped (its variance would be negative).
+  /// 1-sigma of each, from the weighted fit: the estimates' degrees of freedom and the
+  /// correlation of neighbouring octaves (measured, docs/methods/allan.md). 0 for a term the fit
+  /// dropped (its variance would be negative) or was not asked for.
   double quantization_sigma = 0.0, white_sigma = 0.0, bias_instability_sigma = 0.0,
          random_walk_sigma = 0.0, rate_ramp_sigma = 0.0;
   double chi2 = 0.0;  // weighted residual sum
