@@ -28,11 +28,9 @@ void allan_gate(const Session& session, bool force, AllanRunOptions& o, Plausibi
                    : session.has_site
                        ? Earth::wgs84().gravity_n(session.site.lat_rad, session.site.h_m).norm()
                        : units::g0;
-  o.before_analysis = [&session, force, limits, g, &gate](const HandheldRecord& rec,
+  o.before_analysis = [&session, force, limits, g, &gate](const AllanRecord& rec,
                                                           const std::vector<ImuReading>& part) {
-    std::printf("%s\n", record_statement(session.log, rec.samples.size(),
-                                         rec.samples.back().t - rec.samples.front().t)
-                            .c_str());
+    std::printf("%s\n", record_statement(session.log, rec.count, rec.t_last - rec.t_first).c_str());
     gate = check_rests({rest_statistics(part, 0, part.size() - 1, "the stretch analysed")}, g,
                        limits, rec.file);
     gate.checks.push_back(check_same_files(session.log));
@@ -70,14 +68,18 @@ int cmd_allan(const std::vector<std::string>& args) {
       ("force", "run even when the plausibility gate fails (gravity and rate at rest, noise "
        "band, one signal in both triads); the failed checks go in the fragment's header")
       ("points-per-decade", po::value(&o.allan.points_per_decade)->default_value(0),
-       "cluster times per decade (0: octaves, 1, 2, 4, ... samples)");
+       "cluster times per decade (0: octaves, 1, 2, 4, ... samples)")
+      ("fit-quantization", "fit the quantization term too (slope -1)")
+      ("fit-rate-ramp", "fit the rate-ramp term too (slope +1)");
   // clang-format on
   const auto vm =
       parse(args, d,
             "Usage: sinscal allan --session S --out DIR [--all | --longest-pose | --pose N]\n"
             "Overlapping Allan deviation of each axis with confidence bounds, the fitted noise\n"
-            "model (angle / velocity random walk, bias instability, rate random walk) as a\n"
-            "sensor-profile fragment, and a PNG of measured against fitted (gnuplot).");
+            "model (angle / velocity random walk, bias instability, rate random walk; with\n"
+            "options quantization and rate ramp) with 1-sigma as a sensor-profile fragment and a\n"
+            "table, and a PNG of measured against fitted (gnuplot). The log is streamed: memory\n"
+            "does not grow with its length.");
   if (!vm) return 0;
   const int chosen =
       static_cast<int>(vm->count("all") + vm->count("longest-pose") + vm->count("pose"));
@@ -90,6 +92,8 @@ int cmd_allan(const std::vector<std::string>& args) {
     o.pose = pose;
   }
   o.detector.use_gyro = vm->count("pose-accel-only") == 0;
+  o.allan.fit_quantization = vm->count("fit-quantization") > 0;
+  o.allan.fit_rate_ramp = vm->count("fit-rate-ramp") > 0;
   if (!(o.detector.window > 0.0 && o.detector.window <= 60.0))
     throw UsageError("--pose-window must be above 0 and at most 60 s");
   if (!(o.detector.min_duration > 0.0 && o.detector.min_duration <= 3600.0))
@@ -99,17 +103,20 @@ int cmd_allan(const std::vector<std::string>& args) {
   const Session session = Session::load(session_path, Session::PlanNeed::Optional);
   apply_table_free_settings(session.table_free, *vm, o.detector, nullptr);
   const std::string csv = out_dir + "/allan.csv", fragment = out_dir + "/profile-fragment.ini",
-                    png = out_dir + "/allan.png", script = out_dir + "/allan.gp";
+                    png = out_dir + "/allan.png", script = out_dir + "/allan.gp",
+                    terms = out_dir + "/allan-terms.csv";
   refuse_overwrite(session_inputs(session), {{"allan.csv", csv},
                                              {"profile-fragment.ini", fragment},
                                              {"allan.png", png},
-                                             {"allan.gp", script}});
+                                             {"allan.gp", script},
+                                             {"allan-terms.csv", terms}});
   PlausibilityReport gate;
   allan_gate(session, vm->count("force") > 0, o, gate);
   const AllanRun run = run_allan(session, o);
   if (!run.warning.empty()) std::cerr << "sinscal allan: warning: " << run.warning << "\n";
   std::filesystem::create_directories(out_dir);
   write_allan_csv(csv, run.analysis);
+  write_allan_terms_csv(terms, run.analysis);
   const std::string what =
       run.pose > 0 ? "pose " + std::to_string(run.pose) : std::string("the whole record");
   write_atomically(fragment, [&](std::ostream& out) {
@@ -122,8 +129,8 @@ int cmd_allan(const std::vector<std::string>& args) {
   });
   print_allan(run);
   plot_allan(run.analysis, session.name + " (" + what + ")", png, script);
-  std::printf("\nWritten: %s, %s, %s (gnuplot script %s)\n", csv.c_str(), fragment.c_str(),
-              png.c_str(), script.c_str());
+  std::printf("\nWritten: %s, %s, %s, %s (gnuplot script %s)\n", csv.c_str(), terms.c_str(),
+              fragment.c_str(), png.c_str(), script.c_str());
   return 0;
 }
 

@@ -86,7 +86,19 @@ void print_allan(const AllanRun& run) {
                 g.random_walk / units::deg_per_h_per_sqrt_h, axis[i],
                 f.white / units::ug_per_sqrt_hz, f.floor_bias_instability / units::ug,
                 f.random_walk / units::ug_per_sqrt_h);
+    std::printf("%-8s %14.2g %14.2g %16.2g   %-8s %14.2g %12.2g %14.2g\n", "  1-sigma",
+                g.white_sigma / units::deg_per_sqrt_h,
+                g.floor_bias_instability_sigma / units::deg_per_h,
+                g.random_walk_sigma / units::deg_per_h_per_sqrt_h, "",
+                f.white_sigma / units::ug_per_sqrt_hz, f.floor_bias_instability_sigma / units::ug,
+                f.random_walk_sigma / units::ug_per_sqrt_h);
   }
+  std::printf(
+      "bias instability: the fitted curve's minimum / 0.664 (IEEE Std 952's flicker floor)"
+      "\nread %zu time(s), %.1f MB held by the estimators; cluster times fully "
+      "overlapping up to %zu samples, then at a stride of at most %zu\n",
+      run.passes, static_cast<double>(run.memory_bytes) / 1e6, AllanAccumulator::kExactClusters - 1,
+      a.max_stride);
 }
 
 }  // namespace sinscal::cli

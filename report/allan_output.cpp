@@ -82,6 +82,56 @@ void write_allan_csv(const std::string& path, const AllanAnalysis& a) {
   });
 }
 
+namespace {
+
+struct TermColumn {
+  const char* gyro_name;
+  const char* accel_name;
+  double AllanFit::*value;
+  double AllanFit::*sigma;
+  double gyro_unit, accel_unit;  // SI per unit
+  const char* gyro_unit_name;
+  const char* accel_unit_name;
+};
+
+std::vector<TermColumn> term_columns() {
+  using F = AllanFit;
+  const double sqrt12 = std::sqrt(12.0);
+  return {
+      {"quantum", "quantum", &F::quantization, &F::quantization_sigma, units::arcsec / sqrt12,
+       1.0 / sqrt12, "arcsec", "m/s"},
+      {"arw", "vrw", &F::white, &F::white_sigma, units::deg_per_sqrt_h, units::ug_per_sqrt_hz,
+       "deg/sqrt(h)", "ug/sqrt(Hz)"},
+      {"bias_instability", "bias_instability", &F::floor_bias_instability,
+       &F::floor_bias_instability_sigma, units::deg_per_h, units::ug, "deg/h", "ug"},
+      {"flicker", "flicker", &F::bias_instability, &F::bias_instability_sigma, units::deg_per_h,
+       units::ug, "deg/h", "ug"},
+      {"rate_random_walk", "random_walk", &F::random_walk, &F::random_walk_sigma,
+       units::deg_per_h_per_sqrt_h, units::ug_per_sqrt_h, "deg/h/sqrt(h)", "ug/sqrt(h)"},
+      {"rate_ramp", "rate_ramp", &F::rate_ramp, &F::rate_ramp_sigma, units::deg_per_h / units::hour,
+       units::ug / units::hour, "deg/h/h", "ug/h"},
+  };
+}
+
+}  // namespace
+
+void write_allan_terms_csv(const std::string& path, const AllanAnalysis& a) {
+  const auto ch = channels(a);
+  write_atomically(path, [&](std::ostream& out) {
+    out << "channel,term,value,sigma,unit\n";
+    for (const auto& c : ch) {
+      const bool gyro = c.name[0] == 'g';
+      for (const auto& t : term_columns()) {
+        const double per = gyro ? t.gyro_unit : t.accel_unit;
+        const double v = (*c.fit).*t.value / per, sd = (*c.fit).*t.sigma / per;
+        out << c.name << "," << (gyro ? t.gyro_name : t.accel_name) << "," << number(v) << ","
+            << (v != 0.0 ? number(sd) : std::string()) << ","
+            << (gyro ? t.gyro_unit_name : t.accel_unit_name) << "\n";
+      }
+    }
+  });
+}
+
 std::string allan_plot_script(const AllanAnalysis& a, const std::string& title,
                               const std::string& png_path) {
   std::ostringstream g;

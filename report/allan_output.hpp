@@ -13,6 +13,12 @@ namespace sinscal {
 /// its lower and upper confidence bound and the fitted model's value. Written atomically.
 void write_allan_csv(const std::string& path, const AllanAnalysis& analysis);
 
+/// CSV of the fitted noise terms with their 1-sigma: `channel,term,value,sigma,unit`, a row per
+/// channel (gyro.x ... accel.z) and term (quantum, arw / vrw, bias_instability, flicker,
+/// rate_random_walk / random_walk, rate_ramp) in the profile's units; a term the fit left out has
+/// value 0 and an empty sigma. Written atomically.
+void write_allan_terms_csv(const std::string& path, const AllanAnalysis& analysis);
+
 /// The gnuplot script drawing `analysis` into the variable `output` (default `png_path`): gyros
 /// and accelerometers side by side, log-log, measured with bounds and the fitted model dashed.
 std::string allan_plot_script(const AllanAnalysis& analysis, const std::string& title,

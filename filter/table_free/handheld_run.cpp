@@ -261,19 +261,148 @@ HandheldValidation validate_table_free(const Session& v, const TableFreeRun& run
   return out;
 }
 
-AllanRun run_allan(const Session& s, const AllanRunOptions& o) {
-  AllanRun out;
-  out.session = normal(s.path);
-  out.name = s.name;
-  out.log = describe(s.log);
-  out.selection = o.selection;
-  const HandheldRecord rec = read_handheld_record(s.log);
-  const double duration = rec.samples.back().t - rec.samples.front().t;
-  if (rec.samples.size() < kAllanMinSamples)
-    throw AllanError(out.log + ": the record is too short for an Allan deviation: " +
-                     std::to_string(rec.samples.size()) + " samples over " +
-                     std::to_string(duration) + " s (" + std::to_string(kAllanMinSamples) +
-                     " at least)");
+namespace {
+
+// Block means of a record in at most kAllanBlockReadings readings: when full, pairs are merged
+// and the block doubles (entry j covers samples [j block, (j + 1) block)).
+class BlockMeans {
+ public:
+  explicit BlockMeans(AllanRecord& rec) : rec_(rec) {}
+  void add(const ImuReading& r) {
+    sum_.t += r.t;
+    sum_.accel += r.accel;
+    sum_.gyro += r.gyro;
+    if (++in_ == rec_.block) flush();
+  }
+  void flush() {
+    if (in_ == 0) return;
+    if (rec_.readings.size() == kAllanBlockReadings) merge();
+    const double w = 1.0 / static_cast<double>(in_);
+    rec_.readings.push_back({sum_.t * w, sum_.accel * w, sum_.gyro * w});
+    sum_ = ImuReading{};
+    in_ = 0;
+  }
+
+ private:
+  void merge() {
+    auto& r = rec_.readings;
+    for (std::size_t j = 0; j < r.size() / 2; ++j)
+      r[j] = {0.5 * (r[2 * j].t + r[2 * j + 1].t), 0.5 * (r[2 * j].accel + r[2 * j + 1].accel),
+              0.5 * (r[2 * j].gyro + r[2 * j + 1].gyro)};
+    r.resize(r.size() / 2);
+    rec_.block *= 2;
+    // The block under way holds the samples after the merged ones: it now ends at the new size.
+  }
+  AllanRecord& rec_;
+  ImuReading sum_;
+  std::size_t in_ = 0;
+};
+
+// What a pass over the log feeds the Allan deviation: rates of a log of rates at the median
+// interval of the first 2^20 (found at the end), increments at their constant interval. The
+// first AllanError (a varying interval) is kept and thrown after the gate.
+class AllanFeed {
+ public:
+  AllanFeed(const LogFormat& log, const AllanOptions& o)
+      : rates_(!log.gyro.increments && !log.accel.increments), stream_(o) {}
+  void add(const ImuSample& s, const ImuReading& r) {
+    if (!error_.empty()) return;
+    if (stream_.samples() > 0 && dts_.size() < (std::size_t{1} << 20)) dts_.push_back(s.t - t_);
+    t_ = s.t;
+    try {
+      if (rates_)
+        stream_.add_rates(r.gyro, r.accel);
+      else
+        stream_.add(s);
+    } catch (const AllanError& e) {
+      error_ = e.what();
+    }
+  }
+  AllanAnalysis analysis() {
+    if (!error_.empty()) throw AllanError(error_);
+    double tau0 = stream_.first_interval();
+    if (rates_ && !dts_.empty()) {
+      std::nth_element(dts_.begin(), dts_.begin() + static_cast<std::ptrdiff_t>(dts_.size() / 2),
+                       dts_.end());
+      tau0 = dts_[dts_.size() / 2];
+    }
+    return stream_.analysis(tau0);
+  }
+  std::size_t memory_bytes() const {
+    return stream_.memory_bytes() + dts_.capacity() * sizeof(double);
+  }
+
+ private:
+  bool rates_;
+  AllanStream stream_;
+  std::vector<double> dts_;
+  double t_ = 0.0;
+  std::string error_;
+};
+
+ImuReading reading_of(const ImuSample& s) {
+  if (!(s.dt > 0.0)) throw std::invalid_argument("sample interval must be positive");
+  return {s.t, s.dv_b / s.dt, s.dtheta_b / s.dt};
+}
+
+// Pass 1: the block means, the count and times, and the whole record into `feed` when given.
+AllanRecord read_allan_record(const LogFormat& log, AllanFeed* feed) {
+  AllanRecord rec;
+  rec.file = describe(log);
+  nominal_of(log.accel, rec.accel_counts, rec.nominal.accel_sensitivity, rec.nominal.accel_offset,
+             rec.accel_log_axis);
+  nominal_of(log.gyro, rec.gyro_counts, rec.nominal.gyro_sensitivity, rec.nominal.gyro_offset,
+             rec.gyro_log_axis);
+  LogReader reader(log);
+  BlockMeans means(rec);
+  ImuSample s;
+  while (reader.next(s)) {
+    const ImuReading r = reading_of(s);
+    if (rec.count++ == 0) rec.t_first = s.t;
+    rec.t_last = s.t;
+    means.add(r);
+    if (feed) feed->add(s, r);
+  }
+  means.flush();
+  if (rec.count == 0) throw LogError(log.file, 0, "the log has no samples");
+  return rec;
+}
+
+// Pass 2: samples [first, last] of the log into `feed`; their first and last times.
+void feed_stretch(const LogFormat& log, std::size_t first, std::size_t last, AllanFeed& feed,
+                  AllanRun& out) {
+  LogReader reader(log);
+  ImuSample s;
+  for (std::size_t k = 0; k <= last && reader.next(s); ++k) {
+    if (k < first) continue;
+    if (k == first) out.t_start = s.t;
+    out.t_end = s.t;
+    feed.add(s, reading_of(s));
+  }
+}
+
+// The pose the options select (its readings' indices), or none for the whole record.
+const Pose* selected_pose(const AllanRunOptions& o, const PoseDetection& detection,
+                          const std::string& log) {
+  if (o.selection == AllanSelection::All) return nullptr;
+  if (detection.poses.empty()) throw PoseDetectorError(log + ": no static pose found");
+  if (o.selection == AllanSelection::LongestPose)
+    return &*std::max_element(
+        detection.poses.begin(), detection.poses.end(),
+        [](const Pose& a, const Pose& b) { return a.duration() < b.duration(); });
+  if (o.pose < 1 || o.pose > static_cast<int>(detection.poses.size()))
+    throw std::invalid_argument(log + ": pose " + std::to_string(o.pose) +
+                                " does not exist: the detector found " +
+                                std::to_string(detection.poses.size()) + " poses (1 to " +
+                                std::to_string(detection.poses.size()) + ")");
+  return &detection.poses[static_cast<std::size_t>(o.pose - 1)];
+}
+
+// Detects the poses and judges the whole record: static when one pose covers (nearly) all of
+// it (several poses covering most of it are a record with moves between them, which would
+// dominate its Allan deviation).
+PoseDetection judge_record(const AllanRecord& rec, const AllanRunOptions& o, AllanRun& out) {
+  const double duration = rec.t_last - rec.t_first;
   PoseDetection detection;
   bool detected = false;
   std::string undetected;
@@ -285,61 +414,60 @@ AllanRun run_allan(const Session& s, const AllanRunOptions& o) {
     undetected = e.what();
   }
   out.poses_found = detected ? static_cast<int>(detection.poses.size()) : -1;
-  // Static: one pose covers (nearly) the whole record. Several poses covering most of it are a
-  // record with moves between them, which would dominate its Allan deviation.
   double longest = 0.0;
   for (const Pose& p : detection.poses) longest = std::max(longest, p.duration());
   out.static_fraction = duration > 0.0 ? longest / duration : 0.0;
-  std::size_t first = 0, last = rec.samples.size() - 1;
-  if (o.selection == AllanSelection::All) {
-    if (out.static_fraction < 0.9) {
-      out.warning = "the record is not static: its longest static pose covers " +
-                    std::to_string(static_cast<int>(std::round(100.0 * out.static_fraction))) +
-                    " % of it (" + std::to_string(std::max(out.poses_found, 0)) +
-                    " poses found); --longest-pose or --pose N analyses one pose";
-      if (!detected)
-        out.warning = "whether the record is static cannot be told (" + undetected +
-                      "): it is too short for the pose detector";
-      if (o.require_static) throw std::invalid_argument(out.log + ": " + out.warning);
-    }
-  } else {
-    if (detection.poses.empty()) throw PoseDetectorError(out.log + ": no static pose found");
-    const Pose* chosen = nullptr;
-    if (o.selection == AllanSelection::LongestPose) {
-      chosen = &*std::max_element(
-          detection.poses.begin(), detection.poses.end(),
-          [](const Pose& a, const Pose& b) { return a.duration() < b.duration(); });
-    } else {
-      if (o.pose < 1 || o.pose > static_cast<int>(detection.poses.size()))
-        throw std::invalid_argument(out.log + ": pose " + std::to_string(o.pose) +
-                                    " does not exist: the detector found " +
-                                    std::to_string(detection.poses.size()) + " poses (1 to " +
-                                    std::to_string(detection.poses.size()) + ")");
-      chosen = &detection.poses[static_cast<std::size_t>(o.pose - 1)];
-    }
-    out.pose = chosen->index;
-    first = chosen->first;
-    last = chosen->last;
+  if (o.selection == AllanSelection::All && out.static_fraction < 0.9) {
+    out.warning = "the record is not static: its longest static pose covers " +
+                  std::to_string(static_cast<int>(std::round(100.0 * out.static_fraction))) +
+                  " % of it (" + std::to_string(std::max(out.poses_found, 0)) +
+                  " poses found); --longest-pose or --pose N analyses one pose";
+    if (!detected)
+      out.warning = "whether the record is static cannot be told (" + undetected +
+                    "): it is too short for the pose detector";
+    if (o.require_static) throw std::invalid_argument(out.log + ": " + out.warning);
   }
-  out.t_start = rec.samples[first].t;
-  out.t_end = rec.samples[last].t;
-  std::vector<ImuSample> part(rec.samples.begin() + static_cast<std::ptrdiff_t>(first),
-                              rec.samples.begin() + static_cast<std::ptrdiff_t>(last) + 1);
-  // A log of rates samples them at the sensor's clock; the jitter of its time stamps (Xsens:
-  // 0.03 ms, printed to 0.01 ms) is the logger's. Each rate then holds over the median interval.
-  if (!s.log.gyro.increments && !s.log.accel.increments && part.size() > 1) {
-    std::vector<double> dt;
-    for (std::size_t k = 1; k < part.size(); ++k) dt.push_back(part[k].t - part[k - 1].t);
-    std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
-    const double tau0 = dt[dt.size() / 2];
-    for (auto& x : part) {
-      x.dtheta_b *= tau0 / x.dt;
-      x.dv_b *= tau0 / x.dt;
-      x.dt = tau0;
-    }
+  return detection;
+}
+
+}  // namespace
+
+AllanRun run_allan(const Session& s, const AllanRunOptions& o) {
+  AllanRun out;
+  out.session = normal(s.path);
+  out.name = s.name;
+  out.log = describe(s.log);
+  out.selection = o.selection;
+  const bool whole = o.selection == AllanSelection::All;
+  AllanFeed feed(s.log, o.allan);
+  const AllanRecord rec = read_allan_record(s.log, whole ? &feed : nullptr);
+  out.block = rec.block;
+  if (rec.count < kAllanMinSamples)
+    throw AllanError(
+        out.log + ": the record is too short for an Allan deviation: " + std::to_string(rec.count) +
+        " samples over " + std::to_string(rec.t_last - rec.t_first) + " s (" +
+        std::to_string(kAllanMinSamples) + " at least)");
+  const PoseDetection detection = judge_record(rec, o, out);
+  const Pose* pose = selected_pose(o, detection, out.log);
+  std::size_t first = 0, last = rec.readings.size() - 1;
+  out.t_start = rec.t_first;
+  out.t_end = rec.t_last;
+  if (pose) {
+    out.pose = pose->index;
+    first = pose->first;
+    last = pose->last;
   }
-  if (o.before_analysis) o.before_analysis(rec, readings_from_samples(part));
-  out.analysis = analyse_allan(part, o.allan);
+  if (o.before_analysis)
+    o.before_analysis(
+        rec, std::vector<ImuReading>(rec.readings.begin() + static_cast<std::ptrdiff_t>(first),
+                                     rec.readings.begin() + static_cast<std::ptrdiff_t>(last) + 1));
+  if (pose) {
+    out.passes = 2;
+    feed_stretch(s.log, first * rec.block, std::min((last + 1) * rec.block, rec.count) - 1, feed,
+                 out);
+  }
+  out.memory_bytes = feed.memory_bytes();
+  out.analysis = feed.analysis();
   return out;
 }
 

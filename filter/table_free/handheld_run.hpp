@@ -132,6 +132,18 @@ TableFreeRun run_table_free(const Session& session, const TableFreeRunOptions& o
 HandheldValidation validate_table_free(const Session& validation, const TableFreeRun& run,
                                        const PoseDetectorOptions& detector);
 
+/// A record read once for the Allan deviation in bounded memory: `readings` (SI) are the means
+/// of `block` consecutive samples each (1 up to kAllanBlockReadings samples, doubled as the
+/// record grows beyond), for the pose detector and the plausibility gate; `samples` is empty.
+struct AllanRecord : HandheldRecord {
+  std::size_t count = 0;               // samples read
+  std::size_t block = 1;               // samples per reading
+  double t_first = 0.0, t_last = 0.0;  // s, of the first and last sample
+};
+
+/// Most block means an AllanRecord holds (then pairs are merged and the block doubles).
+constexpr std::size_t kAllanBlockReadings = std::size_t{1} << 19;
+
 /// Which part of a record the Allan deviation takes.
 enum class AllanSelection { All, LongestPose, Pose };
 
@@ -143,9 +155,9 @@ struct AllanRunOptions {
   bool require_static = false;
   PoseDetectorOptions detector;
   AllanOptions allan;
-  /// Called with the record and the readings (rates, SI) of the stretch selected before the
-  /// analysis: a plausibility gate that throws stops it.
-  std::function<void(const HandheldRecord&, const std::vector<ImuReading>&)> before_analysis;
+  /// Called with the record and the readings (rates, SI; block means, AllanRecord) of the
+  /// stretch selected before the analysis: a plausibility gate that throws stops it.
+  std::function<void(const AllanRecord&, const std::vector<ImuReading>&)> before_analysis;
 };
 
 struct AllanRun {
@@ -155,17 +167,22 @@ struct AllanRun {
   int poses_found = 0;                // by the detector (-1: it found none)
   double static_fraction = 0.0;       // of the record in its longest detected pose
   double t_start = 0.0, t_end = 0.0;  // s, the stretch analysed
+  std::size_t block = 1;              // samples per reading of the pose detector and the gate
+  std::size_t passes = 1;             // over the log: 1 (whole record), 2 (a pose)
+  std::size_t memory_bytes = 0;       // held by the Allan estimators
   AllanAnalysis analysis;
   /// Not empty when the whole record was taken but is not static (its longest detected pose
   /// covers less than 90 % of it): says so and how to take one pose.
   std::string warning;
 };
 
-/// Allan deviation of a session's static record or one of its poses. Throws PoseDetectorError
+/// Allan deviation of a session's static record or one of its poses, streamed: the log is read
+/// once (the whole record) or twice (a pose: found on the block means, then analysed at the
+/// full rate) in memory independent of its length. Throws PoseDetectorError
 /// (no pose), std::invalid_argument (no such pose; a record that is not static, or too short for
 /// the detector to tell, with `require_static`), AllanError (too short, naming the log). A log of
-/// rates is taken at its median sample interval (time-stamp jitter is the logger's, not the
-/// sensor's).
+/// rates is taken at the median sample interval of the stretch's first 2^20 intervals
+/// (time-stamp jitter is the logger's, not the sensor's).
 AllanRun run_allan(const Session& session, const AllanRunOptions& options);
 
 }  // namespace sinscal
