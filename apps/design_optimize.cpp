@@ -279,15 +279,15 @@ int design_optimize(const DesignCliOptions& o) {
   // Every plan given is a seed: the search is at least as good as each, scaled to the budget.
   so.seeds.push_back(reference);
   for (const auto& f : o.compare) so.seeds.push_back(Plan::load(f));
-  const std::string bound =
+  const std::string work_bound =
       "plans up to " + fmt("%.0f", so.max_duration) + " s" +
       (so.budget_s > 0.0 ? ", budget " + fmt("%.0f", so.budget_s) + " s" : "") + ", beam " +
       std::to_string(so.beam) + ", " + std::to_string(so.targets.size()) + " targeted families";
-  std::printf("Searching the shortest plan that meets the targets: %s\n", bound.c_str());
+  std::printf("Searching the shortest plan that meets the targets: %s\n", work_bound.c_str());
   std::fflush(stdout);
   const std::clock_t c0 = std::clock();
   const SearchResult r = [&] {
-    const SearchProgress progress(bound);
+    const SearchProgress progress(work_bound);
     return search_plan(ko, table, reference.site, SearchSpace{}, so);
   }();
   const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
