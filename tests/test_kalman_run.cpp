@@ -415,3 +415,40 @@ TEST_CASE("Kalman filter, several passes, the base estimated: a MEMS unit settle
   const ResultCoefficients truth = load_truth(s, r.accel_triad_frame);
   check_within_sigmas(r, truth, 4.0);
 }
+
+TEST_CASE("Kalman run from the data: a static interval beyond the plan's last dwell",
+          "[kalman][static][passes]") {
+  // The cause of the SIGSEGV of `calibrate --passes 2 --static-from data` on a real table log
+  // (APOPHIS, issue 34): the data held a static interval beyond the plan's last dwell, the run
+  // stopped there, and its summary read the plan's dwell past the end of the timeline for it.
+  // Here the data follow rot19 and the plan stops two turns earlier (16 dwells, 18 in the data).
+  Session s = make_session("kf_extra_dwell", "rot19.ini", "config/sensors/nav-fog.ini",
+                           "config/sensors/nav-fog.ini", 3);
+  std::string text = s.plan.text;
+  const std::string from = "-x -x -x +z +z -z -z -z";
+  const auto at = text.find(from);
+  REQUIRE(at != std::string::npos);
+  text.replace(at, from.size(), "-x -x -x +z +z -z");
+  s.plan = Plan::parse("rot19-shorter", text);
+  const auto plan_dwells = PlanTimeline::of(s.plan, s.site).dwells;
+  REQUIRE(plan_dwells.size() == 17);
+  CalibratorOptions o = options_for(s);
+  o.static_from = CalibratorOptions::StaticFrom::Data;
+  for (int passes : {1, 2}) {
+    KalmanRunOptions run;
+    run.passes = passes;
+    const KalmanRun r = run_kalman(s, o, nullptr, run);
+    CAPTURE(passes, r.stopped, r.diverged);
+    CHECK_THAT(r.stopped, Catch::Contains("static interval 18 found in the data") &&
+                              Catch::Contains("the plan has 17 dwells"));
+    REQUIRE(r.detected.has_value());
+    // Every interval reported is one of the plan's dwells, with its label and times.
+    REQUIRE(r.detected->intervals.size() == plan_dwells.size());
+    for (std::size_t k = 0; k < plan_dwells.size(); ++k) {
+      const auto& f = r.detected->intervals[k];
+      CHECK(f.dwell == static_cast<int>(k) + 1);
+      CHECK(f.label == plan_dwells[k].label);
+      CHECK(f.plan_t_start == plan_dwells[k].t_start);
+    }
+  }
+}

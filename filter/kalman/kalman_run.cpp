@@ -259,6 +259,12 @@ void summarize(const Calibrator& kf, const PlanTimeline& timeline, const KalmanR
     KalmanRun::Detected d{
         detector->gyro_bound(), detector->accel_bound(), detector->rate_threshold(), {}};
     for (const auto& f : detector->dwells()) {
+      // A static interval beyond the plan's last dwell stopped the run (PlanDataMismatch, named
+      // in `stopped`): it has no dwell of the plan to be reported against. Reading the plan's
+      // dwell past the end crashed `--passes 2` on a real log (APOPHIS, issue 34): a quiet pass,
+      // without the divergence alarm, read on until the data had more static intervals than the
+      // plan.
+      if (f.index < 1 || f.index > static_cast<int>(timeline.dwells.size())) continue;
       const PlanDwell& p = timeline.dwells[static_cast<std::size_t>(f.index - 1)];
       d.intervals.push_back({f.index, p.label, f.t_start, f.t_end, p.t_start, p.t_end});
     }
