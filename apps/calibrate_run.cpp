@@ -83,7 +83,7 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
   const CalibratorOptions ko = kalman_options(o, session, profile);
   // The motion from the data, once: for the gate and the filter.
   std::optional<DataMotion> motion;
-  if (!o.stream && o.motion == "data" && follows_plan_motion(ko)) try {
+  if (!o.stream && o.motion == "data" && motion_from_data_applies(ko)) try {
       motion = motion_from_data(session, ko);
     } catch (const std::runtime_error&) {
       motion.reset();  // the gate and the filter read the log again and say what is wrong

@@ -494,7 +494,7 @@ KalmanRun run_kalman(const Session& session, const CalibratorOptions& given, Sam
   std::optional<DataMotion> motion;
   if (run.motion) {
     motion = *run.motion;
-  } else if (!source && run.motion_from_data && follows_plan_motion(given) &&
+  } else if (!source && run.motion_from_data && motion_from_data_applies(given) &&
              !given.reference_motion) {
     try {
       motion = motion_from_data(session, given);
