@@ -84,7 +84,7 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
   const CalibratorOptions ko = kalman_options(o, session, profile);
   // The motion from the data, once: for the gate and the filter.
   std::optional<DataMotion> motion;
-  if (!o.stream && o.motion == "data" && follows_plan_motion(ko)) try {
+  if (!o.stream && o.motion == "data" && motion_from_data_applies(ko)) try {
       motion = motion_from_data(session, ko);
     } catch (const std::runtime_error&) {
       motion.reset();  // the gate and the filter read the log again and say what is wrong
@@ -171,13 +171,23 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
   if (co.vrw > 0.0) o.vrw = co.vrw * units::ug_per_sqrt_hz;
   const auto t0 = std::chrono::steady_clock::now();
   const ClosedFormReport r =
-      run_closed_form(session, o, TableAttitudeError{co.table_sigma * units::arcsec});
+      run_closed_form_relinearized(session, o, TableAttitudeError{co.table_sigma * units::arcsec});
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   gate.checks.push_back(check_stage1_fit(r.stage1, limits, session.log.file));
+  gate.checks.push_back(check_linear_range(r, session.log.file));
+  gate.checks.push_back(check_stage2_fit(r, limits, session.log.file));
   enforce(gate, co.force);
   const ResultCoefficients coefficients = result_coefficients(r);
   auto sections = result_sections(r);
+  sections["linearization"] = {
+      {"linearizations", r.linearizations},
+      {"removed_gyro_bias_deg_per_s",
+       {r.removed_gyro_bias.x() / units::deg_per_s, r.removed_gyro_bias.y() / units::deg_per_s,
+        r.removed_gyro_bias.z() / units::deg_per_s}},
+      {"largest_turn_dwell", r.largest_turn_dwell},
+      {"largest_turn_deg", r.largest_turn / units::deg},
+      {"linear_turn_deg", r.linear_turn / units::deg}};
   record_gate(sections, gate);
   record_provenance(sections, session);
   write_result_json(out_path, coefficients, sections);
@@ -195,6 +205,13 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
       session.name.c_str(), name_of(co.stage1).c_str(), name_of(co.model).c_str(),
       name_of(co.channels).c_str(), co.table_sigma);
   print_closed_form(r, coefficients, truth);
+  if (r.linearizations > 1)
+    std::printf(
+        "Relinearized %d times about the closed form's own gyro biases (%.4f, %.4f, %.4f deg/s "
+        "removed): dwell %s turns %.3f deg (stage 1's linear range %.3f deg)\n",
+        r.linearizations - 1, r.removed_gyro_bias.x() / units::deg_per_s,
+        r.removed_gyro_bias.y() / units::deg_per_s, r.removed_gyro_bias.z() / units::deg_per_s,
+        r.largest_turn_dwell.c_str(), r.largest_turn / units::deg, r.linear_turn / units::deg);
   std::printf("\nResult written to %s (%.2f s)\n", out_path.c_str(), seconds);
   return row;
 }

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 #include <fstream>
 #include <optional>
+#include <sstream>
 
 #include "filter/closed_form/closed_form.hpp"
 #include "filter/kalman/kalman_calibrator.hpp"
@@ -414,4 +415,95 @@ TEST_CASE("Kalman filter, several passes, the base estimated: a MEMS unit settle
     CHECK(std::abs(r.installation.base_n(i)) < 3.0 * r.installation.base_sigma_n(i));
   const ResultCoefficients truth = load_truth(s, r.accel_triad_frame);
   check_within_sigmas(r, truth, 4.0);
+}
+
+TEST_CASE("Kalman run from the data: a static interval beyond the plan's last dwell",
+          "[kalman][static][passes]") {
+  // The cause of the SIGSEGV of `calibrate --passes 2 --static-from data` on a real table log
+  // (APOPHIS, issue 34): the data held a static interval beyond the plan's last dwell, the run
+  // stopped there, and its summary read the plan's dwell past the end of the timeline for it.
+  // Here the data follow rot19 and the plan stops two turns earlier (16 dwells, 18 in the data).
+  Session s = make_session("kf_extra_dwell", "rot19.ini", "config/sensors/nav-fog.ini",
+                           "config/sensors/nav-fog.ini", 3);
+  std::string text = s.plan.text;
+  const std::string from = "-x -x -x +z +z -z -z -z";
+  const auto at = text.find(from);
+  REQUIRE(at != std::string::npos);
+  text.replace(at, from.size(), "-x -x -x +z +z -z");
+  s.plan = Plan::parse("rot19-shorter", text);
+  const auto plan_dwells = PlanTimeline::of(s.plan, s.site).dwells;
+  REQUIRE(plan_dwells.size() == 17);
+  CalibratorOptions o = options_for(s);
+  o.static_from = CalibratorOptions::StaticFrom::Data;
+  for (int passes : {1, 2}) {
+    KalmanRunOptions run;
+    run.passes = passes;
+    const KalmanRun r = run_kalman(s, o, nullptr, run);
+    CAPTURE(passes, r.stopped, r.diverged);
+    CHECK_THAT(r.stopped, Catch::Contains("static interval 18 found in the data") &&
+                              Catch::Contains("the plan has 17 dwells"));
+    REQUIRE(r.detected.has_value());
+    // Every interval reported is one of the plan's dwells, with its label and times.
+    REQUIRE(r.detected->intervals.size() == plan_dwells.size());
+    for (std::size_t k = 0; k < plan_dwells.size(); ++k) {
+      const auto& f = r.detected->intervals[k];
+      CHECK(f.dwell == static_cast<int>(k) + 1);
+      CHECK(f.label == plan_dwells[k].label);
+      CHECK(f.plan_t_start == plan_dwells[k].t_start);
+    }
+  }
+}
+
+TEST_CASE("Kalman filter without attitude updates: MEMS g-sensitivity's diagonal refused",
+          "[kalman][attitude]") {
+  // Issue 34: with --attitude none the three diagonal terms went to about -2300 deg/h/g (the
+  // profile's range up to 360), 160 of their sigmas off the truth, with exit 0. Refused now,
+  // naming the cause; with attitude updates the same session passes.
+  const Session s = make_session("kf_mems_attitude_none", "rot19.ini", "config/sensors/mems.ini",
+                                 "config/sensors/mems.ini", 1);
+  CalibratorOptions o = options_for(s);
+  o.attitude = CalibratorOptions::AttitudeUpdates::None;
+  const KalmanRun none = run_kalman(s, o);
+  CHECK_THAT(none.diverged, Catch::Contains("without attitude updates") &&
+                                Catch::Contains("gyro.g_sensitivity.xx") &&
+                                Catch::Contains("heading drift"));
+  o.attitude = CalibratorOptions::AttitudeUpdates::Every;
+  const KalmanRun every = run_kalman(s, o);
+  CHECK(every.diverged.empty());
+  check_within_sigmas(every, load_truth(s), 4.0);
+}
+
+TEST_CASE("Kalman filter with dwells from the data on consumer MEMS: along the data's motion",
+          "[kalman][static]") {
+  // Issue 34: with --static-from data the error dynamics were evaluated at the navigator's
+  // outputs (no reference motion), and a consumer unit (gyro biases up to 1 deg/s, scale factors
+  // up to 5 %, misalignments up to 1 deg) diverged (t = 252 s on this session; a real BMI160 table
+  // log at its first move). Along the motion the data show it is right.
+  const std::string dir = test::temp_dir("kf_consumer_profile");
+  std::ifstream mems(test::source_path("config/sensors/mems.ini"));
+  std::ostringstream text;
+  for (std::string line; std::getline(mems, line);) {
+    if (line.rfind("bias = 0.1 0.5 deg/s", 0) == 0) line = "bias = 0.5 1 deg/s";
+    if (line.rfind("scale = 1000 10000 ppm", 0) == 0) line = "scale = 10000 50000 ppm";
+    if (line.rfind("misalignment = 300 3000 arcsec", 0) == 0)
+      line = "misalignment = 1000 3600 arcsec";
+    text << line << "\n";
+  }
+  std::ofstream(dir + "/consumer.ini") << text.str();
+  SessionSimulation spec;
+  spec.plan_path = test::source_path("config/plans/rot19.ini");
+  spec.data_sensor_path = dir + "/consumer.ini";
+  spec.name = "kf_consumer_static_data";
+  spec.seed = 3;
+  const std::string out = test::temp_dir(spec.name);
+  simulate_session(out, spec);
+  const Session s = Session::load(out + "/session.ini");
+  CalibratorOptions o = options_for(s);
+  o.static_from = CalibratorOptions::StaticFrom::Data;
+  const KalmanRun r = run_kalman(s, o);
+  CHECK(r.diverged.empty());
+  CHECK(r.stopped.empty());
+  REQUIRE(r.motion.has_value());
+  REQUIRE(r.detected.has_value());
+  check_within_sigmas(r, load_truth(s), 4.0);
 }

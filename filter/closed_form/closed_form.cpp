@@ -749,4 +749,112 @@ ClosedFormReport run_closed_form(const Session& session, const Stage1Options& st
   return r;
 }
 
+DwellTurn closed_form_turn(const EquivalentInputs& e, const Site& site) {
+  DwellTurn t;
+  double rate2 = 0.0;
+  for (int i = 3; i < 6; ++i)
+    if (e.estimated[static_cast<std::size_t>(i)]) rate2 += e.u(i) * e.u(i);
+  t.turn = std::sqrt(rate2) * e.duration;
+  double sigma_f = HUGE_VAL;
+  for (int i = 0; i < 2; ++i)
+    if (e.estimated[static_cast<std::size_t>(i)] && e.cov(i, i) > 0.0)
+      sigma_f = std::min(sigma_f, std::sqrt(e.cov(i, i)));
+  const double g = Earth::wgs84().gravity_n(site.lat_rad, site.h_m).norm();
+  t.bound = std::isfinite(sigma_f) ? std::sqrt(2.0 * sigma_f / g) : HUGE_VAL;
+  return t;
+}
+
+namespace {
+
+// The dwell turned farthest against its bound.
+void set_largest_turn(ClosedFormReport& r, const Site& site) {
+  double worst = -1.0;
+  for (const auto& e : r.stage1) {
+    const DwellTurn t = closed_form_turn(e, site);
+    if (t.turn / t.bound <= worst) continue;
+    worst = t.turn / t.bound;
+    r.largest_turn = t.turn;
+    r.linear_turn = t.bound;
+    r.largest_turn_dwell = e.dwell.label;
+  }
+}
+
+// The stage-2 gyro biases (rad/s), zero where unobservable.
+Eigen::Vector3d gyro_biases(const Stage2Result& s2) {
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  const auto& cat = coefficient_catalog();
+  for (std::size_t i = 0; i < s2.parameters.size(); ++i) {
+    const auto& c = cat[static_cast<std::size_t>(s2.parameters[i])];
+    if (c.family != "gyro.bias" || !s2.observable[i]) continue;
+    b(c.name.back() - 'x') = s2.theta(static_cast<Eigen::Index>(i));
+  }
+  return b;
+}
+
+// The biases compensated before stage 1 added back: the coefficients are totals.
+void add_removed_biases(ClosedFormReport& r) {
+  const auto& cat = coefficient_catalog();
+  Stage2Result& s2 = r.stage2;
+  for (std::size_t i = 0; i < s2.parameters.size(); ++i) {
+    const auto& c = cat[static_cast<std::size_t>(s2.parameters[i])];
+    if (c.family == "gyro.bias" && s2.observable[i])
+      s2.theta(static_cast<Eigen::Index>(i)) += r.removed_gyro_bias(c.name.back() - 'x');
+  }
+  if (r.has_paper_forms) {
+    r.paper.w0x += r.removed_gyro_bias.x();
+    r.paper.w0z += r.removed_gyro_bias.z();
+  }
+}
+
+// The gyro biases from the dwells' mean outputs, the Earth rate at the plan's attitudes taken
+// out (no integration: right to the scale factors times the Earth rate, whatever the biases);
+// zero when the log cannot be read (stage 1 reports why).
+Eigen::Vector3d dwell_mean_gyro_bias(const Session& session) {
+  std::vector<AlignmentDwell> means;
+  try {
+    LogReader reader(session.log);
+    reader.skip_bad_samples([](const BadSampleError&) {});
+    means = dwell_means(reader, PlanTimeline::of(session.plan, session.site), session.time_offset,
+                        kAlignmentEdge);
+  } catch (const std::runtime_error&) {
+    return Eigen::Vector3d::Zero();
+  }
+  const Eigen::Vector3d omega_ie_n = Earth::wgs84().omega_ie_n(session.site.lat_rad);
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const auto& d : means) sum += d.omega_b - d.C_b_n_known.transpose() * omega_ie_n;
+  return means.empty() ? sum : Eigen::Vector3d(sum / static_cast<double>(means.size()));
+}
+
+}  // namespace
+
+ClosedFormReport run_closed_form_relinearized(const Session& session, const Stage1Options& stage1,
+                                              const TableAttitudeError& table,
+                                              int max_linearizations) {
+  ClosedFormReport r = run_closed_form(session, stage1, table);
+  set_largest_turn(r, session.site);
+  r.first_gyro_bias = gyro_biases(r.stage2);
+  ImuErrorModel about;
+  for (int k = 2; k <= max_linearizations && r.largest_turn > r.linear_turn; ++k) {
+    // The first relinearization about the dwells' mean rates (a stage 1 far beyond its range
+    // gives biases shrunk and of either sign: seed8's 180 s dwells at 1 deg/s turned -0.65
+    // times the truth), the next ones by stage 2's corrections to the biases already removed.
+    const Eigen::Vector3d step = k == 2 ? dwell_mean_gyro_bias(session) : gyro_biases(r.stage2);
+    if (!step.allFinite()) break;
+    about.gyro.bias += step;
+    ClosedFormReport next;
+    try {
+      next = run_closed_form(session, stage1, table, true, &about);
+    } catch (const std::invalid_argument&) {
+      break;  // a linearization that cannot run (no dwell left): the last one stands
+    }
+    next.linearizations = k;
+    next.removed_gyro_bias = about.gyro.bias;
+    next.first_gyro_bias = r.first_gyro_bias;
+    set_largest_turn(next, session.site);
+    r = std::move(next);
+  }
+  add_removed_biases(r);
+  return r;
+}
+
 }  // namespace sinscal

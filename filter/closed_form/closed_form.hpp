@@ -171,7 +171,25 @@ struct ClosedFormReport {
   Stage2Result stage2;
   bool has_paper_forms = false;  // the plan is the paper's 8-orientation table
   PaperClosedForms paper{};
+  /// Relinearization (run_closed_form_relinearized): how many times stage 1 ran, the gyro biases
+  /// the samples were compensated with before the last (rad/s; stage2.theta includes them), and
+  /// the first linearization's stage-2 gyro biases (rad/s).
+  int linearizations = 1;
+  Eigen::Vector3d removed_gyro_bias = Eigen::Vector3d::Zero();
+  Eigen::Vector3d first_gyro_bias = Eigen::Vector3d::Zero();
+  /// Stage 1's linear range in the last linearization: the dwell where the gyros' equivalent
+  /// input turned the attitude farthest against its bound (closed_form_turn, rad).
+  std::string largest_turn_dwell;
+  double largest_turn = 0.0, linear_turn = 0.0;
 };
+
+/// The attitude a dwell's gyro equivalent inputs turn over the dwell (|dw| x duration, rad), and
+/// the turn stage 1's linear model tolerates there: its neglected second-order term g phi^2 / 2
+/// at the dwell's end equal to the sigma of the dwell's horizontal accelerometer inputs.
+struct DwellTurn {
+  double turn = 0.0, bound = 0.0;
+};
+DwellTurn closed_form_turn(const EquivalentInputs& e, const Site& site);
 
 /// `align`: align from the dwells first and estimate the base in stage 2 (the command line's
 /// default); false: the plan's attitudes as they are, no base. `about`: the samples compensated
@@ -181,5 +199,14 @@ struct ClosedFormReport {
 ClosedFormReport run_closed_form(const Session& session, const Stage1Options& stage1,
                                  const TableAttitudeError& table, bool align = true,
                                  const class ImuErrorModel* about = nullptr);
+
+/// The closed form linearized about its own gyro biases: while a dwell's gyro inputs turn the
+/// attitude beyond stage 1's linear range (closed_form_turn), the samples are compensated with
+/// the stage-2 gyro biases so far and stage 1 and 2 run again (at most `max_linearizations`
+/// times). The report's coefficients are the totals; its largest turn says whether the last
+/// linearization is within the range (the gate refuses it otherwise, naming the gyro biases).
+ClosedFormReport run_closed_form_relinearized(const Session& session, const Stage1Options& stage1,
+                                              const TableAttitudeError& table,
+                                              int max_linearizations = 4);
 
 }  // namespace sinscal

@@ -51,6 +51,10 @@ bool follows_plan_motion(const CalibratorOptions& o) {
          o.attitude != CalibratorOptions::AttitudeUpdates::None && o.zero_velocity_in_motion;
 }
 
+bool motion_from_data_applies(const CalibratorOptions& o) {
+  return o.attitude != CalibratorOptions::AttitudeUpdates::None && o.zero_velocity_in_motion;
+}
+
 double initial_attitude_sigma(const CalibratorOptions& o) {
   if (o.initial_attitude_sigma > 0.0) return o.initial_attitude_sigma;
   return kDefaultStartAttitudeSigma;

@@ -191,6 +191,11 @@ bool gyros_find_north(const CalibratorOptions& options);
 /// error dynamics are then evaluated along the plan's motion (CalibratorOptions::reference_motion;
 /// run_kalman and the plan search give it).
 bool follows_plan_motion(const CalibratorOptions& options);
+/// Whether the motion the data show may be the error dynamics' linearization point (run_kalman,
+/// motion_from_data): as follows_plan_motion, the dwells also when the data give them
+/// (--static-from data: the navigator's outputs, noisy and off by a MEMS unit's errors, made the
+/// filter diverge at the first turn).
+bool motion_from_data_applies(const CalibratorOptions& options);
 /// The start-attitude sigma the options imply.
 double initial_attitude_sigma(const CalibratorOptions& options);
 

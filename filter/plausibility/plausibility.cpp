@@ -1,6 +1,8 @@
 #include "filter/plausibility/plausibility.hpp"
 
 #include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
+#include <boost/math/distributions/normal.hpp>
 #include <cmath>
 #include <sstream>
 
@@ -275,6 +277,47 @@ PlausibilityCheck check_stage1_fit(const std::vector<EquivalentInputs>& stage1,
               "): the navigation errors do not follow the model (the data or the plan are not "
               "what the session says, or the noise densities are wrong)");
   return bad.check("stage-1 fit");
+}
+
+PlausibilityCheck check_linear_range(const ClosedFormReport& r, const std::string& input) {
+  PlausibilityCheck c{"closed-form linear range", true, ""};
+  if (!(r.largest_turn > r.linear_turn)) return c;
+  const bool removed = r.linearizations > 1;
+  const Eigen::Vector3d b = (removed ? r.removed_gyro_bias : r.first_gyro_bias) / units::deg_per_s;
+  c.passed = false;
+  c.detail = input + ": dwell " + r.largest_turn_dwell + ": the gyros turn the attitude by " +
+             number(r.largest_turn / units::deg, 3) + " deg within the dwell, beyond stage 1's " +
+             "linear range of " + number(r.linear_turn / units::deg, 3) +
+             " deg (there its neglected g phi^2/2 reaches the accelerometer inputs' sigma); the " +
+             "gyro biases are " + number(b.x(), 3) + ", " + number(b.y(), 3) + ", " +
+             number(b.z(), 3) + " deg/s" +
+             (removed ? ", removed in " + std::to_string(r.linearizations - 1) +
+                            " relinearization(s): what still turns the attitude is a gyro error "
+                            "the closed form does not model (g-sensitivity, bias instability)"
+                      : ": the gyro biases turn the attitude") +
+             "; the Kalman filter (--method kf) models them";
+  return c;
+}
+
+PlausibilityCheck check_stage2_fit(const ClosedFormReport& r, const PlausibilityLimits& l,
+                                   const std::string& input) {
+  PlausibilityCheck c{"stage-2 fit", true, ""};
+  const Stage2Result& s2 = r.stage2;
+  if (s2.dof <= 0) return c;
+  const double tail = boost::math::cdf(
+      boost::math::complement(boost::math::normal_distribution<double>(), l.stage2_fit_z));
+  const double bound = boost::math::quantile(boost::math::complement(
+                           boost::math::chi_squared_distribution<double>(s2.dof), tail)) /
+                       s2.dof;
+  if (s2.chi2_per_dof <= bound) return c;
+  c.passed = false;
+  c.detail = input + ": stage-2 chi2 per dof " + number(s2.chi2_per_dof, 3) + " over " +
+             std::to_string(s2.dof) + " dof (bound " + number(bound, 3) + ", its " +
+             number(l.stage2_fit_z, 2) +
+             "-sigma quantile): the dwells' equivalent inputs do not fit one set of the model's "
+             "coefficients (errors the model lacks, a stage 1 beyond its linear range, or noise "
+             "densities too small)";
+  return c;
 }
 
 }  // namespace sinscal

@@ -18,6 +18,7 @@ namespace sinscal {
 struct SensorProfile;
 struct Session;
 struct EquivalentInputs;
+struct ClosedFormReport;
 
 /// What a static dwell may show and still be plausible. SI units.
 struct PlausibilityLimits {
@@ -30,6 +31,7 @@ struct PlausibilityLimits {
   double accel_white = 0.0;                // m/s/sqrt(s): for the noise of a dwell's mean
   double gyro_white = 0.0;                 // rad/sqrt(s)
   double max_stage1_chi2_per_dof = 10.0;   // closed form: a dwell's fit far above 1
+  double stage2_fit_z = 4.0;  // closed form: stage 2's chi2 above its quantile at this normal tail
 
   /// Bounds from the sensor profile's error ranges (3 times the largest error they allow, plus
   /// 5 noise sigmas of a dwell's mean), or generic bounds without a profile (nullptr).
@@ -108,5 +110,14 @@ void enforce(const PlausibilityReport& report, bool force);
 /// fit the model (the data or the plan are not what the session says).
 PlausibilityCheck check_stage1_fit(const std::vector<EquivalentInputs>& stage1,
                                    const PlausibilityLimits& limits, const std::string& input);
+/// The closed form's linear range: after its relinearizations about its own gyro biases
+/// (run_closed_form_relinearized) no dwell's gyro inputs may turn the attitude beyond what stage
+/// 1's linear model tolerates (closed_form_turn); the cause named is the gyro biases.
+PlausibilityCheck check_linear_range(const ClosedFormReport& r, const std::string& input);
+/// The closed form's stage 2: its residual chi2 (dof = inputs - rank) against the chi-square
+/// quantile at the normal tail of `limits.stage2_fit_z`: above it the dwells do not fit one set
+/// of the model's coefficients.
+PlausibilityCheck check_stage2_fit(const ClosedFormReport& r, const PlausibilityLimits& limits,
+                                   const std::string& input);
 
 }  // namespace sinscal
