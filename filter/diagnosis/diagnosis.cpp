@@ -34,6 +34,7 @@ struct WhiteDwell {
   Eigen::MatrixXd H;  // H (physical units)
   Eigen::VectorXd u;
   std::vector<int> rows;  // which of the 6 inputs
+  Eigen::MatrixXd L;      // R = L L^T
 };
 
 class StaticDesign {
@@ -80,6 +81,7 @@ class StaticDesign {
                                     std::to_string(in.dwell.index) + " is not positive definite");
       w.A = llt.matrixL().solve(w.H);
       w.y = llt.matrixL().solve(w.u);
+      w.L = llt.matrixL();
       out.push_back(std::move(w));
     }
     return out;
@@ -162,6 +164,7 @@ FitFigures figures(const StaticDesign& design, const std::vector<int>& parameter
   f.heldout_accel = nha ? std::sqrt(ha / nha) : 0.0;
   f.heldout_gyro = nhg ? std::sqrt(hg / nhg) : 0.0;
   f.heldout = nz ? std::sqrt(hz / nz) : 0.0;
+  f.heldout_chi2 = hz;
   f.heldout_dwells = static_cast<int>(dwells.size());
   f.log_likelihood = -0.5 * f.chi2;
   f.bic = f.chi2 + f.fit.rank * std::log(std::max(1, inputs));
@@ -501,6 +504,17 @@ FitFigures DwellTests::fit(const std::vector<int>& parameters) const {
 std::vector<CandidateTest> DwellTests::round(const std::vector<int>& current,
                                              const FitFigures& now) const {
   return run_round(StaticDesign(inputs_, site_, base_), current, now, options_);
+}
+
+std::vector<WhitenedDwell> DwellTests::whitened(const std::vector<int>& parameters) const {
+  std::vector<WhitenedDwell> out;
+  for (auto& w : StaticDesign(inputs_, site_, base_).whiten(parameters))
+    out.push_back({std::move(w.A), std::move(w.L), std::move(w.y), std::move(w.rows)});
+  return out;
+}
+
+Eigen::VectorXd DwellTests::prior(const std::vector<int>& parameters) const {
+  return prior_sigmas(parameters, base_.base_attitude);
 }
 
 std::vector<DwellResidual> DwellTests::residuals(const std::vector<int>& initial,

@@ -47,6 +47,7 @@ struct FitFigures {
   double accel_rms = 0.0;      // m/s^2: RMS of the accelerometer residuals over dwells, axes
   double gyro_rms = 0.0;       // rad/s
   double heldout = 0.0;        // RMS of the leave-one-dwell-out prediction error, in sigmas
+  double heldout_chi2 = 0.0;   // its sum of squares (whitened): the held-out dwells' chi-square
   double heldout_accel = 0.0;  // m/s^2, same in the sensor's units
   double heldout_gyro = 0.0;   // rad/s
   int heldout_dwells = 0;      // dwells whose prediction the others determine
@@ -164,6 +165,14 @@ void run_rounds(DiagnosisReport& rep, int max_findings, const RoundRunner& run_r
                 const BestCompleter& complete = {});
 }  // namespace diagnosis_detail
 
+/// One dwell's estimated inputs whitened (R = L L^T): A = L^-1 H (the model's columns, then the
+/// table base's three when it is estimated), y = L^-1 u; `rows` which of the 6 NED inputs.
+struct WhitenedDwell {
+  Eigen::MatrixXd A, L;
+  Eigen::VectorXd y;
+  std::vector<int> rows;
+};
+
 /// The static dwells' side of a table diagnosis: fits of parameter sets to stage 1's equivalent
 /// inputs and the tests of candidates against a current model (filter/diagnosis/diagnosis_table.hpp
 /// runs the rounds).
@@ -181,6 +190,12 @@ class DwellTests {
   /// Per-dwell residuals under the initial and the final parameter sets.
   std::vector<DwellResidual> residuals(const std::vector<int>& initial,
                                        const std::vector<int>& final) const;
+  /// The dwells whitened for the model `parameters`, and the weak prior sigmas (SI) of its
+  /// columns (filter/diagnosis/term_library.hpp fits what is left).
+  std::vector<WhitenedDwell> whitened(const std::vector<int>& parameters) const;
+  Eigen::VectorXd prior(const std::vector<int>& parameters) const;
+  const std::vector<EquivalentInputs>& dwell_inputs() const { return inputs_; }
+  const Site& site() const { return site_; }
   int inputs() const { return inputs_count_; }
   const Stage2Options& base() const { return base_; }
   const DiagnosisOptions& options() const { return options_; }
