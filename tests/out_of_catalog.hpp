@@ -70,35 +70,41 @@ inline void inject_into_log(const std::string& path, double rate_hz, const Extra
 struct OpenWorldEffect {
   std::string name;
   ExtraTerm term;
+  /// The library term that explains it on the dwells (filter/diagnosis/term_library.hpp): sensor,
+  /// axis, the formula's beginning and the value in the term's unit; sensor empty: none.
+  std::string sensor;
+  int axis = 0;
+  std::string formula;
+  double value = 0.0;
 };
 
 constexpr double kG = units::g0;
 
 /// The effects of the open-world matrix (issue 33); the bias step at log time mid_s (s).
 inline std::vector<OpenWorldEffect> open_world_effects(double mid_s) {
-  const double ug = units::ug, dph = units::deg_per_h;
+  const double ug = units::ug, dph = units::deg_per_h, g2 = kG * kG;
   std::vector<OpenWorldEffect> e;
-  // Accelerometer cross-axis product: f_x += 100 ug/g^2 f_y f_z.
   e.push_back({"accel x += 100 ug/g^2 f_y f_z",
-               [ug](double, auto& f, auto&) { f(0) += 100.0 * ug * f(1) * f(2) / (kG * kG); }});
-  // Gyro g^2 term: omega_x += 0.05 deg/h/g^2 f_z^2.
-  e.push_back({"gyro x += 0.05 deg/h/g^2 f_z^2",
-               [dph](double, auto& f, auto& w) { w(0) += 0.05 * dph * f(2) * f(2) / (kG * kG); }});
-  // |omega| scale nonlinearity: omega_x += 300 ppm/(rad/s) omega_x |omega_x|.
-  e.push_back({"gyro x += 300 ppm/(rad/s) omega_x |omega_x|",
-               [](double, auto&, auto& w) { w(0) += 300e-6 * w(0) * std::abs(w(0)); }});
-  // Periodic accelerometer disturbance: 20 ug at a 29 s period.
-  e.push_back({"accel y += 20 ug sin(2 pi t / 29 s)", [ug](double t, auto& f, auto&) {
-                 f(1) += 20.0 * ug * std::sin(2.0 * M_PI * t / 29.0);
-               }});
-  // A gyro bias step half-way: 0.02 deg/h.
+               [ug, g2](double, auto& f, auto&) { f(0) += 100.0 * ug * f(1) * f(2) / g2; }, "accel",
+               0, "f_y f_z", 100.0});
+  e.push_back({"gyro x += 0.2 deg/h/g^2 f_z^2",
+               [dph, g2](double, auto& f, auto& w) { w(0) += 0.2 * dph * f(2) * f(2) / g2; },
+               "gyro", 0, "f_z^2", 0.2});
+  e.push_back({"gyro x += 3000 ppm/(rad/s) omega_x |omega_x|",
+               [](double, auto&, auto& w) { w(0) += 3000e-6 * w(0) * std::abs(w(0)); }, "", 0, "",
+               0.0});
   e.push_back(
-      {"gyro z bias step 0.02 deg/h at mid-session", [dph, mid_s](double t, auto&, auto& w) {
-         if (t > mid_s) w(2) += 0.02 * dph;
-       }});
-  // Anisoelastic gyro term: omega_x += 0.05 deg/h/g^2 f_y f_z.
-  e.push_back({"gyro x += 0.05 deg/h/g^2 f_y f_z",
-               [dph](double, auto& f, auto& w) { w(0) += 0.05 * dph * f(1) * f(2) / (kG * kG); }});
+      {"accel y += 20 ug sin(2 pi t / 29 s)",
+       [ug](double t, auto& f, auto&) { f(1) += 20.0 * ug * std::sin(2.0 * M_PI * t / 29.0); }, "",
+       0, "", 0.0});
+  e.push_back({"gyro z bias step 0.1 deg/h at mid-session",
+               [dph, mid_s](double t, auto&, auto& w) {
+                 if (t > mid_s) w(2) += 0.1 * dph;
+               },
+               "gyro", 2, "step", 0.1});
+  e.push_back({"gyro x += 0.2 deg/h/g^2 f_y f_z",
+               [dph, g2](double, auto& f, auto& w) { w(0) += 0.2 * dph * f(1) * f(2) / g2; },
+               "gyro", 0, "f_y f_z", 0.2});
   return e;
 }
 

@@ -372,6 +372,20 @@ std::vector<CandidateTest> not_separable(const std::vector<CandidateTest>& last_
   return out;
 }
 
+std::string heldout_refusal(const FitFigures& before, const FitFigures& after, int dof,
+                            double alpha) {
+  if (before.heldout_dwells == 0 || after.heldout_dwells == 0 || !(after.heldout_chi2 > 0.0))
+    return "";
+  const double scale = std::max(1.0, after.heldout * after.heldout);
+  const double gain = (before.heldout_chi2 - after.heldout_chi2) / scale;
+  const double q = boost::math::quantile(boost::math::chi_squared(std::max(1, dof)), 1.0 - alpha);
+  if (gain >= q) return "";
+  char b[200];
+  std::snprintf(b, sizeof b, "the held-out chi-square gains %.3g%s (%.3g needed)", gain,
+                scale > 1.0 ? " in its residual's scale" : "", q);
+  return b;
+}
+
 void run_rounds(DiagnosisReport& rep, int max_findings, const RoundRunner& run_round,
                 const BestCompleter& complete) {
   std::vector<int> current = rep.initial_parameters;
@@ -388,6 +402,14 @@ void run_rounds(DiagnosisReport& rep, int max_findings, const RoundRunner& run_r
     if (!best) break;
     if (!best->named) {
       rep.ambiguous.push_back(*best);
+      break;
+    }
+    const std::string refused = heldout_refusal(now, best->with, best->dof, rep.alpha);
+    if (!refused.empty()) {
+      for (auto& c : rep.rounds.back()) c.named = false;
+      rep.rejected.push_back(*best);
+      rep.stops.push_back(best->family + ", the most significant candidate, is not named: " +
+                          refused + "; the search stops, its residual unexplained");
       break;
     }
     rep.findings.push_back(*best);

@@ -131,6 +131,9 @@ struct DiagnosisReport {
   std::vector<DwellResidual> residuals;
   int inputs = 0;  // equivalent inputs over all dwells
   double alpha = 0.0;
+  /// The round's best the held-out data refuse (run_rounds): not named, the search stopped.
+  std::vector<CandidateTest> rejected;
+  std::vector<std::string> stops;  // why each refused candidate was refused
 };
 
 /// The statistics shared by the table and hand-held diagnoses.
@@ -147,6 +150,12 @@ CandidateTest* best_of(std::vector<CandidateTest>& round, double alpha);
 /// The most significant candidate with those that explain the residual as well; named unless
 /// another family's does.
 CandidateTest* choose(std::vector<CandidateTest>& round, double alpha);
+/// Why the held-out figures refuse an extension of `dof` parameters from `before` to `after`
+/// (empty: they confirm it): the held-out chi-square must fall by at least the chi-square quantile
+/// of dof at 1 - alpha, measured in the extended model's held-out residual scale where that
+/// exceeds 1 (as the F test scales the in-sample statistic). Held-out figures absent: empty.
+std::string heldout_refusal(const FitFigures& before, const FitFigures& after, int dof,
+                            double alpha);
 /// What could not be separated (aliased components), one entry per family.
 std::vector<CandidateTest> not_separable(const std::vector<CandidateTest>& last_round);
 /// Catalog indices of the components of `families` (empty: every extended family of the family

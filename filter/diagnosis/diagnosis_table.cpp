@@ -280,16 +280,13 @@ void scale_sigmas(TableFinding& f, const ResidualCheck& c) {
 // quantile of its dof at 1 - alpha, the gain the in-sample test itself asks for), must not lose
 // the filter's log-likelihood (by more than half that quantile), and must not worsen the
 // held-out turns (a turn finding: must improve them).
-std::string heldout_refusal(const TableFinding& f, double alpha) {
+std::string refusal_of(const TableFinding& f, double alpha) {
   const double q = boost::math::quantile(boost::math::chi_squared(std::max(1, f.dof)), 1.0 - alpha);
   char b[200];
   if (f.source == TableFinding::Source::Dwells && f.dwells_before && f.dwells_after) {
-    const double gain = f.dwells_before->heldout_chi2 - f.dwells_after->heldout_chi2;
-    if (gain < q) {
-      std::snprintf(b, sizeof b, "the held-out dwells' chi-square gains %.3g (%.3g needed)", gain,
-                    q);
-      return b;
-    }
+    const std::string dwells =
+        diagnosis_detail::heldout_refusal(*f.dwells_before, *f.dwells_after, f.dof, alpha);
+    if (!dwells.empty()) return "on the dwells, " + dwells;
   }
   if (!f.filter) return "";
   const double dll = f.log_likelihood_after - f.log_likelihood_before;
@@ -368,7 +365,7 @@ class TableRounds {
     for (const auto& a : f->ambiguous_with)
       f->separated_by.push_back(coefficient_family_info(a).separated_by);
     extend_filter(*f);
-    const std::string refused = heldout_refusal(*f, o_.dwells.alpha);
+    const std::string refused = refusal_of(*f, o_.dwells.alpha);
     if (!refused.empty()) {
       withdraw(*f);
       d_.rejected.push_back({std::move(*f), refused});
@@ -390,13 +387,14 @@ class TableRounds {
       d_.turns->final_run = turns_->now();
     }
     d_.check = residual_check(rep.final_fit, turns_ ? &turns_->now() : nullptr);
-    d_.unexplained = unexplained_of(d_, rep.residuals);
-    if (d_.unexplained.present)
-      d_.unexplained.library = fit_term_library(dwells_, current_, o_.dwells.alpha);
     for (auto& f : d_.findings) {
       final_magnitudes(f, turns_ ? &turns_->now() : nullptr, rep.final_fit.fit);
       scale_sigmas(f, d_.check);
     }
+    const std::vector<int> confirmed = demote_unexplaining();
+    d_.unexplained = unexplained_of(d_, rep.residuals);
+    if (d_.unexplained.present)
+      d_.unexplained.library = fit_term_library(dwells_, confirmed, o_.dwells.alpha);
     state_stops();
     return std::move(d_);
   }
@@ -404,13 +402,46 @@ class TableRounds {
   int findings() const { return static_cast<int>(d_.findings.size()); }
 
  private:
+  // A finding whose data still reject the noise model with it (the dwells' findings against the
+  // dwells' residual, the turns' against the filter's NIS) does not explain the evidence: it is
+  // moved to `rejected`, not named. Returns the dwells' model without them (the library fits
+  // what that model leaves).
+  std::vector<int> demote_unexplaining() {
+    std::vector<int> confirmed = d_.dwells.initial_parameters;
+    std::vector<TableFinding> kept;
+    char b[200];
+    for (auto& f : d_.findings) {
+      const bool dwells = f.source == TableFinding::Source::Dwells;
+      const bool holds = dwells ? d_.check.dwells_hold : d_.check.filter_holds;
+      if (holds) {
+        if (dwells) confirmed.insert(confirmed.end(), f.components.begin(), f.components.end());
+        kept.push_back(std::move(f));
+        continue;
+      }
+      if (dwells)
+        std::snprintf(b, sizeof b,
+                      "with the findings the dwells' residual still rejects the noise model "
+                      "(chi2 %.4g on %d dof, 99 %% quantile %.4g)",
+                      d_.check.dwells_chi2, d_.check.dwells_dof, d_.check.dwells_quantile);
+      else
+        std::snprintf(b, sizeof b,
+                      "with the findings the filter's NIS per dof is still %.3g (above %.3g)",
+                      d_.check.nis_per_dof, kNisPerDofLimit);
+      d_.rejected.push_back({std::move(f), b});
+    }
+    d_.findings = std::move(kept);
+    return confirmed;
+  }
+
+ public:
+ private:
   // Every stop and limit of the search (TableDiagnosis::stops).
   void state_stops() {
     char b[400];
     for (const auto& r : d_.rejected) {
       std::snprintf(b, sizeof b,
-                    "round %d: %s was the most significant candidate (p %.2g), but %s: not named, "
-                    "the search stops and its residual is unexplained",
+                    "round %d: %s was the most significant candidate (p %.2g), but %s: not "
+                    "named, its residual is unexplained",
                     r.finding.round, r.finding.family.c_str(), r.finding.p_value, r.reason.c_str());
       d_.stops.emplace_back(b);
     }
