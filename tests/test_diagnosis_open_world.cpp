@@ -30,10 +30,15 @@ struct OpenWorldScore {
 // only (-1), or none (0).
 int score_terms(const TableDiagnosis& d, const OpenWorldEffect& e) {
   if (!d.unexplained.library || d.unexplained.library->terms.empty()) return 0;
-  for (const auto& t : d.unexplained.library->terms)
-    if (!e.sensor.empty() && t.sensor == e.sensor && t.axis == e.axis &&
-        t.formula.rfind(e.formula, 0) == 0 && std::abs(t.value - e.value) < 3.0 * t.sigma)
-      return 1;
+  const auto right = [&](const LibraryTerm& t) {
+    return !e.sensor.empty() && t.sensor == e.sensor && t.axis == e.axis &&
+           t.formula.rfind(e.formula, 0) == 0 && std::abs(t.value - e.value) < 3.0 * t.sigma;
+  };
+  for (const auto& t : d.unexplained.library->terms) {
+    if (right(t)) return 1;
+    for (const auto& a : t.aliases)  // the plan cannot tell them apart: reported together
+      if (right(a)) return 1;
+  }
   return -1;
 }
 

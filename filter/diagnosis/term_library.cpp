@@ -217,6 +217,25 @@ Eigen::MatrixXd covariance_on(const Stacked& s, const std::vector<Eigen::Index>&
   return N.ldlt().solve(Eigen::MatrixXd::Identity(k, k));
 }
 
+// The library terms whose columns are one function with column j on these dwells, each with the
+// value and sigma it would have alone in j's place.
+std::vector<LibraryTerm> aliases_of(const Stacked& s, const std::vector<Column>& lib,
+                                    Eigen::Index j, double value, double sigma) {
+  std::vector<LibraryTerm> out;
+  const double nj = s.B.col(j).norm();
+  for (Eigen::Index k = 0; k < s.B.cols(); ++k) {
+    const double nk = s.B.col(k).norm();
+    if (k == j || !(nk > 0.0) || !(nj > 0.0)) continue;
+    const double r = s.B.col(j).dot(s.B.col(k)) / (nj * nk);
+    if (std::abs(r) < kAliasCorrelation) continue;
+    LibraryTerm t = lib[static_cast<std::size_t>(k)].term;
+    t.value = value * r * nj / nk;
+    t.sigma = sigma * nj / nk;
+    out.push_back(t);
+  }
+  return out;
+}
+
 std::string how_to_add(const std::vector<LibraryTerm>& terms) {
   if (terms.empty()) return "";
   const LibraryTerm& t = terms.front();
@@ -233,7 +252,11 @@ std::string LibraryTerm::text() const {
   char b[200];
   std::snprintf(b, sizeof b, "%s %s: %.3g +- %.2g %s * %s", sensor.c_str(), kAxis[axis], value,
                 sigma, unit.c_str(), formula.c_str());
-  return b;
+  std::string out = b;
+  for (std::size_t k = 0; k < aliases.size(); ++k)
+    out += (k == 0 ? " (or, not separable on this plan: " : "; ") + aliases[k].text() +
+           (k + 1 == aliases.size() ? ")" : "");
+  return out;
 }
 
 LibraryFit fit_term_library(const DwellTests& dwells, const std::vector<int>& parameters,
@@ -273,6 +296,7 @@ LibraryFit fit_term_library(const DwellTests& dwells, const std::vector<int>& pa
     const auto i = static_cast<Eigen::Index>(j);
     t.value = c(i);
     t.sigma = std::sqrt(P(i, i)) * scale;
+    t.aliases = aliases_of(s, lib, cols[j], t.value, t.sigma);
     out.terms.push_back(t);
   }
   out.how_to_add = how_to_add(out.terms);

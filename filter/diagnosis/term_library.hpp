@@ -22,9 +22,16 @@ struct LibraryTerm {
   double si_per_unit = 1.0;
   double value = 0.0;  // in `unit`
   double sigma = 0.0;  // in `unit`, scaled by the library fit's residual where it exceeds noise
+  /// Other library terms this plan cannot tell from it (their columns, with the model's
+  /// projected out, correlate beyond kAliasCorrelation): each with its own value and sigma.
+  std::vector<LibraryTerm> aliases;
   /// "accel x: 97 +- 6 ug/g^2 * f_y f_z"
   std::string text() const;
 };
+
+/// Two library columns correlated beyond this (with the model's columns projected out) are one
+/// function on the plan's dwells: the library reports them together.
+constexpr double kAliasCorrelation = 0.999;
 
 struct LibraryFit {
   int candidates = 0;            // library terms tried
