@@ -127,6 +127,19 @@ Eigen::VectorXd solve_with_prior(const std::vector<WhiteDwell>& dwells, const Ei
   return N.ldlt().solve(b);
 }
 
+// z^T S^-1 z for the whitened prediction error z of dwell i from the others: S = I + A_i N_-i^-1
+// A_i^T, N_-i the other dwells' normal matrix with the prior.
+double predictive_chi2(const std::vector<WhiteDwell>& dwells, const Eigen::VectorXd& p0,
+                       std::size_t i, const Eigen::VectorXd& z) {
+  Eigen::MatrixXd N = p0.cwiseInverse().cwiseAbs2().asDiagonal();
+  for (std::size_t k = 0; k < dwells.size(); ++k)
+    if (k != i) N += dwells[k].A.transpose() * dwells[k].A;
+  const Eigen::MatrixXd& A = dwells[i].A;
+  const Eigen::MatrixXd S =
+      Eigen::MatrixXd::Identity(A.rows(), A.rows()) + A * N.ldlt().solve(A.transpose());
+  return z.dot(S.ldlt().solve(z));
+}
+
 // Fit, residuals and leave-one-dwell-out prediction of one parameter set.
 FitFigures figures(const StaticDesign& design, const std::vector<int>& parameters,
                    bool heldout = true) {
@@ -156,6 +169,7 @@ FitFigures figures(const StaticDesign& design, const std::vector<int>& parameter
       (gyro ? nhg : nha) += 1;
     }
     hz += z.squaredNorm();
+    if (heldout) f.heldout_predictive_chi2 += predictive_chi2(dwells, p0, i, z);
     nz += static_cast<int>(z.size());
     inputs += static_cast<int>(w.rows.size());
   }
@@ -165,6 +179,7 @@ FitFigures figures(const StaticDesign& design, const std::vector<int>& parameter
   f.heldout_gyro = nhg ? std::sqrt(hg / nhg) : 0.0;
   f.heldout = nz ? std::sqrt(hz / nz) : 0.0;
   f.heldout_chi2 = hz;
+  f.heldout_inputs = heldout ? nz : 0;
   f.heldout_dwells = static_cast<int>(dwells.size());
   f.log_likelihood = -0.5 * f.chi2;
   f.bic = f.chi2 + f.fit.rank * std::log(std::max(1, inputs));

@@ -43,11 +43,15 @@ struct DwellResidual {
 /// Fit figures of one parameter set.
 struct FitFigures {
   Stage2Result fit;
-  double chi2 = 0.0;           // whitened residual sum of squares
-  double accel_rms = 0.0;      // m/s^2: RMS of the accelerometer residuals over dwells, axes
-  double gyro_rms = 0.0;       // rad/s
-  double heldout = 0.0;        // RMS of the leave-one-dwell-out prediction error, in sigmas
-  double heldout_chi2 = 0.0;   // its sum of squares (whitened): the held-out dwells' chi-square
+  double chi2 = 0.0;          // whitened residual sum of squares
+  double accel_rms = 0.0;     // m/s^2: RMS of the accelerometer residuals over dwells, axes
+  double gyro_rms = 0.0;      // rad/s
+  double heldout = 0.0;       // RMS of the leave-one-dwell-out prediction error, in sigmas
+  double heldout_chi2 = 0.0;  // its sum of squares (whitened): the held-out dwells' chi-square
+  /// The same prediction errors whitened by their predictive covariance (noise plus the other
+  /// dwells' uncertainty of the prediction): chi-square of heldout_inputs dof when the model holds.
+  double heldout_predictive_chi2 = 0.0;
+  int heldout_inputs = 0;
   double heldout_accel = 0.0;  // m/s^2, same in the sensor's units
   double heldout_gyro = 0.0;   // rad/s
   int heldout_dwells = 0;      // dwells whose prediction the others determine

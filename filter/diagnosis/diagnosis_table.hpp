@@ -100,7 +100,10 @@ struct ResidualCheck {
   double dwells_chi2 = 0.0;
   int dwells_dof = 0;
   double dwells_quantile = 0.0;  // the chi-square quantile of dwells_dof at kResidualLevel
-  bool dwells_hold = true;
+  bool dwells_hold = true;       // the in-sample chi2 within its quantile
+  double heldout_chi2 = 0.0;     // the held-out dwells' predictive chi-square (reported only)
+  int heldout_inputs = 0;
+  double heldout_quantile = 0.0;
   bool filter = false;  // the filter ran
   double nis_per_dof = 0.0;
   bool filter_holds = true;         // NIS per dof within kNisPerDofLimit
