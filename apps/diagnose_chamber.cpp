@@ -68,6 +68,12 @@ void print_thermal_findings(const ThermalDiagnosis& d) {
           m.c_str());
   for (const auto& t : d.not_testable)
     std::printf("Not testable on these soaks: %s (%s)\n", t.family.c_str(), t.not_testable.c_str());
+  if (d.unexplained)
+    std::printf(
+        "Unexplained: with the findings the soaks' fit is still chi2 %.1f on %d dof (p %.2g): no "
+        "thermal family explains the rest; the sigmas above are scaled by %.2f\n",
+        d.final_fit.chi2, d.final_fit.dof, d.final_fit.p_value, d.sigma_scale);
+  for (const auto& s : d.stops) std::printf("Stop: %s\n", s.c_str());
 }
 
 // A table log's temperature span below which it is one temperature for the diagnosis.

@@ -57,7 +57,11 @@ void print(const HandheldDiagnosisInput& in, const HandheldDiagnosisFiles& files
       r.initial.accel_rms / u.accel_si, u.accel.c_str(), r.initial.gyro_rms / u.gyro_si,
       u.gyro.c_str(), r.initial.turn_rms / units::deg);
   if (r.findings.empty())
-    std::printf("Findings: none (no candidate significant at the family-wise level %g)\n", r.alpha);
+    std::printf("Findings: none (%s at the family-wise level %g)\n",
+                r.rejected.empty() ? "no candidate significant"
+                                   : "the significant candidate is refused by the held-out data",
+                r.alpha);
+  for (const auto& s : r.stops) std::printf("Unexplained: %s\n", s.c_str());
   const FitFigures* before = &r.initial;
   for (const auto& f : r.findings) {
     std::printf(

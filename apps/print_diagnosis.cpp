@@ -10,10 +10,37 @@ namespace sinscal::cli {
 
 namespace {
 
-// The dwells' residual chi2 per dof above which the output cautions that the noise model does
-// not hold (a clean nav-fog session: 0.7-1.2; a clean MEMS session, bias instability unmodelled
-// by the dwells: 5).
-constexpr double kNoiseModelCaution = 2.5;
+// The final model against its noise model, what it leaves unexplained, every stop.
+void print_verdict(const TableDiagnosis& d) {
+  const ResidualCheck& c = d.check;
+  std::printf("Residual with the findings: dwells chi2 %.4g on %d dof (99 %% quantile %.4g)%s",
+              c.dwells_chi2, c.dwells_dof, c.dwells_quantile,
+              c.dwells_hold ? "" : " REJECTS the noise model");
+  if (c.filter)
+    std::printf("; filter NIS per dof %.3f%s", c.nis_per_dof,
+                c.filter_holds ? "" : " REJECTS the noise model");
+  std::printf("\n");
+  if (d.unexplained.present) {
+    std::printf("Unexplained: what the findings leave (no family of the catalog explains it):\n");
+    for (const auto& s : d.unexplained.signature) std::printf("   %s\n", s.c_str());
+    if (const auto& lib = d.unexplained.library) {
+      if (lib->terms.empty())
+        std::printf(
+            "   No term of the out-of-catalog library (%d terms) confirmed on held-out dwells\n",
+            lib->candidates);
+      for (const auto& t : lib->terms)
+        std::printf("   Library term: %s (held-out dwells chi2 %.4g -> %.4g)\n", t.text().c_str(),
+                    lib->heldout_before, lib->heldout_after);
+      if (!lib->how_to_add.empty()) std::printf("   How: %s\n", lib->how_to_add.c_str());
+    }
+    if (c.dwells_sigma_scale > 1.0 || c.filter_sigma_scale > 1.0)
+      std::printf(
+          "   The sigmas below are scaled by the unexplained residual (dwells x%.2f, filter "
+          "x%.2f)\n",
+          c.dwells_sigma_scale, c.filter_sigma_scale);
+  }
+  for (const auto& s : d.stops) std::printf("Stop: %s\n", s.c_str());
+}
 
 }  // namespace
 
@@ -23,15 +50,11 @@ void print_diagnosis(const TableDiagnosis& d) {
               r.initial_parameters.size(), r.initial.fit.chi2_per_dof, r.residuals.size());
   if (d.turns) std::printf("; the filter's NIS per dof %.3f", d.turns->initial_nis_per_dof);
   std::printf("\n");
-  if (r.final_fit.fit.chi2_per_dof > kNoiseModelCaution)
-    std::printf(
-        "Caution: with the findings, the dwells' residual is still %.1f times its noise model "
-        "(unmodelled noise such "
-        "as bias instability, or errors beyond the linearization): the tests rescale by it, "
-        "but a finding without a held-out gain is doubtful\n",
-        r.final_fit.fit.chi2_per_dof);
+  print_verdict(d);
   if (d.findings.empty())
-    std::printf("Findings: none (no candidate significant at the family-wise level %g)\n", r.alpha);
+    std::printf("Findings: none (%s)\n", d.unexplained.present
+                                             ? "no family of the catalog explains the residual"
+                                             : "no candidate significant at the family-wise level");
   int number = 0;
   for (const auto& f : d.findings) {
     std::printf("%d. %s: %s\n", ++number, finding_title(f).c_str(), finding_summary(f).c_str());
@@ -65,7 +88,8 @@ void print_diagnosis(const TableDiagnosis& d) {
         for (const auto& k : round)
           turns_tested = turns_tested || (k.family == c.family && k.dof > 0);
     if (turns_tested) continue;  // the turns separate it
-    std::printf("Not separable on this plan: %s (%zu of its components); separated by %s\n",
+    std::printf("Not separable on this plan%s: %s (%zu of its components); separated by %s\n",
+                d.unexplained.present ? " (whatever the unexplained residual holds)" : "",
                 c.family.c_str(), c.aliased.size(), c.separated_by.c_str());
   }
 }

@@ -60,7 +60,52 @@ namespace {
 json heldout_turns_json(const std::optional<HeldoutTurns>& h) {
   if (h && !h->failed.empty()) return {{"turns", 0}, {"failed", h->failed}};
   if (!h || h->turns == 0) return nullptr;
-  return {{"turns", h->turns}, {"sigmas", h->sigmas}, {"velocity_mm_per_s", h->velocity / 1e-3}};
+  return {{"turns", h->turns},
+          {"sigmas", h->sigmas},
+          {"velocity_mm_per_s", h->velocity / 1e-3},
+          {"chi2", h->chi2},
+          {"dof", h->dof}};
+}
+
+// The final model against its noise model, what is unexplained, the stops.
+void add_verdict(json& j, const TableDiagnosis& d) {
+  const ResidualCheck& c = d.check;
+  j["residual_check"] = {{"dwells_chi2", c.dwells_chi2},
+                         {"dwells_dof", c.dwells_dof},
+                         {"dwells_quantile_99", c.dwells_quantile},
+                         {"dwells_hold", c.dwells_hold},
+                         {"filter", c.filter},
+                         {"nis_per_dof", c.nis_per_dof},
+                         {"filter_holds", c.filter_holds},
+                         {"dwells_sigma_scale", c.dwells_sigma_scale},
+                         {"filter_sigma_scale", c.filter_sigma_scale}};
+  json rejected = json::array();
+  for (const auto& r : d.rejected)
+    rejected.push_back({{"family", r.finding.family},
+                        {"round", r.finding.round},
+                        {"p_value", r.finding.p_value},
+                        {"reason", r.reason}});
+  j["unexplained"] = {{"present", d.unexplained.present},
+                      {"signature", d.unexplained.signature},
+                      {"rejected", rejected}};
+  if (const auto& lib = d.unexplained.library) {
+    json terms = json::array();
+    for (const auto& t : lib->terms)
+      terms.push_back({{"sensor", t.sensor},
+                       {"axis", t.axis},
+                       {"formula", t.formula},
+                       {"unit", t.unit},
+                       {"value", t.value},
+                       {"sigma", t.sigma},
+                       {"text", t.text()}});
+    j["unexplained"]["library"] = {{"candidates", lib->candidates},
+                                   {"heldout_chi2_before", lib->heldout_before},
+                                   {"heldout_chi2_after", lib->heldout_after},
+                                   {"heldout_gain_needed", lib->heldout_needed},
+                                   {"terms", terms},
+                                   {"how_to_add", lib->how_to_add}};
+  }
+  j["stops"] = d.stops;
 }
 
 // The extended calibration's coefficients of a finding, in the family's unit.
@@ -196,6 +241,7 @@ json diagnosis_json(const TableDiagnosis& d, const std::string& session) {
   for (const auto& w : r.residuals) dwells.push_back(dwell_json(w));
   j["dwells"] = dwells;
   if (d.turns) add_kalman_diagnosis(j, *d.turns, false);
+  add_verdict(j, d);
   return j;
 }
 
@@ -284,12 +330,23 @@ std::string diagnosis_markdown(const TableDiagnosis& d, const std::string& sessi
   if (d.turns)
     m << " The Kalman filter with the same model: NIS per dof "
       << fixed(d.turns->initial_nis_per_dof, 3) << ".";
-  if (r.final_fit.fit.chi2_per_dof > 2.5)
-    m << "\n\n**Caution**: with the findings, the dwells' residual is still "
-      << fixed(r.final_fit.fit.chi2_per_dof, 1)
-      << " times its noise model (unmodelled noise such as bias instability, or errors beyond the "
-         "linearization): the tests rescale by it (F), but a finding without a held-out gain is "
-         "doubtful.";
+  const ResidualCheck& c = d.check;
+  m << "\n\nWith the findings, the dwells' chi2 is " << fixed(c.dwells_chi2, 1) << " on "
+    << c.dwells_dof << " dof (99 % quantile " << fixed(c.dwells_quantile, 1) << ")";
+  if (c.filter) m << ", the filter's NIS per dof " << fixed(c.nis_per_dof, 3);
+  m << (c.holds() ? ": the noise model holds." : ": the noise model does not hold.");
+  if (d.unexplained.present) {
+    m << "\n\n**Unexplained** (no family of the catalog explains it; the sigmas are scaled by the "
+         "residual: dwells x"
+      << fixed(c.dwells_sigma_scale, 2) << ", filter x" << fixed(c.filter_sigma_scale, 2)
+      << "):\n\n";
+    for (const auto& s : d.unexplained.signature) m << "- " << s << "\n";
+    if (d.unexplained.library)
+      for (const auto& t : d.unexplained.library->terms)
+        m << "- library term: " << t.text() << "\n";
+  }
+  for (const auto& s : d.stops)
+    m << (&s == &d.stops.front() ? "\n\n" : "\n") << "Stop: " << s << ".";
   m << "\n\nEach round tests every candidate of the dwells" << (d.turns ? " and of the turns" : "")
     << " against one model at the family-wise level " << r.alpha
     << " (Bonferroni over the round's tests); the dwells' finding comes first, the "

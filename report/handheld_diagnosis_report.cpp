@@ -123,6 +123,10 @@ json handheld_diagnosis_json(const HandheldDiagnosisInput& in) {
   j["findings"] = findings_json(u, r);
   j["not_separable"] = not_separable_json(r);
   j["ambiguous"] = ambiguous_json(r);
+  json rejected = json::array();
+  for (const auto& c : r.rejected)
+    rejected.push_back({{"family", c.family}, {"p_value", c.p_value}});
+  j["unexplained"] = {{"rejected", rejected}, {"stops", r.stops}};
   j["noise"] = {{"pose", in.diagnosis.noise_pose}, {"candidates", noise_json(in.diagnosis)}};
   j["rounds"] = rounds_json(u, r);
   j["validation"] = validation_json(u, in);

@@ -88,6 +88,11 @@ json thermal_diagnosis_json(const ThermalDiagnosis& d, const std::string& chambe
   json untested = json::array();
   for (const auto& t : d.not_testable) untested.push_back(test_json(t));
   j["not_testable"] = untested;
+  json rejected = json::array();
+  for (const auto& t : d.rejected) rejected.push_back(test_json(t));
+  j["unexplained"] = {
+      {"present", d.unexplained}, {"sigma_scale", d.sigma_scale}, {"rejected", rejected}};
+  j["stops"] = d.stops;
   j["final"] = {{"model",
                  [&] {
                    std::vector<std::string> m = d.model;

@@ -34,6 +34,7 @@ struct WhiteDwell {
   Eigen::MatrixXd H;  // H (physical units)
   Eigen::VectorXd u;
   std::vector<int> rows;  // which of the 6 inputs
+  Eigen::MatrixXd L;      // R = L L^T
 };
 
 class StaticDesign {
@@ -80,6 +81,7 @@ class StaticDesign {
                                     std::to_string(in.dwell.index) + " is not positive definite");
       w.A = llt.matrixL().solve(w.H);
       w.y = llt.matrixL().solve(w.u);
+      w.L = llt.matrixL();
       out.push_back(std::move(w));
     }
     return out;
@@ -125,6 +127,19 @@ Eigen::VectorXd solve_with_prior(const std::vector<WhiteDwell>& dwells, const Ei
   return N.ldlt().solve(b);
 }
 
+// z^T S^-1 z for the whitened prediction error z of dwell i from the others: S = I + A_i N_-i^-1
+// A_i^T, N_-i the other dwells' normal matrix with the prior.
+double predictive_chi2(const std::vector<WhiteDwell>& dwells, const Eigen::VectorXd& p0,
+                       std::size_t i, const Eigen::VectorXd& z) {
+  Eigen::MatrixXd N = p0.cwiseInverse().cwiseAbs2().asDiagonal();
+  for (std::size_t k = 0; k < dwells.size(); ++k)
+    if (k != i) N += dwells[k].A.transpose() * dwells[k].A;
+  const Eigen::MatrixXd& A = dwells[i].A;
+  const Eigen::MatrixXd S =
+      Eigen::MatrixXd::Identity(A.rows(), A.rows()) + A * N.ldlt().solve(A.transpose());
+  return z.dot(S.ldlt().solve(z));
+}
+
 // Fit, residuals and leave-one-dwell-out prediction of one parameter set.
 FitFigures figures(const StaticDesign& design, const std::vector<int>& parameters,
                    bool heldout = true) {
@@ -154,6 +169,7 @@ FitFigures figures(const StaticDesign& design, const std::vector<int>& parameter
       (gyro ? nhg : nha) += 1;
     }
     hz += z.squaredNorm();
+    if (heldout) f.heldout_predictive_chi2 += predictive_chi2(dwells, p0, i, z);
     nz += static_cast<int>(z.size());
     inputs += static_cast<int>(w.rows.size());
   }
@@ -162,6 +178,8 @@ FitFigures figures(const StaticDesign& design, const std::vector<int>& parameter
   f.heldout_accel = nha ? std::sqrt(ha / nha) : 0.0;
   f.heldout_gyro = nhg ? std::sqrt(hg / nhg) : 0.0;
   f.heldout = nz ? std::sqrt(hz / nz) : 0.0;
+  f.heldout_chi2 = hz;
+  f.heldout_inputs = heldout ? nz : 0;
   f.heldout_dwells = static_cast<int>(dwells.size());
   f.log_likelihood = -0.5 * f.chi2;
   f.bic = f.chi2 + f.fit.rank * std::log(std::max(1, inputs));
@@ -369,6 +387,20 @@ std::vector<CandidateTest> not_separable(const std::vector<CandidateTest>& last_
   return out;
 }
 
+std::string heldout_refusal(const FitFigures& before, const FitFigures& after, int dof,
+                            double alpha) {
+  if (before.heldout_dwells == 0 || after.heldout_dwells == 0 || !(after.heldout_chi2 > 0.0))
+    return "";
+  const double scale = std::max(1.0, after.heldout * after.heldout);
+  const double gain = (before.heldout_chi2 - after.heldout_chi2) / scale;
+  const double q = boost::math::quantile(boost::math::chi_squared(std::max(1, dof)), 1.0 - alpha);
+  if (gain >= q) return "";
+  char b[200];
+  std::snprintf(b, sizeof b, "the held-out chi-square gains %.3g%s (%.3g needed)", gain,
+                scale > 1.0 ? " in its residual's scale" : "", q);
+  return b;
+}
+
 void run_rounds(DiagnosisReport& rep, int max_findings, const RoundRunner& run_round,
                 const BestCompleter& complete) {
   std::vector<int> current = rep.initial_parameters;
@@ -385,6 +417,14 @@ void run_rounds(DiagnosisReport& rep, int max_findings, const RoundRunner& run_r
     if (!best) break;
     if (!best->named) {
       rep.ambiguous.push_back(*best);
+      break;
+    }
+    const std::string refused = heldout_refusal(now, best->with, best->dof, rep.alpha);
+    if (!refused.empty()) {
+      for (auto& c : rep.rounds.back()) c.named = false;
+      rep.rejected.push_back(*best);
+      rep.stops.push_back(best->family + ", the most significant candidate, is not named: " +
+                          refused + "; the search stops, its residual unexplained");
       break;
     }
     rep.findings.push_back(*best);
@@ -501,6 +541,17 @@ FitFigures DwellTests::fit(const std::vector<int>& parameters) const {
 std::vector<CandidateTest> DwellTests::round(const std::vector<int>& current,
                                              const FitFigures& now) const {
   return run_round(StaticDesign(inputs_, site_, base_), current, now, options_);
+}
+
+std::vector<WhitenedDwell> DwellTests::whitened(const std::vector<int>& parameters) const {
+  std::vector<WhitenedDwell> out;
+  for (auto& w : StaticDesign(inputs_, site_, base_).whiten(parameters))
+    out.push_back({std::move(w.A), std::move(w.L), std::move(w.y), std::move(w.rows)});
+  return out;
+}
+
+Eigen::VectorXd DwellTests::prior(const std::vector<int>& parameters) const {
+  return prior_sigmas(parameters, base_.base_attitude);
 }
 
 std::vector<DwellResidual> DwellTests::residuals(const std::vector<int>& initial,

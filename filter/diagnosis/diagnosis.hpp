@@ -43,10 +43,15 @@ struct DwellResidual {
 /// Fit figures of one parameter set.
 struct FitFigures {
   Stage2Result fit;
-  double chi2 = 0.0;           // whitened residual sum of squares
-  double accel_rms = 0.0;      // m/s^2: RMS of the accelerometer residuals over dwells, axes
-  double gyro_rms = 0.0;       // rad/s
-  double heldout = 0.0;        // RMS of the leave-one-dwell-out prediction error, in sigmas
+  double chi2 = 0.0;          // whitened residual sum of squares
+  double accel_rms = 0.0;     // m/s^2: RMS of the accelerometer residuals over dwells, axes
+  double gyro_rms = 0.0;      // rad/s
+  double heldout = 0.0;       // RMS of the leave-one-dwell-out prediction error, in sigmas
+  double heldout_chi2 = 0.0;  // its sum of squares (whitened): the held-out dwells' chi-square
+  /// The same prediction errors whitened by their predictive covariance (noise plus the other
+  /// dwells' uncertainty of the prediction): chi-square of heldout_inputs dof when the model holds.
+  double heldout_predictive_chi2 = 0.0;
+  int heldout_inputs = 0;
   double heldout_accel = 0.0;  // m/s^2, same in the sensor's units
   double heldout_gyro = 0.0;   // rad/s
   int heldout_dwells = 0;      // dwells whose prediction the others determine
@@ -130,6 +135,9 @@ struct DiagnosisReport {
   std::vector<DwellResidual> residuals;
   int inputs = 0;  // equivalent inputs over all dwells
   double alpha = 0.0;
+  /// The round's best the held-out data refuse (run_rounds): not named, the search stopped.
+  std::vector<CandidateTest> rejected;
+  std::vector<std::string> stops;  // why each refused candidate was refused
 };
 
 /// The statistics shared by the table and hand-held diagnoses.
@@ -146,6 +154,12 @@ CandidateTest* best_of(std::vector<CandidateTest>& round, double alpha);
 /// The most significant candidate with those that explain the residual as well; named unless
 /// another family's does.
 CandidateTest* choose(std::vector<CandidateTest>& round, double alpha);
+/// Why the held-out figures refuse an extension of `dof` parameters from `before` to `after`
+/// (empty: they confirm it): the held-out chi-square must fall by at least the chi-square quantile
+/// of dof at 1 - alpha, measured in the extended model's held-out residual scale where that
+/// exceeds 1 (as the F test scales the in-sample statistic). Held-out figures absent: empty.
+std::string heldout_refusal(const FitFigures& before, const FitFigures& after, int dof,
+                            double alpha);
 /// What could not be separated (aliased components), one entry per family.
 std::vector<CandidateTest> not_separable(const std::vector<CandidateTest>& last_round);
 /// Catalog indices of the components of `families` (empty: every extended family of the family
@@ -164,6 +178,14 @@ void run_rounds(DiagnosisReport& rep, int max_findings, const RoundRunner& run_r
                 const BestCompleter& complete = {});
 }  // namespace diagnosis_detail
 
+/// One dwell's estimated inputs whitened (R = L L^T): A = L^-1 H (the model's columns, then the
+/// table base's three when it is estimated), y = L^-1 u; `rows` which of the 6 NED inputs.
+struct WhitenedDwell {
+  Eigen::MatrixXd A, L;
+  Eigen::VectorXd y;
+  std::vector<int> rows;
+};
+
 /// The static dwells' side of a table diagnosis: fits of parameter sets to stage 1's equivalent
 /// inputs and the tests of candidates against a current model (filter/diagnosis/diagnosis_table.hpp
 /// runs the rounds).
@@ -181,6 +203,12 @@ class DwellTests {
   /// Per-dwell residuals under the initial and the final parameter sets.
   std::vector<DwellResidual> residuals(const std::vector<int>& initial,
                                        const std::vector<int>& final) const;
+  /// The dwells whitened for the model `parameters`, and the weak prior sigmas (SI) of its
+  /// columns (filter/diagnosis/term_library.hpp fits what is left).
+  std::vector<WhitenedDwell> whitened(const std::vector<int>& parameters) const;
+  Eigen::VectorXd prior(const std::vector<int>& parameters) const;
+  const std::vector<EquivalentInputs>& dwell_inputs() const { return inputs_; }
+  const Site& site() const { return site_; }
   int inputs() const { return inputs_count_; }
   const Stage2Options& base() const { return base_; }
   const DiagnosisOptions& options() const { return options_; }

@@ -146,11 +146,15 @@ HeldoutTurns heldout_turns(const Session& session, const CalibratorOptions& opti
     try {
       r = run_checked(session, o, "with turns held out");
     } catch (const std::runtime_error& e) {
-      return {0, e.what(), 0.0, 0.0};
+      HeldoutTurns failed;
+      failed.failed = e.what();
+      return failed;
     }
     for (const auto& p : r.holdout) {
       if (p.dof == 0) continue;
       nis += p.nis / p.dof;
+      h.chi2 += p.nis;
+      h.dof += p.dof;
       vel += p.velocity_innovation.squaredNorm();
       ++scored;
     }

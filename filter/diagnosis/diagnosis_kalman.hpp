@@ -64,6 +64,8 @@ struct HeldoutTurns {
   std::string failed;     // a run with turns held out diverged (errors too large to predict)
   double sigmas = 0.0;    // RMS of sqrt(NIS / dof) of those updates (1: as predicted)
   double velocity = 0.0;  // m/s: RMS of the zero-velocity innovation's norm
+  double chi2 = 0.0;      // the scored updates' NIS summed (the held-out turns' chi-square)
+  int dof = 0;            // their measurement dimensions summed
 };
 
 /// The held-out turns of `options`' model on the session (two runs of the filter). Turns with
@@ -80,6 +82,17 @@ class TurnTests {
   TurnTests(const Session& session, const CalibratorOptions& base,
             const KalmanDiagnosisOptions& options);
   const KalmanRun& now() const { return now_; }
+  /// The current model and its run, to return to when an extension is withdrawn.
+  struct State {
+    CalibratorOptions model;
+    KalmanRun now;
+  };
+  State state() const { return {model_, now_}; }
+  void restore(State s) {
+    model_ = std::move(s.model);
+    now_ = std::move(s.now);
+    last_round_.clear();
+  }
   const CalibratorOptions& model() const { return model_; }
   /// Tests each family against the current model (the runs are kept for extend()). Throws
   /// std::invalid_argument for a family that is not extended or already in the model; a run

@@ -10,6 +10,7 @@
 
 #include "filter/diagnosis/diagnosis.hpp"
 #include "filter/diagnosis/diagnosis_kalman.hpp"
+#include "filter/diagnosis/term_library.hpp"
 
 namespace sinscal {
 
@@ -51,7 +52,7 @@ std::optional<ImuErrorModel> linearize(TurnModel& model, int passes, std::string
 struct FindingCoefficient {
   int catalog = 0;
   double value = 0.0;  // SI
-  double sigma = 0.0;  // SI
+  double sigma = 0.0;  // SI (scaled by the unexplained residual, ResidualCheck)
   /// "kalman" (the filter with the extended model), "dwells" (the dwells' fit), or "" when
   /// neither determines it alone (see the finding's combinations).
   std::string source;
@@ -92,6 +93,48 @@ struct TableFinding {
   std::optional<HeldoutTurns> turns_before, turns_after;
 };
 
+/// The final model's residual against its noise model: whether the findings leave the dwells and
+/// the turns as the noise model predicts. When they do not, the reported sigmas are scaled by the
+/// excess (sqrt of chi2 per dof) and the rest is "unexplained".
+struct ResidualCheck {
+  double dwells_chi2 = 0.0;
+  int dwells_dof = 0;
+  double dwells_quantile = 0.0;  // the chi-square quantile of dwells_dof at kResidualLevel
+  bool dwells_hold = true;       // the in-sample chi2 within its quantile
+  double heldout_chi2 = 0.0;     // the held-out dwells' predictive chi-square (reported only)
+  int heldout_inputs = 0;
+  double heldout_quantile = 0.0;
+  bool filter = false;  // the filter ran
+  double nis_per_dof = 0.0;
+  bool filter_holds = true;         // NIS per dof within kNisPerDofLimit
+  double dwells_sigma_scale = 1.0;  // sqrt(chi2 / dof) where the dwells do not hold, else 1
+  double filter_sigma_scale = 1.0;  // sqrt(NIS per dof) where the filter does not hold, else 1
+  bool holds() const { return dwells_hold && filter_holds; }
+};
+
+/// The level of the residual's chi-square test (the final model against its noise model).
+constexpr double kResidualLevel = 0.99;
+/// The filter's NIS per dof above this rejects its noise model: the chi-square quantile per dof of
+/// the thousands of updates of a session is within a few percent of 1 (a clean session: 0.4-0.8).
+constexpr double kNisPerDofLimit = 1.0;
+
+/// A finding the in-sample test took but the held-out data contradict: not named, and the
+/// diagnosis stops there (its residual is "unexplained").
+struct RejectedFinding {
+  TableFinding finding;
+  std::string reason;  // "the held-out dwells' chi-square gains 2.1 (11.3 needed)", ...
+};
+
+/// What the final model leaves unexplained, by where it shows.
+struct Unexplained {
+  bool present = false;
+  /// Where: "dwells, accel down: chi2 310 on 38 inputs; largest at ..."; "turns: NIS per dof ..."
+  std::vector<std::string> signature;
+  /// The dwells' residual fitted against the out-of-catalog library (term_library.hpp); its terms
+  /// empty when none is confirmed on held-out dwells.
+  std::optional<LibraryFit> library;
+};
+
 struct TableDiagnosis {
   DiagnosisReport dwells;  // the dwells' rounds, their findings, what they cannot separate
   /// The filter's rounds (aligned with the dwells' by round; a round with no turn candidate is
@@ -99,6 +142,12 @@ struct TableDiagnosis {
   std::optional<KalmanDiagnosis> turns;
   std::vector<TableFinding> findings;  // the story, in order
   int rounds = 0;
+  std::vector<RejectedFinding> rejected;  // the best candidate the held-out data contradict
+  ResidualCheck check;                    // the final model against its noise model
+  Unexplained unexplained;
+  /// Every stop and every limit of the search: the findings cap reached with candidates still
+  /// significant, families not tested on this kind of session, a name the held-out data refuse.
+  std::vector<std::string> stops;
 };
 
 /// Diagnoses a table session from its stage-1 inputs, starting from `base` (the session's model);

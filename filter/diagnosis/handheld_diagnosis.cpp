@@ -389,6 +389,7 @@ class HandheldFitter {
       t2 += t.squaredNorm() * std::pow(d_.turn_sigma(p + 1), 2);
     }
     f.heldout = std::sqrt(z2 / nz);
+    f.heldout_chi2 = z2;
     f.heldout_accel = std::sqrt(g2 / static_cast<double>(P));
     f.heldout_gyro = std::sqrt(w2 / (3.0 * static_cast<double>(P)));
     f.heldout_turn = P > 1 ? std::sqrt(t2 / static_cast<double>(P - 1)) : 0.0;
@@ -626,6 +627,7 @@ HandheldDiagnosis diagnose_handheld(const std::vector<ImuReading>& readings,
   auto add_heldout = [&](const std::vector<int>& with, CandidateTest& best) {
     const FitFigures h = fit.figures(with, true);
     best.with.heldout = h.heldout;
+    best.with.heldout_chi2 = h.heldout_chi2;
     best.with.heldout_accel = h.heldout_accel;
     best.with.heldout_gyro = h.heldout_gyro;
     best.with.heldout_turn = h.heldout_turn;

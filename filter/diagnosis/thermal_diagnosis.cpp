@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <set>
@@ -87,6 +88,7 @@ HeldoutSoaks heldout(const std::vector<SoakEstimate>& soaks,
     out.per_soak.push_back(per);
     out.temperature_c.push_back(e.gyro_temperature_c);
     sum += per * per;
+    out.chi2 += std::max(0.0, d2);
   }
   out.soaks = static_cast<int>(soaks.size());
   out.sigmas = std::sqrt(sum / static_cast<double>(soaks.size()));
@@ -150,6 +152,45 @@ std::vector<std::string> candidate_families(const ThermalDiagnosisOptions& o) {
   return out;
 }
 
+// One round: every remaining candidate against the model, the most significant (-1: none).
+struct ThermalRound {
+  std::vector<ThermalCandidateTest> tests, not_testable;
+  std::vector<ThermalFit> fits;
+  int best = -1;
+};
+
+ThermalRound test_round(const std::vector<SoakEstimate>& soaks,
+                        const std::vector<std::string>& model,
+                        const std::set<std::string>& estimated,
+                        const std::vector<std::string>& remaining, const ThermalFit& now, double t0,
+                        double alpha) {
+  ThermalRound r;
+  for (const auto& c : remaining) {
+    const std::string why = not_testable(c, model, estimated, soaks.size());
+    if (!why.empty()) {
+      ThermalCandidateTest t;
+      t.family = c;
+      t.not_testable = why;
+      r.not_testable.push_back(t);
+      continue;
+    }
+    std::vector<std::string> extended = model;
+    extended.push_back(c);
+    r.fits.push_back(fit_soaks_with(soaks, extended, t0));
+    r.tests.push_back(test_candidate(c, now, r.fits.back(), alpha));
+  }
+  const double threshold = alpha / static_cast<double>(std::max<std::size_t>(1, r.tests.size()));
+  for (std::size_t i = 0; i < r.tests.size(); ++i) {
+    auto& t = r.tests[i];
+    t.threshold = threshold;
+    t.significant = t.dof > 0 && t.log10_p < std::log10(threshold);
+    if (t.significant &&
+        (r.best < 0 || t.log10_p < r.tests[static_cast<std::size_t>(r.best)].log10_p))
+      r.best = static_cast<int>(i);
+  }
+  return r;
+}
+
 }  // namespace
 
 HeldoutSoaks heldout_soaks(const std::vector<SoakEstimate>& soaks,
@@ -177,60 +218,65 @@ ThermalDiagnosis diagnose_soaks(const std::vector<SoakEstimate>& soaks, double t
   d.initial_dof = now.dof;
   d.initial_heldout = heldout_soaks(soaks, model, t0);
   HeldoutSoaks current = d.initial_heldout;
-  for (int round = 1; round <= options.max_findings; ++round) {
-    std::vector<ThermalCandidateTest> tests;
-    std::vector<ThermalFit> fits;
-    d.not_testable.clear();
-    for (const auto& c : remaining) {
-      const std::string why = not_testable(c, model, estimated, soaks.size());
-      if (!why.empty()) {
-        ThermalCandidateTest t;
-        t.family = c;
-        t.not_testable = why;
-        d.not_testable.push_back(t);
-        continue;
-      }
-      std::vector<std::string> extended = model;
-      extended.push_back(c);
-      fits.push_back(fit_soaks_with(soaks, extended, t0));
-      tests.push_back(test_candidate(c, now, fits.back(), options.alpha));
-    }
-    if (tests.empty()) break;
-    const double threshold = options.alpha / static_cast<double>(tests.size());
-    int best = -1;
-    for (std::size_t i = 0; i < tests.size(); ++i) {
-      tests[i].threshold = threshold;
-      tests[i].significant = tests[i].dof > 0 && tests[i].log10_p < std::log10(threshold);
-      if (tests[i].significant &&
-          (best < 0 || tests[i].log10_p < tests[static_cast<std::size_t>(best)].log10_p))
-        best = static_cast<int>(i);
-    }
-    if (best < 0) {
-      d.rounds.push_back(tests);
+  for (int round = 1;; ++round) {
+    ThermalRound r = test_round(soaks, model, estimated, remaining, now, t0, options.alpha);
+    d.not_testable = r.not_testable;
+    if (round > options.max_findings) {  // one more round: what the cap leaves significant
+      if (r.best >= 0)
+        d.stops.push_back("the findings cap (" + std::to_string(options.max_findings) +
+                          ") was reached; still significant: " +
+                          r.tests[static_cast<std::size_t>(r.best)].family);
       break;
     }
-    tests[static_cast<std::size_t>(best)].named = true;
-    d.rounds.push_back(tests);
+    if (r.tests.empty()) break;
+    if (r.best < 0) {
+      d.rounds.push_back(r.tests);
+      break;
+    }
+    const auto best = static_cast<std::size_t>(r.best);
     ThermalFinding f;
     f.round = round;
-    f.test = tests[static_cast<std::size_t>(best)];
+    f.test = r.tests[best];
     const std::string family = thermal_family_parts(f.test.family).first;
     f.before = heldout(soaks, model, t0, family, &f.family_error_before);
-    model.push_back(f.test.family);
-    now = fits[static_cast<std::size_t>(best)];
-    f.after = heldout(soaks, model, t0, family, &f.family_error_after);
+    std::vector<std::string> extended = model;
+    extended.push_back(f.test.family);
+    f.after = heldout(soaks, extended, t0, family, &f.family_error_after);
+    if (f.before.soaks > 0 && f.after.soaks > 0 && f.after.chi2 >= f.before.chi2) {
+      d.rounds.push_back(r.tests);
+      d.rejected.push_back(f.test);
+      char b[300];
+      std::snprintf(b, sizeof b,
+                    "round %d: %s was the most significant candidate (p %.2g), but the held-out "
+                    "soaks' chi-square goes from %.4g to %.4g: not named, the search stops",
+                    round, f.test.family.c_str(), f.test.p_value, f.before.chi2, f.after.chi2);
+      d.stops.emplace_back(b);
+      break;
+    }
+    r.tests[best].named = true;
+    f.test.named = true;
+    d.rounds.push_back(r.tests);
+    model = extended;
+    now = r.fits[best];
     current = f.after;
     d.findings.push_back(f);
     remaining.erase(std::find(remaining.begin(), remaining.end(), f.test.family));
   }
   d.final_fit = now;
   d.final_heldout = current;
+  d.unexplained = now.dof > 0 && now.p_value < options.alpha;
+  if (d.unexplained) d.sigma_scale = std::sqrt(now.chi2 / now.dof);
+  d.stops.emplace_back(
+      "only thermal families tested: the non-thermal families (K2, g-sensitivity, scale "
+      "asymmetry, lever arms, time delay, ...) are fitted soak by soak, not tested; diagnose a "
+      "soak's session (soak-K/session.ini) as a table session to test them");
   for (auto& f : d.findings)
     for (std::size_t i = 0; i < now.catalog.size(); ++i)
       if (coefficient_catalog()[static_cast<std::size_t>(now.catalog[i])].family == f.test.family)
-        f.coefficients.push_back({now.catalog[i], now.value(static_cast<Eigen::Index>(i)),
-                                  std::sqrt(now.covariance(static_cast<Eigen::Index>(i),
-                                                           static_cast<Eigen::Index>(i)))});
+        f.coefficients.push_back(
+            {now.catalog[i], now.value(static_cast<Eigen::Index>(i)),
+             d.sigma_scale * std::sqrt(now.covariance(static_cast<Eigen::Index>(i),
+                                                      static_cast<Eigen::Index>(i)))});
   return d;
 }
 

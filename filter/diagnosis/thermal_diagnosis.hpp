@@ -25,6 +25,7 @@ struct ThermalDiagnosisOptions {
 struct HeldoutSoaks {
   int soaks = 0;
   double sigmas = 0.0;                // RMS over the soaks of sqrt(d^2 / m)
+  double chi2 = 0.0;                  // the sum of d^2: the held-out soaks' chi-square
   std::vector<double> per_soak;       // sqrt(d^2 / m) of each
   std::vector<double> temperature_c;  // each soak's gyro temperature (its label)
 };
@@ -74,6 +75,16 @@ struct ThermalDiagnosis {
   std::vector<ThermalCandidateTest> not_testable;
   ThermalFit final_fit;  // the model with the findings
   HeldoutSoaks final_heldout;
+  /// The most significant candidate the held-out soaks refuse (its chi-square not lower with
+  /// it): not named, the search stops there.
+  std::vector<ThermalCandidateTest> rejected;
+  /// The final fit's residual rejects the soaks' covariance (p below alpha): what is left is
+  /// unexplained, and the findings' sigmas are scaled by sigma_scale = sqrt(chi2 / dof).
+  bool unexplained = false;
+  double sigma_scale = 1.0;
+  /// Every stop and limit: the findings cap reached with candidates still significant, the
+  /// families a chamber's soaks do not test.
+  std::vector<std::string> stops;
 };
 
 /// Held-out soaks of the model with `families`: needs at least 3 soaks, and the other soaks to

@@ -1,0 +1,123 @@
+// Effects outside the family catalog, injected into a simulated session's log by test code (the
+// simulator and the estimators never see them): each sample's specific force and rate, read back
+// from the log's increments, get an extra term, and the log is written again. Shared by the
+// out-of-catalog tests and their Monte Carlo matrix (tests/test_diagnosis_open_world.cpp).
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "diagnosis_cases.hpp"
+#include "models/units.hpp"
+#include "rig/timeline.hpp"
+
+namespace sinscal::test {
+
+/// An extra term on one sample: specific force f_b (m/s^2) and rate omega_ib_b (rad/s) at log
+/// time t (s), changed in place.
+using ExtraTerm = std::function<void(double t, Eigen::Vector3d& f_b, Eigen::Vector3d& omega_ib_b)>;
+
+/// Rewrites the native log `path` (increments over 1/rate_hz) with `term` added to each sample.
+inline void inject_into_log(const std::string& path, double rate_hz, const ExtraTerm& term) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot read");
+  std::ostringstream out;
+  std::string line;
+  const double dt = 1.0 / rate_hz;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#' || line[0] == 't') {
+      out << line << "\n";
+      continue;
+    }
+    std::vector<std::string> fields;
+    std::stringstream parts(line);
+    std::string field;
+    while (std::getline(parts, field, ',')) fields.push_back(field);
+    if (fields.size() < 7) throw std::runtime_error(path + ": short row " + line);
+    const double t = std::stod(fields[0]);
+    Eigen::Vector3d w, f;
+    for (int i = 0; i < 3; ++i) {
+      w(i) = std::stod(fields[static_cast<std::size_t>(1 + i)]) / dt;
+      f(i) = std::stod(fields[static_cast<std::size_t>(4 + i)]) / dt;
+    }
+    term(t, f, w);
+    char b[64];
+    out << fields[0];
+    for (int i = 0; i < 3; ++i) {
+      std::snprintf(b, sizeof b, ",%.17g", w(i) * dt);
+      out << b;
+    }
+    for (int i = 0; i < 3; ++i) {
+      std::snprintf(b, sizeof b, ",%.17g", f(i) * dt);
+      out << b;
+    }
+    for (std::size_t k = 7; k < fields.size(); ++k) out << "," << fields[k];
+    out << "\n";
+  }
+  in.close();
+  write_file(path, out.str());
+}
+
+/// One out-of-catalog effect: its name, the term, and the library term that should explain it
+/// (empty: none expected).
+struct OpenWorldEffect {
+  std::string name;
+  ExtraTerm term;
+  /// The library term that explains it on the dwells (filter/diagnosis/term_library.hpp): sensor,
+  /// axis, the formula's beginning and the value in the term's unit; sensor empty: none.
+  std::string sensor;
+  int axis = 0;
+  std::string formula;
+  double value = 0.0;
+};
+
+constexpr double kG = units::g0;
+
+/// The effects of the open-world matrix (issue 33); the bias step at log time mid_s (s).
+inline std::vector<OpenWorldEffect> open_world_effects(double mid_s) {
+  const double ug = units::ug, dph = units::deg_per_h, g2 = kG * kG;
+  std::vector<OpenWorldEffect> e;
+  e.push_back({"accel x += 100 ug/g^2 f_y f_z",
+               [ug, g2](double, auto& f, auto&) { f(0) += 100.0 * ug * f(1) * f(2) / g2; }, "accel",
+               0, "f_y f_z", 100.0});
+  e.push_back({"gyro x += 0.2 deg/h/g^2 f_z^2",
+               [dph, g2](double, auto& f, auto& w) { w(0) += 0.2 * dph * f(2) * f(2) / g2; },
+               "gyro", 0, "f_z^2", 0.2});
+  e.push_back({"gyro x += 3000 ppm/(rad/s) omega_x |omega_x|",
+               [](double, auto&, auto& w) { w(0) += 3000e-6 * w(0) * std::abs(w(0)); }, "", 0, "",
+               0.0});
+  e.push_back(
+      {"accel y += 20 ug sin(2 pi t / 29 s)",
+       [ug](double t, auto& f, auto&) { f(1) += 20.0 * ug * std::sin(2.0 * M_PI * t / 29.0); }, "",
+       0, "", 0.0});
+  e.push_back({"gyro z bias step 0.1 deg/h at mid-session",
+               [dph, mid_s](double t, auto&, auto& w) {
+                 if (t > mid_s) w(2) += 0.1 * dph;
+               },
+               "gyro", 2, "step", 0.1});
+  e.push_back({"gyro x += 0.2 deg/h/g^2 f_y f_z",
+               [dph, g2](double, auto& f, auto& w) { w(0) += 0.2 * dph * f(1) * f(2) / g2; },
+               "gyro", 0, "f_y f_z", 0.2});
+  return e;
+}
+
+/// A clean simulated session with the effect `index` of open_world_effects injected (its
+/// mid-session: the plan's).
+inline HiddenCase open_world_case(const std::string& plan, const std::string& profile,
+                                  std::size_t index, std::uint64_t seed, double rate_hz) {
+  HiddenCase c = hidden_case("open_world", plan, profile, {}, seed, rate_hz);
+  const double duration = PlanTimeline::of(c.session.plan, c.session.site).duration;
+  const auto effects = open_world_effects(c.session.time_offset + 0.5 * duration);
+  inject_into_log(c.session.dir + "/imu.csv", rate_hz, effects.at(index).term);
+  c.session = Session::load(c.session.path);
+  return c;
+}
+
+}  // namespace sinscal::test

@@ -1,0 +1,133 @@
+// The table diagnosis in an open world (issue 33): effects outside the family catalog, injected
+// into the log by test code (tests/out_of_catalog.hpp). Never a catalog family's name first; the
+// residual reported "unexplained" with where it shows.
+//
+// The matrix at more seeds is a documented measurement (hidden test, [.]):
+//   SINSCAL_OPEN_WORLD_SEEDS=30 build/tests/sinscal_tests "[open_world_matrix]"
+// with SINSCAL_OPEN_WORLD_FILTER=TEXT (effects whose name contains it) and
+// SINSCAL_OPEN_WORLD_PLANS=rot19.ini,seed8.ini; results in docs/accuracy.md.
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <cstdlib>
+
+#include "out_of_catalog.hpp"
+
+using namespace sinscal;
+using namespace sinscal::test;
+
+namespace {
+
+constexpr double kOpenWorldRate = 20.0;  // Hz, as the diagnosis matrix
+
+struct OpenWorldScore {
+  int seeds = 0, wrong_first = 0, unexplained = 0, quiet = 0, errors = 0;
+  int right_term = 0;  // the effect's library term reported, within 3 sigma of the truth
+  int wrong_term = 0;  // a library term reported, but not the effect's within 3 sigma
+  std::string first_miss, first_terms;
+};
+
+// The library's terms: whether the effect's is among them within 3 sigma (1), another term
+// only (-1), or none (0).
+int score_terms(const TableDiagnosis& d, const OpenWorldEffect& e) {
+  if (!d.unexplained.library || d.unexplained.library->terms.empty()) return 0;
+  const auto right = [&](const LibraryTerm& t) {
+    return !e.sensor.empty() && t.sensor == e.sensor && t.axis == e.axis &&
+           t.formula.rfind(e.formula, 0) == 0 && std::abs(t.value - e.value) < 3.0 * t.sigma;
+  };
+  for (const auto& t : d.unexplained.library->terms) {
+    if (right(t)) return 1;
+    for (const auto& a : t.aliases)  // the plan cannot tell them apart: reported together
+      if (right(a)) return 1;
+  }
+  return -1;
+}
+
+OpenWorldScore run_effect(const std::string& plan, std::size_t effect, int seeds,
+                          std::uint64_t seed0) {
+  OpenWorldScore s;
+  for (int k = 0; k < seeds; ++k) {
+    const std::uint64_t seed = seed0 + static_cast<std::uint64_t>(k);
+    ++s.seeds;
+    DiagnosisOutcome o;
+    try {
+      const HiddenCase c = open_world_case(plan, "nav-fog.ini", effect, seed, kOpenWorldRate);
+      o = diagnose_hidden(c, {});
+    } catch (const std::exception& e) {
+      ++s.errors;
+      if (s.first_miss.empty()) s.first_miss = "seed " + std::to_string(seed) + ": " + e.what();
+      continue;
+    }
+    const OpenWorldEffect e = open_world_effects(0.0)[effect];
+    const int term = score_terms(o.result, e);
+    s.right_term += term > 0 ? 1 : 0;
+    s.wrong_term += term < 0 ? 1 : 0;
+    if (term != 0 && s.first_terms.empty())
+      for (const auto& t : o.result.unexplained.library->terms) s.first_terms += t.text() + "; ";
+    const bool wrong = !o.result.findings.empty();
+    s.wrong_first += wrong ? 1 : 0;
+    s.unexplained += o.result.unexplained.present ? 1 : 0;
+    s.quiet += !wrong && !o.result.unexplained.present ? 1 : 0;
+    if ((wrong || !o.result.unexplained.present) && s.first_miss.empty()) {
+      std::string where;
+      for (const auto& w : o.result.unexplained.signature) where += " | " + w;
+      for (const auto& w : o.result.stops) where += " | stop: " + w;
+      s.first_miss = "seed " + std::to_string(seed) + ": " + o.story + where;
+    }
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("Open world: out-of-catalog effects on rot19 and seed8, measured",
+          "[.][open_world_matrix]") {
+  const char* env_seeds = std::getenv("SINSCAL_OPEN_WORLD_SEEDS");
+  const char* env_filter = std::getenv("SINSCAL_OPEN_WORLD_FILTER");
+  const char* env_plans = std::getenv("SINSCAL_OPEN_WORLD_PLANS");
+  const int seeds = env_seeds ? std::atoi(env_seeds) : 30;
+  std::vector<std::string> plans;
+  std::stringstream parts(env_plans ? env_plans : "rot19.ini,seed8.ini");
+  for (std::string p; std::getline(parts, p, ',');) plans.push_back(p);
+  std::printf(
+      "| plan | effect | seeds | catalog name first | unexplained | right library term | other "
+      "library term | quiet | errors |\n"
+      "|---|---|---|---|---|---|---|---|---|\n");
+  for (const auto& plan : plans)
+    for (std::size_t k = 0; k < open_world_effects(0.0).size(); ++k) {
+      const OpenWorldEffect e = open_world_effects(0.0)[k];
+      if (env_filter && e.name.find(env_filter) == std::string::npos) continue;
+      const OpenWorldScore s = run_effect(plan, k, seeds, 9000);
+      std::printf("| %s | %s | %d | %d | %d | %d | %d | %d | %d |\n", plan.c_str(), e.name.c_str(),
+                  s.seeds, s.wrong_first, s.unexplained, s.right_term, s.wrong_term, s.quiet,
+                  s.errors);
+      if (!s.first_miss.empty()) std::printf("    first miss: %s\n", s.first_miss.c_str());
+      if (!s.first_terms.empty()) std::printf("    library: %s\n", s.first_terms.c_str());
+      std::fflush(stdout);
+    }
+}
+
+// CI: one seed of three cells of the matrix (seeds outside the measured ones). An anisoelastic
+// gyro term on seed8 and a gyro g^2 term on rot19 are found by the library within 3 sigma (a
+// sign or a column wrong turns them red); a cross-axis accelerometer product on seed8 (named
+// time_delay before issue 33) names no catalog family and is reported unexplained.
+TEST_CASE("Open world: out-of-catalog effects are unexplained, or their library term",
+          "[diagnosis][open_world][long]") {
+  struct Case {
+    std::string plan;
+    std::size_t effect;
+    bool term;  // the library must find the effect's term
+  };
+  for (const Case& k :
+       {Case{"seed8.ini", 5, true}, Case{"rot19.ini", 1, true}, Case{"seed8.ini", 0, false}}) {
+    const OpenWorldEffect e = open_world_effects(0.0)[k.effect];
+    const HiddenCase c = open_world_case(k.plan, "nav-fog.ini", k.effect, 77, kOpenWorldRate);
+    const DiagnosisOutcome o = diagnose_hidden(c, {});
+    std::string terms;
+    if (o.result.unexplained.library)
+      for (const auto& t : o.result.unexplained.library->terms) terms += t.text() + "; ";
+    INFO(k.plan << " " << e.name << ": " << o.story << " | library: " << terms);
+    CHECK(o.result.findings.empty());
+    CHECK(o.result.unexplained.present);
+    if (k.term) CHECK(score_terms(o.result, e) == 1);
+  }
+}
