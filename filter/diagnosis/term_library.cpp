@@ -49,6 +49,7 @@ LibraryTerm term_of(bool gyro, int axis, const std::string& formula, bool produc
 // quarters of the dwells (in time).
 std::vector<Column> library(const std::vector<EquivalentInputs>& inputs) {
   std::vector<double> mids;
+  mids.reserve(inputs.size());
   for (const auto& in : inputs) mids.push_back(0.5 * (in.dwell.t_start + in.dwell.t_end));
   std::sort(mids.begin(), mids.end());
   std::vector<Column> out;

@@ -229,7 +229,8 @@ System whitened(const std::vector<MeanRow>& rows, const std::vector<Param>& para
       const Eigen::Matrix3d L_inv = cov.llt().matrixL().solve(Eigen::Matrix3d::Identity());
       Eigen::Matrix3Xd cols(3, params.size());
       for (std::size_t k = 0; k < params.size(); ++k)
-        cols.col(static_cast<Eigen::Index>(k)) = params[k].column(r).segment<3>(3 * t);
+        cols.col(static_cast<Eigen::Index>(k)) =
+            params[k].column(r).segment<3>(static_cast<Eigen::Index>(3) * t);
       s.A.middleRows(at, 3) = L_inv * cols;
       s.b.segment<3>(at) = L_inv * (t == 0 ? r.y_w - r.x_w : r.y_f - r.x_f);
       at += 3;
