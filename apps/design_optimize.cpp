@@ -293,9 +293,7 @@ int design_optimize(const DesignCliOptions& o) {
   const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
   // A plan that misses a target is not written as the optimized plan.
   const std::string written = r.meets ? plan_path : o.out + "/best_unmet.ini";
-  write_atomically(written, [&](std::ostream& s) {
-    s << r.text;
-  });
+  write_atomically(written, [&](std::ostream& s) { s << r.text; });
   const Plan best = Plan::load(written);
   DesignOptions d;
   d.rate_hz = o.rate_hz;
