@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "apps/calibrate.hpp"
+#include "filter/plausibility/plausibility.hpp"
 #include "models/units.hpp"
 #include "report/rate_table_result.hpp"
 
@@ -27,8 +28,14 @@ SessionSummary calibrate_rate_table_session(const CalibrateOptions& o,
     throw RateTableError(session.log.file + ": " + e.what());
   }
   const RateTableResult r = rate_table_calibrate(segments, means, session.site, 0.0, ro);
+  // The fit's gate: refused (exit 2) unless --force, which records it in the result.
+  PlausibilityReport gate;
+  gate.checks.push_back(
+      check_rate_table_fit(r, PlausibilityLimits::from_profile(nullptr), session.log.file));
+  enforce(gate, o.force);
   const ResultCoefficients coefficients = result_coefficients(r);
   auto sections = result_sections(r, segments);
+  record_gate(sections, gate);
   record_provenance(sections, session);
   write_result_json(out_path, coefficients, sections);
   const ResultCoefficients truth = load_truth(session);

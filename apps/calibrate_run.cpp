@@ -50,6 +50,15 @@ CalibratorOptions kalman_options(const CalibrateOptions& o, const Session& sessi
   return ko;
 }
 
+// A log without a time column: its times come from the session's rate, an assumption the
+// terminal states.
+void print_timing_assumption(const PlausibilityReport& report) {
+  for (const auto& c : report.checks)
+    if (c.name == "sample intervals" && c.passed &&
+        c.detail.find("no time column") != std::string::npos)
+      std::fprintf(stderr, "Assumption: %s\n", c.detail.c_str());
+}
+
 // The plausibility gate (filter/plausibility/plausibility.hpp) before any estimate: a failure stops
 // with the checks' messages (exit 2) unless --force, which runs anyway and records them in the
 // result. Standard input cannot be read twice: a streamed log is checked by the filter's own
@@ -62,15 +71,18 @@ PlausibilityReport plausibility_gate(const CalibrateOptions& o, const Session& s
   if (o.stream) return {};
   const bool dwells_from_plan =
       o.method != Method::Kf || o.static_from == CalibratorOptions::StaticFrom::Plan;
+  // Both methods integrate: they need a steady sample rate.
+  const PlausibilityLimits l = integrating_limits(limits, session.log);
   PlausibilityReport report;
   if (motion) {
     LogReader reader(session.log);
     report = check_plausibility(reader, session.log.file, *motion->timeline, session.site,
-                                motion->time_offset, limits, dwells_from_plan);
+                                motion->time_offset, l, dwells_from_plan);
   } else {
-    report = check_plausibility(session, limits, dwells_from_plan);
+    report = check_plausibility(session, l, dwells_from_plan);
   }
   enforce(report, o.force);
+  print_timing_assumption(report);
   return report;
 }
 

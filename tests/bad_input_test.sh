@@ -965,6 +965,27 @@ rtnew three-axis-plan-two-axis-table; cp "$src/config/plans/six-face-3axis.ini" 
 fixed 2 "plan.ini: a plan for a three-axis table ([table] axes = 3), and table.ini has 2 axes" S design --plan plan.ini --sensor sensor.ini --table table.ini
 rtnew rate-table-kf-option
 fixed 1 "--passes is not an option of --method rate-table" rtcal --passes 2
+# Irregular sample intervals (issue 34, item 4): the integrating methods refuse them, naming the
+# log and the spread; the means-only rate table runs. jitter FILE: times moved by up to 15 % of
+# the 10 Hz interval (intervals 70-130 ms).
+jitter() { awk -F, -v OFS=, 'NR > 3 { $1 = sprintf("%.10g", $1 + 0.015 * sin(37 * $1)) } { print }' "$1" > "$1.j" && mv "$1.j" "$1"; }
+new kf-irregular-intervals; mini; jitter "$d/imu.csv"
+fixed 2 "plausibility gate|imu.csv: sample intervals|spread|use --method rate-table" kf
+new closed-form-irregular-intervals; s8; jitter "$d/imu.csv"
+fixed 2 "imu.csv: sample intervals|spread|use --method rate-table" cf
+new kf-no-time-column; custom; set_key "$d/session.ini" columns "- ax ay az gx gy gz"
+fixed 0 "Assumption: ./imu.txt: no time column|rate of 10 Hz" kf
+rtnew rate-table-irregular-intervals; (cd "$d" && rtsim > /dev/null) || die "rate-table simulation"
+awk -F, -v OFS=, 'NR > 3 { $1 = sprintf("%.10g", $1 + 0.0075 * sin(37 * $1)) } { print }' "$d/sim/imu.csv" > "$d/j" && mv "$d/j" "$d/sim/imu.csv"
+control 0 "" rtcal
+# The rate table's fit gate (issue 34, item 5): a gyro offset of 0.005 deg/s on every gyro while
+# the table turns (increments above 0.3 deg per 20 Hz sample), which the model lacks, is refused;
+# --force runs and records the check.
+rtnew rate-table-fit-refused; (cd "$d" && rtsim > /dev/null) || die "rate-table simulation"
+awk -F, -v OFS=, 'NR > 3 && sqrt($2*$2+$3*$3+$4*$4) > 0.005 { for (i = 2; i <= 4; i++) $i = sprintf("%.12g", $i + 4.4e-6) } { print }' "$d/sim/imu.csv" > "$d/j" && mv "$d/j" "$d/sim/imu.csv"
+fixed 2 "rate-table fit|imu.csv: the gyros' chi2 per dof|a gyro offset while turning" rtcal
+POST='grep -q "rate-table fit" out/r.json'
+fixed 0 "" rtcal --force
 
 # --- issue 21: the plausibility gate without a table (filter/plausibility/rest_plausibility.hpp),
 # simulate's output directory, and the messages the probe found weak. The real recordings of

@@ -18,7 +18,7 @@ constexpr double kRate = 10.0;  // Hz: enough for dwell means
 // seed8 simulated with the nav-fog profile's drawn errors and noise, altered by `alter`, written
 // as a native log and passed through the gate.
 PlausibilityReport gate(const std::function<void(ImuSample&)>& alter, const Plan* plan_for_gate,
-                        double accel_range = 0.0) {
+                        double accel_range = 0.0, bool integrating = false) {
   const Plan plan = test::load_plan("seed8.ini");
   const SensorProfile profile =
       SensorProfile::load(test::source_path("config/sensors/nav-fog.ini"));
@@ -34,6 +34,7 @@ PlausibilityReport gate(const std::function<void(ImuSample&)>& alter, const Plan
   }
   PlausibilityLimits limits = PlausibilityLimits::from_profile(&profile);
   if (accel_range > 0.0) limits.accel_range = accel_range;
+  if (integrating) limits = integrating_limits(limits, LogFormat::native_format(path, kRate));
   LogReader reader(LogFormat::native_format(path, kRate));
   const Plan& p = plan_for_gate ? *plan_for_gate : plan;
   return check_plausibility(reader, "imu.csv", test::timeline(p), p.site, 0.0, limits);
@@ -145,5 +146,51 @@ TEST_CASE("Plausibility gate Monte Carlo: no false alarm on simulated sessions",
       INFO(sensor << " on " << plan_file << ": " << first);
       CHECK(alarms == 0);
     }
+  }
+}
+
+TEST_CASE("Plausibility gate: the integrating methods refuse irregular sample intervals",
+          "[plausibility]") {
+  const double dt0 = 1.0 / kRate;
+  SECTION("a clean clock passes") {
+    const auto r = gate([](ImuSample&) {}, nullptr, 0.0, true);
+    const auto& c = check(r, "sample intervals");
+    INFO(c.detail);
+    CHECK(c.passed);
+    CHECK_THAT(c.detail, Catch::Contains("spread 0"));
+  }
+  SECTION("times jittered by up to 20 % of the interval (8-12 Hz irregular)") {
+    const auto jitter = [dt0](ImuSample& s) { s.t += 0.2 * dt0 * std::sin(37.0 * s.t); };
+    const auto r = gate(jitter, nullptr, 0.0, true);
+    const auto& c = check(r, "sample intervals");
+    INFO(c.detail);
+    CHECK_FALSE(c.passed);
+    CHECK_THAT(c.detail, Catch::Contains("imu.csv: sample intervals") &&
+                             Catch::Contains("median 100 ms") &&
+                             Catch::Contains("use --method rate-table"));
+    // The means-only methods do not check the intervals.
+    const auto means_only = gate(jitter, nullptr);
+    for (const auto& m : means_only.checks) CHECK(m.name != "sample intervals");
+  }
+  SECTION("a jitter just above the tolerance is refused, one below passes") {
+    const double tol = PlausibilityLimits::kIntegratingIntervalSpread;
+    // Intervals dt0 (1 +- a): a spread of 2a.
+    const auto alternate = [dt0](double a) {
+      return [dt0, a](ImuSample& s) {
+        const auto k = static_cast<long>(std::lround(s.t / dt0));
+        s.t += (k % 2 == 0 ? 0.5 : -0.5) * a * dt0;
+      };
+    };
+    CHECK_FALSE(check(gate(alternate(0.8 * tol), nullptr, 0.0, true), "sample intervals").passed);
+    CHECK(check(gate(alternate(0.3 * tol), nullptr, 0.0, true), "sample intervals").passed);
+  }
+  SECTION("no time column: the session's rate is an assumption the check names") {
+    LogFormat f = LogFormat::native_format("imu.txt", 200.0);
+    f.columns = {"gx", "gy", "gz", "ax", "ay", "az"};
+    const PlausibilityLimits l = integrating_limits(PlausibilityLimits{}, f);
+    CHECK(l.assumed_rate_hz == 200.0);
+    const PlausibilityCheck c = check_interval_spread(IntervalSpread{}, l, "imu.txt");
+    CHECK(c.passed);
+    CHECK_THAT(c.detail, Catch::Contains("imu.txt: no time column") && Catch::Contains("200 Hz"));
   }
 }

@@ -3,7 +3,9 @@
 // mixed), a few seeds each, error / sigma of every estimate against the simulation's truth.
 // The 30-seed Monte Carlo of the same families: bench/rate_table_mc.sh (docs/accuracy.md).
 #include <cmath>
+#include <functional>
 
+#include "filter/plausibility/plausibility.hpp"
 #include "filter/rate_table/rate_table.hpp"
 #include "helpers.hpp"
 #include "models/units.hpp"
@@ -29,8 +31,12 @@ struct FamilyStats {
   std::vector<std::string> names;  // of the first seed's estimates
 };
 
+// Alters the segments' means before the fit (an effect the simulation's truth does not have).
+using AlterMeans = std::function<void(const std::vector<RateSegment>&, std::vector<SegmentMean>&)>;
+
 RateTableResult calibrate_simulated(const std::string& plan, std::uint64_t seed,
-                                    ImuErrorModel& truth, double table_sigma = 0.0) {
+                                    ImuErrorModel& truth, double table_sigma = 0.0,
+                                    const AlterMeans& alter = nullptr) {
   SessionSimulation spec;
   spec.plan_path = source_path("config/plans/" + plan);
   spec.data_sensor_path = source_path("config/sensors/tactical-rate.ini");
@@ -45,7 +51,8 @@ RateTableResult calibrate_simulated(const std::string& plan, std::uint64_t seed,
   o.nominal_rate_hz = session.rate_hz;
   o.table_sigma = table_sigma;
   const auto segments = rate_segments(session.plan, session.site);
-  const auto means = find_segments(read_rate_readings(session.log), segments, o);
+  auto means = find_segments(read_rate_readings(session.log), segments, o);
+  if (alter) alter(segments, means);
   return rate_table_calibrate(segments, means, session.site, 0.0, o);
 }
 
@@ -150,4 +157,47 @@ TEST_CASE("rate table: the segments found without the log's time", "[rate_table]
   // show as a gyro bias of 2 x 15 deg/h).
   for (const auto& c : r.coefficients)
     if (c.name.rfind("gyro.bias", 0) == 0) CHECK(std::abs(c.value) < 0.01 * units::deg_per_h);
+}
+
+TEST_CASE("rate table: the fit's gate passes a clean session, refuses what the model lacks",
+          "[rate_table][plausibility]") {
+  const PlausibilityLimits limits = PlausibilityLimits::from_profile(nullptr);
+  const double table_sigma = 2.5 * units::arcsec;
+  ImuErrorModel truth;
+  const auto clean = calibrate_simulated("rate-mixed.ini", 4, truth, table_sigma);
+  REQUIRE(clean.triad_fits.size() == 2);
+  const PlausibilityCheck ok = check_rate_table_fit(clean, limits, "imu.csv");
+  INFO(ok.detail);
+  CHECK(ok.passed);
+  // A gyro offset present only while the table turns (the model's gyro biases are the same at
+  // rest and turning), 30 sigma of a rate segment's mean: the gyros' fit is refused.
+  const auto turning_offset = [](const std::vector<RateSegment>& seg, std::vector<SegmentMean>& m) {
+    std::size_t first = 0;
+    while (seg[first].kind != RateSegment::Kind::Rate) ++first;
+    const double sigma = std::sqrt(m[first].var_omega.dot(seg[first].axis_b.cwiseAbs2()) /
+                                   static_cast<double>(m[first].count));
+    for (std::size_t i = 0; i < seg.size(); ++i)
+      if (seg[i].kind == RateSegment::Kind::Rate)
+        m[i].omega += 30.0 * sigma * Eigen::Vector3d(1.0, 1.0, 1.0).normalized();
+  };
+  const auto bad = calibrate_simulated("rate-mixed.ini", 4, truth, table_sigma, turning_offset);
+  const PlausibilityCheck refused = check_rate_table_fit(bad, limits, "imu.csv");
+  INFO(refused.detail);
+  for (const auto& t : bad.triad_fits) INFO(t.triad << " chi2 " << t.chi2 << " dof " << t.dof);
+  CHECK_FALSE(refused.passed);
+  CHECK_THAT(refused.detail, Catch::Contains("imu.csv: the gyros' chi2 per dof") &&
+                                 Catch::Contains("a gyro offset while turning"));
+  CHECK_THAT(refused.detail, !Catch::Contains("accelerometers"));
+  // Noise densities 3 times too small (the means' variances 9 times): both triads refused.
+  const auto quiet = [](const std::vector<RateSegment>&, std::vector<SegmentMean>& m) {
+    for (auto& x : m) {
+      x.var_omega /= 9.0;
+      x.var_f /= 9.0;
+    }
+  };
+  const auto q = calibrate_simulated("rate-mixed.ini", 4, truth, 0.0, quiet);
+  const PlausibilityCheck q_check = check_rate_table_fit(q, limits, "imu.csv");
+  INFO(q_check.detail);
+  CHECK_FALSE(q_check.passed);
+  CHECK_THAT(q_check.detail, Catch::Contains("gyros'") && Catch::Contains("accelerometers'"));
 }

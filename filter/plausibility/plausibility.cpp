@@ -9,6 +9,7 @@
 #include "filter/closed_form/closed_form.hpp"
 #include "filter/installation/installation.hpp"
 #include "filter/kalman/kalman_calibrator.hpp"
+#include "filter/rate_table/rate_table.hpp"
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"
 #include "rig/session.hpp"
@@ -85,10 +86,49 @@ class SaturationWatch {
   std::string first_;
 };
 
-// One pass over the log: dwell means and saturation.
+// The sample intervals as a histogram of interval / first interval in bins of 0.1 % (constant
+// memory over any log; the reader refuses intervals outside 0.5 to 1.5 nominal, bridged skips
+// aside, so the range of 0 to 4 first intervals holds them).
+class IntervalWatch {
+ public:
+  void see(const ImuSample& s, std::size_t count) {
+    if (count < 2 || !(s.dt > 0.0)) return;  // the first sample's interval is the nominal one
+    if (dt0_ == 0.0) dt0_ = s.dt;
+    const double r = s.dt / dt0_ * kBinsPerInterval;
+    ++bins_[static_cast<std::size_t>(std::min(r, static_cast<double>(kBins - 1)))];
+    ++n_;
+  }
+  IntervalSpread spread() const {
+    IntervalSpread out;
+    out.intervals = n_;
+    if (n_ == 0) return out;
+    out.low = quantile(0.01);
+    out.median = quantile(0.5);
+    out.high = quantile(0.99);
+    return out;
+  }
+
+ private:
+  static constexpr std::size_t kBins = 4000;
+  static constexpr double kBinsPerInterval = 1000.0;
+  double quantile(double p) const {
+    const double target = p * static_cast<double>(n_);
+    std::size_t sum = 0, b = 0;
+    for (; b + 1 < kBins; ++b) {
+      sum += bins_[b];
+      if (static_cast<double>(sum) >= target) break;
+    }
+    return (static_cast<double>(b) + 0.5) / kBinsPerInterval * dt0_;
+  }
+  double dt0_ = 0.0;
+  std::vector<std::size_t> bins_ = std::vector<std::size_t>(kBins, 0);
+  std::size_t n_ = 0;
+};
+
+// One pass over the log: dwell means, saturation and the sample intervals.
 std::vector<DwellMean> read_means(LogReader& reader, const PlanTimeline& timeline,
                                   double time_offset, bool dwell_checks, SaturationWatch& sat,
-                                  double& dt) {
+                                  IntervalWatch& intervals, double& dt) {
   std::vector<DwellMean> means;
   for (const auto& d : timeline.dwells) {
     DwellMean m;  // sums start at zero (the members' initializers)
@@ -108,6 +148,7 @@ std::vector<DwellMean> read_means(LogReader& reader, const PlanTimeline& timelin
   };
   while (next_sample()) {
     sat.see(s, reader.line());
+    intervals.see(s, reader.count());
     if (dt == 0.0) dt = s.dt;
     if (!dwell_checks) continue;
     const double t = s.t - time_offset;
@@ -215,11 +256,14 @@ PlausibilityReport check_plausibility(LogReader& reader, const std::string& inpu
                                       double time_offset, const PlausibilityLimits& l,
                                       bool dwell_checks) {
   SaturationWatch sat(l, input);
+  IntervalWatch intervals;
   double dt = 0.0;
   const std::vector<DwellMean> means =
-      read_means(reader, timeline, time_offset, dwell_checks, sat, dt);
+      read_means(reader, timeline, time_offset, dwell_checks, sat, intervals, dt);
   PlausibilityReport report;
   report.checks.push_back(sat.check());
+  if (l.max_interval_spread > 0.0)
+    report.checks.push_back(check_interval_spread(intervals.spread(), l, input));
   if (!dwell_checks) return report;
   const Eigen::Vector3d f_n = -Earth::wgs84().gravity_n(site.lat_rad, site.h_m);
   const double g = f_n.norm(), Omega = Earth::wgs84().rate();
@@ -251,6 +295,38 @@ PlausibilityReport check_plausibility(LogReader& reader, const std::string& inpu
   if (l.check_rate) report.checks.push_back(rate.check("Earth rate"));
   report.checks.push_back(direction.check("gravity direction"));
   return report;
+}
+
+PlausibilityLimits integrating_limits(PlausibilityLimits l, const LogFormat& log) {
+  l.max_interval_spread = PlausibilityLimits::kIntegratingIntervalSpread;
+  const bool timed = log.kind == LogFormat::Kind::NovAtel ||
+                     std::count(log.columns.begin(), log.columns.end(), "t") > 0;
+  l.assumed_rate_hz = timed ? 0.0 : log.rate_hz;
+  return l;
+}
+
+PlausibilityCheck check_interval_spread(const IntervalSpread& s, const PlausibilityLimits& l,
+                                        const std::string& input) {
+  PlausibilityCheck c{"sample intervals", true, ""};
+  if (l.assumed_rate_hz > 0.0) {
+    c.detail = input + ": no time column: the times are assumed from the session's rate of " +
+               number(l.assumed_rate_hz) + " Hz (its sample intervals cannot be checked)";
+    return c;
+  }
+  if (s.intervals == 0) return c;
+  const double ms = 1e-3;
+  c.detail = input + ": sample intervals " + number(s.low / ms, 3) + "-" + number(s.high / ms, 3) +
+             " ms (median " + number(s.median / ms, 3) + " ms, spread " +
+             number(100.0 * s.spread(), 2) + " %";
+  c.passed = !(s.spread() > l.max_interval_spread);
+  if (c.passed) {
+    c.detail += ")";
+    return c;
+  }
+  c.detail += ", tolerated " + number(100.0 * l.max_interval_spread, 2) +
+              " %): the integrating methods need a steady rate; use --method rate-table (means "
+              "only) or a log with a clean time column";
+  return c;
 }
 
 PlausibilityReport check_plausibility(const Session& session, const PlausibilityLimits& limits,
@@ -299,16 +375,22 @@ PlausibilityCheck check_linear_range(const ClosedFormReport& r, const std::strin
   return c;
 }
 
+// The chi2 per dof a fit of `dof` degrees of freedom exceeds with the probability of a normal
+// variable beyond `z` sigma.
+double chi2_per_dof_bound(int dof, double z) {
+  const double tail =
+      boost::math::cdf(boost::math::complement(boost::math::normal_distribution<double>(), z));
+  return boost::math::quantile(
+             boost::math::complement(boost::math::chi_squared_distribution<double>(dof), tail)) /
+         dof;
+}
+
 PlausibilityCheck check_stage2_fit(const ClosedFormReport& r, const PlausibilityLimits& l,
                                    const std::string& input) {
   PlausibilityCheck c{"stage-2 fit", true, ""};
   const Stage2Result& s2 = r.stage2;
   if (s2.dof <= 0) return c;
-  const double tail = boost::math::cdf(
-      boost::math::complement(boost::math::normal_distribution<double>(), l.stage2_fit_z));
-  const double bound = boost::math::quantile(boost::math::complement(
-                           boost::math::chi_squared_distribution<double>(s2.dof), tail)) /
-                       s2.dof;
+  const double bound = chi2_per_dof_bound(s2.dof, l.stage2_fit_z);
   if (s2.chi2_per_dof <= bound) return c;
   c.passed = false;
   c.detail = input + ": stage-2 chi2 per dof " + number(s2.chi2_per_dof, 3) + " over " +
@@ -318,6 +400,24 @@ PlausibilityCheck check_stage2_fit(const ClosedFormReport& r, const Plausibility
              "coefficients (errors the model lacks, a stage 1 beyond its linear range, or noise "
              "densities too small)";
   return c;
+}
+
+PlausibilityCheck check_rate_table_fit(const RateTableResult& r, const PlausibilityLimits& l,
+                                       const std::string& input) {
+  Findings bad;
+  bad.items = "triads";
+  for (const auto& t : r.triad_fits) {
+    if (t.dof <= 0) continue;
+    const double per_dof = t.chi2 / t.dof, bound = chi2_per_dof_bound(t.dof, l.stage2_fit_z);
+    if (per_dof <= bound) continue;
+    bad.add(input + ": the " + (t.triad == "gyro" ? "gyros" : "accelerometers") +
+            "' chi2 per dof " + number(per_dof, 3) + " over " + std::to_string(t.dof) +
+            " dof (bound " + number(bound, 3) + ", its " + number(l.stage2_fit_z, 2) +
+            "-sigma quantile): the segments' means do not fit the model (a segment not at its "
+            "commanded rate, a gyro offset while turning the model lacks, or noise densities "
+            "too small)");
+  }
+  return bad.check("rate-table fit");
 }
 
 }  // namespace sinscal

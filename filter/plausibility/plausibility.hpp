@@ -19,6 +19,7 @@ struct SensorProfile;
 struct Session;
 struct EquivalentInputs;
 struct ClosedFormReport;
+struct RateTableResult;
 
 /// What a static dwell may show and still be plausible. SI units.
 struct PlausibilityLimits {
@@ -32,6 +33,16 @@ struct PlausibilityLimits {
   double gyro_white = 0.0;                 // rad/sqrt(s)
   double max_stage1_chi2_per_dof = 10.0;   // closed form: a dwell's fit far above 1
   double stage2_fit_z = 4.0;  // closed form: stage 2's chi2 above its quantile at this normal tail
+  /// The integrating methods (Kalman filter, closed form): the tolerated spread of the log's
+  /// sample intervals, (99th - 1st percentile) / median; 0: not checked (the means-only methods).
+  double max_interval_spread = 0.0;
+  /// > 0: the log has no time column and the reader takes its times from this rate (Hz): the
+  /// intervals cannot show a spread and the rate is an assumption the check names.
+  double assumed_rate_hz = 0.0;
+  /// The spread the integrating methods set (docs/usage/plausibility.md, "sample intervals"): a
+  /// timing error of this fraction of the interval during a 90 deg turn at 10 deg/s sampled at
+  /// 100 Hz walks the integrated angle by about 1 arcmin, the attitude budget of a table session.
+  static constexpr double kIntegratingIntervalSpread = 0.02;
 
   /// Bounds from the sensor profile's error ranges (3 times the largest error they allow, plus
   /// 5 noise sigmas of a dwell's mean), or generic bounds without a profile (nullptr).
@@ -106,6 +117,21 @@ std::string plausibility_number(double v, int precision = 4);
 /// Throws PlausibilityError listing the failed checks unless the report passed or `force`.
 void enforce(const PlausibilityReport& report, bool force);
 
+/// The limits of the integrating methods (Kalman filter, closed form) on `log`: `limits` with
+/// the sample intervals checked (and the rate assumed when the log has no time column).
+PlausibilityLimits integrating_limits(PlausibilityLimits limits, const LogFormat& log);
+
+/// The spread of a log's sample intervals.
+struct IntervalSpread {
+  std::size_t intervals = 0;
+  double low = 0.0, median = 0.0, high = 0.0;  // s: 1st percentile, median, 99th percentile
+  double spread() const { return median > 0.0 ? (high - low) / median : 0.0; }
+};
+/// The "sample intervals" check: refuses a spread above `limits.max_interval_spread` (a pass
+/// without a time column names the assumed rate in its detail).
+PlausibilityCheck check_interval_spread(const IntervalSpread& s, const PlausibilityLimits& limits,
+                                        const std::string& input);
+
 /// The closed form's stage-1 fits: a dwell whose residual chi2 per dof is far above 1 does not
 /// fit the model (the data or the plan are not what the session says).
 PlausibilityCheck check_stage1_fit(const std::vector<EquivalentInputs>& stage1,
@@ -119,5 +145,12 @@ PlausibilityCheck check_linear_range(const ClosedFormReport& r, const std::strin
 /// of the model's coefficients.
 PlausibilityCheck check_stage2_fit(const ClosedFormReport& r, const PlausibilityLimits& limits,
                                    const std::string& input);
+
+/// The rate table's fit, triad by triad: each triad's chi2 against its chi-square quantile at
+/// the normal tail of `limits.stage2_fit_z` (the same tail as the closed form's stage 2); above
+/// it the segments' means do not fit the model (a segment not at its commanded rate, a gyro
+/// offset while turning the model lacks, noise densities too small).
+PlausibilityCheck check_rate_table_fit(const RateTableResult& r, const PlausibilityLimits& limits,
+                                       const std::string& input);
 
 }  // namespace sinscal

@@ -239,6 +239,30 @@ System whitened(const std::vector<MeanRow>& rows, const std::vector<Param>& para
   return s;
 }
 
+// Each triad's chi2 and dof: the residuals of its rows (whitened() order: per mean, 3 gyro rows
+// then 3 accelerometer rows) less the coefficients of its own.
+std::vector<RateTableResult::TriadFit> triad_fits(const std::vector<MeanRow>& rows,
+                                                  const Eigen::VectorXd& residual,
+                                                  const std::vector<Param>& params,
+                                                  const std::vector<std::size_t>& keep,
+                                                  bool accel) {
+  RateTableResult::TriadFit gyro{"gyro", 0.0, 0}, acc{"accel", 0.0, 0};
+  Eigen::Index at = 0;
+  for (const auto& r : rows) {
+    gyro.chi2 += residual.segment<3>(at).squaredNorm();
+    gyro.dof += 3;
+    at += 3;
+    if (!(r.has_f && accel)) continue;
+    acc.chi2 += residual.segment<3>(at).squaredNorm();
+    acc.dof += 3;
+    at += 3;
+  }
+  for (const std::size_t k : keep) --(params[k].name.rfind("accel.", 0) == 0 ? acc : gyro).dof;
+  std::vector<RateTableResult::TriadFit> out{gyro};
+  if (accel) out.push_back(acc);
+  return out;
+}
+
 // The candidates taken in order while each adds to the rank (columns scaled to unit norm).
 std::vector<std::size_t> determined(const Eigen::MatrixXd& A) {
   std::vector<std::size_t> keep;
@@ -383,6 +407,7 @@ RateTableResult rate_table_calibrate(const std::vector<RateSegment>& segments,
   const Eigen::MatrixXd P = ldlt.solve(Eigen::MatrixXd::Identity(N.rows(), N.cols()));
   res.chi2 = (A * x - sys.b).squaredNorm();
   res.dof = static_cast<int>(A.rows() - A.cols());
+  res.triad_fits = triad_fits(rows, A * x - sys.b, params, keep, accel);
   std::vector<bool> used(params.size(), false);
   for (std::size_t k = 0; k < keep.size(); ++k) {
     const auto e = static_cast<Eigen::Index>(k);

@@ -90,6 +90,13 @@ struct RateTableResult {
   std::vector<std::string> undetermined;  // parameter names the segments do not determine
   double chi2 = 0.0;
   int dof = 0;
+  /// Each triad's share of the fit (its rows and coefficients are its own): "gyro", "accel".
+  struct TriadFit {
+    std::string triad;
+    double chi2 = 0.0;
+    int dof = 0;
+  };
+  std::vector<TriadFit> triad_fits;
   std::size_t static_segments = 0, rate_segments = 0;
   std::vector<SegmentMean> means;
 };
