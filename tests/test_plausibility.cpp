@@ -184,6 +184,26 @@ TEST_CASE("Plausibility gate: the integrating methods refuse irregular sample in
     CHECK_FALSE(check(gate(alternate(0.8 * tol), nullptr, 0.0, true), "sample intervals").passed);
     CHECK(check(gate(alternate(0.3 * tol), nullptr, 0.0, true), "sample intervals").passed);
   }
+  SECTION("a steady clock stamped in coarse steps passes; jitter stamped so is still refused") {
+    // Times rounded to 7 ms: intervals of 98 and 105 ms (a spread of 7 %), the rounding of a
+    // steady clock, whose integrated errors telescope.
+    const auto stamp = [](double step) {
+      return [step](ImuSample& s) { s.t = step * std::round(s.t / step); };
+    };
+    const auto coarse = check(gate(stamp(0.007), nullptr, 0.0, true), "sample intervals");
+    INFO(coarse.detail);
+    CHECK(coarse.passed);
+    CHECK_THAT(coarse.detail, Catch::Contains("timestamps in steps of 7 ms") &&
+                                  Catch::Contains("jitter beyond them 0 %"));
+    // The 20 % jitter above, stamped in whole ms: the grid is the stamps', the jitter is not.
+    const auto jittered_stamped = [dt0](ImuSample& s) {
+      s.t += 0.2 * dt0 * std::sin(37.0 * s.t);
+      s.t = 0.001 * std::round(s.t / 0.001);
+    };
+    const auto j = check(gate(jittered_stamped, nullptr, 0.0, true), "sample intervals");
+    INFO(j.detail);
+    CHECK_FALSE(j.passed);
+  }
   SECTION("no time column: the session's rate is an assumption the check names") {
     LogFormat f = LogFormat::native_format("imu.txt", 200.0);
     f.columns = {"gx", "gy", "gz", "ax", "ay", "az"};

@@ -95,7 +95,9 @@ class IntervalWatch {
     if (count < 2 || !(s.dt > 0.0)) return;  // the first sample's interval is the nominal one
     if (dt0_ == 0.0) dt0_ = s.dt;
     const double r = s.dt / dt0_ * kBinsPerInterval;
-    ++bins_[static_cast<std::size_t>(std::min(r, static_cast<double>(kBins - 1)))];
+    const auto b = static_cast<std::size_t>(std::min(r, static_cast<double>(kBins - 1)));
+    ++bins_[b];
+    sums_[b] += r;
     ++n_;
   }
   IntervalSpread spread() const {
@@ -105,6 +107,7 @@ class IntervalWatch {
     out.low = quantile(0.01);
     out.median = quantile(0.5);
     out.high = quantile(0.99);
+    out.resolution = grid_step();
     return out;
   }
 
@@ -120,8 +123,39 @@ class IntervalWatch {
     }
     return (static_cast<double>(b) + 0.5) / kBinsPerInterval * dt0_;
   }
+  // The intervals' grid: the occupied bins (each at least 0.1 % of the intervals) fall into runs
+  // of neighbours; separate runs (an empty bin between them) are values of a quantized clock, and
+  // the smallest distance between runs' centres is its resolution. One run: no grid.
+  double grid_step() const {
+    std::vector<double> centres;  // each run's mean interval, in bins
+    double sum = 0.0;
+    std::size_t count = 0;
+    for (std::size_t b = 0; b <= kBins; ++b) {
+      const bool occupied = b < kBins && bins_[b] * 1000 >= n_;
+      if (occupied) {
+        sum += sums_[b];
+        count += bins_[b];
+      } else if (count > 0) {
+        centres.push_back(sum / static_cast<double>(count));
+        sum = 0.0;
+        count = 0;
+      }
+    }
+    double step = 0.0;
+    for (std::size_t i = 1; i < centres.size(); ++i) {
+      const double d = centres[i] - centres[i - 1];
+      if (step == 0.0 || d < step) step = d;
+    }
+    // A clock's grid holds every value as a whole number of steps (within a tenth of a step; a
+    // run holds one value of a grid, so its mean is that value): two irregular values, 98.4 and
+    // 101.6 ms say, are not a grid of 3.2 ms.
+    for (const double c : centres)
+      if (std::abs(c - step * std::round(c / step)) > 0.1 * step) return 0.0;
+    return step / kBinsPerInterval * dt0_;
+  }
   double dt0_ = 0.0;
   std::vector<std::size_t> bins_ = std::vector<std::size_t>(kBins, 0);
+  std::vector<double> sums_ = std::vector<double>(kBins, 0.0);  // of interval / first, in bins
   std::size_t n_ = 0;
 };
 
@@ -318,7 +352,10 @@ PlausibilityCheck check_interval_spread(const IntervalSpread& s, const Plausibil
   c.detail = input + ": sample intervals " + number(s.low / ms, 3) + "-" + number(s.high / ms, 3) +
              " ms (median " + number(s.median / ms, 3) + " ms, spread " +
              number(100.0 * s.spread(), 2) + " %";
-  c.passed = !(s.spread() > l.max_interval_spread);
+  if (s.resolution > 0.0)
+    c.detail += "; timestamps in steps of " + number(s.resolution / ms, 3) + " ms, jitter beyond " +
+                "them " + number(100.0 * s.jitter(), 2) + " %";
+  c.passed = !(s.jitter() > l.max_interval_spread);
   if (c.passed) {
     c.detail += ")";
     return c;

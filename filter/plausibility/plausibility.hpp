@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -125,7 +126,15 @@ PlausibilityLimits integrating_limits(PlausibilityLimits limits, const LogFormat
 struct IntervalSpread {
   std::size_t intervals = 0;
   double low = 0.0, median = 0.0, high = 0.0;  // s: 1st percentile, median, 99th percentile
+  /// s: the timestamps' resolution when the intervals sit on a grid (separate values, e.g. 9, 10
+  /// and 11 ms stamped in whole ms at 100 Hz), else 0. Rounding a steady clock's times moves
+  /// each interval by up to one resolution, and the integrated errors telescope: not counted.
+  double resolution = 0.0;
   double spread() const { return median > 0.0 ? (high - low) / median : 0.0; }
+  /// The spread beyond the timestamps' rounding: what the check compares with its limit.
+  double jitter() const {
+    return median > 0.0 ? std::max(0.0, high - low - 2.0 * resolution) / median : 0.0;
+  }
 };
 /// The "sample intervals" check: refuses a spread above `limits.max_interval_spread` (a pass
 /// without a time column names the assumed rate in its detail).
