@@ -308,8 +308,8 @@ PlausibilityCheck check_same_files(const LogFormat& log) {
 
 namespace {
 
-double chi2_quantile(int dof, double false_alarm) {
-  return boost::math::quantile(boost::math::chi_squared(std::max(dof, 1)), 1.0 - false_alarm);
+double chi2_quantile(double dof, double false_alarm) {
+  return boost::math::quantile(boost::math::chi_squared(std::max(dof, 1.0)), 1.0 - false_alarm);
 }
 
 // What a turn's residual variance per component is expected to be over the noise the fit gives
@@ -342,13 +342,13 @@ HandheldFitBounds handheld_fit_bounds(const TableFreeResult& r) {
 PlausibilityCheck check_handheld_fit(const TableFreeResult& r, const std::string& input) {
   const HandheldFitBounds b = handheld_fit_bounds(r);
   PlausibilityCheck c{"fit", true, ""};
-  auto part = [&](const char* what, double chi2, int dof, double bound) {
+  auto part = [&](const char* what, double chi2, double dof, double bound) {
     if (chi2 <= bound) return;
     c.passed = false;
     c.detail +=
         std::string(c.detail.empty() ? input + ": the table-free fit's residuals: " : "; ") + what +
-        " chi2 " + number(chi2) + " (dof " + std::to_string(dof) + ", chi2/dof " +
-        number(chi2 / std::max(dof, 1)) + ") beyond its bound " + number(bound);
+        " chi2 " + number(chi2) + " (dof " + number(dof) + ", chi2/dof " +
+        number(chi2 / std::max(dof, 1.0)) + ") beyond its bound " + number(bound);
   };
   part("static poses", b.static_chi2, b.static_dof, b.static_bound);
   part("turns", b.turn_chi2, b.turn_dof, b.turn_bound);

@@ -83,10 +83,8 @@ struct HandheldFitBounds {
   static constexpr double kFalseAlarm = 1e-3;    // of each part's quantile
   static constexpr double kStaticExcess = 30.0;  // bias instability over a pose
   static constexpr double kTurnDynamics = 5e-3;  // unmodelled share of a turn's angle
-  double static_chi2 = 0.0, static_bound = 0.0;
-  int static_dof = 0;
-  double turn_chi2 = 0.0, turn_bound = 0.0;
-  int turn_dof = 0;
+  double static_chi2 = 0.0, static_bound = 0.0, static_dof = 0.0;
+  double turn_chi2 = 0.0, turn_bound = 0.0, turn_dof = 0.0;
   double turn_excess = 1.0;  // mean expected variance over the fit's, over the turns
 };
 HandheldFitBounds handheld_fit_bounds(const TableFreeResult& result);

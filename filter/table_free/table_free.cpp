@@ -5,6 +5,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <sstream>
@@ -598,22 +599,45 @@ class TableFreeSolver {
     return r;
   }
 
-  static TableFreeFitPart fit_part(const std::vector<double>& r, int parameters) {
+  static TableFreeFitPart fit_part(const std::vector<double>& r, double leverage) {
     TableFreeFitPart f;
     for (double x : r) f.chi2 += x * x;
     f.residuals = static_cast<int>(r.size());
-    f.dof = f.residuals - parameters;
-    if (f.dof > 0) f.sigma_scale = std::max(1.0, std::sqrt(f.chi2 / f.dof));
+    f.dof = static_cast<double>(f.residuals) - leverage;
+    if (f.dof > 0.0) f.sigma_scale = std::max(1.0, std::sqrt(f.chi2 / f.dof));
     return f;
+  }
+
+  // The leverage of each part (the sum of the hat matrix's diagonal over its residuals): the
+  // parameters it determines, the directions shared with the other parts counted by share.
+  std::array<double, 3> leverages(ceres::Problem& problem) const {
+    std::vector<ceres::ResidualBlockId> all = accel_ids_;
+    all.insert(all.end(), gyro_ids_.begin(), gyro_ids_.end());
+    all.insert(all.end(), turn_ids_.begin(), turn_ids_.end());
+    ceres::Problem::EvaluateOptions eo;
+    eo.residual_blocks = all;
+    ceres::CRSMatrix crs;
+    problem.Evaluate(eo, nullptr, nullptr, nullptr, &crs);
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+    for (int i = 0; i < crs.num_rows; ++i)
+      for (int k = crs.rows[static_cast<std::size_t>(i)];
+           k < crs.rows[static_cast<std::size_t>(i) + 1]; ++k)
+        J(i, crs.cols[static_cast<std::size_t>(k)]) = crs.values[static_cast<std::size_t>(k)];
+    const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(J).householderQ() *
+                              Eigen::MatrixXd::Identity(J.rows(), J.cols());
+    const Eigen::VectorXd h = Q.rowwise().squaredNorm();  // hat matrix diagonal
+    const auto na = static_cast<Eigen::Index>(3 * accel_ids_.size());
+    const auto ng = static_cast<Eigen::Index>(3 * gyro_ids_.size());
+    return {h.head(na).sum(), h.segment(na, ng).sum(), h.tail(h.size() - na - ng).sum()};
   }
 
   // The chi2 in parts and the turns one by one (rate, angle, duration: the fit gate's bound).
   void fit_parts(ceres::Problem& problem) {
-    const int n = static_cast<int>(pd_.size());
-    out_.accel_fit = fit_part(residuals_of(problem, accel_ids_), 9 + 2 * n);
-    out_.gyro_rest_fit = fit_part(residuals_of(problem, gyro_ids_), 3);
+    const std::array<double, 3> lev = leverages(problem);
+    out_.accel_fit = fit_part(residuals_of(problem, accel_ids_), lev[0]);
+    out_.gyro_rest_fit = fit_part(residuals_of(problem, gyro_ids_), lev[1]);
     const std::vector<double> rt = residuals_of(problem, turn_ids_);
-    out_.turn_fit = fit_part(rt, 9);
+    out_.turn_fit = fit_part(rt, lev[2]);
     for (std::size_t p = 0; p < turns_.size(); ++p) {
       const Turn& t = turns_[p];
       TableFreeTurn o;

@@ -98,17 +98,17 @@ struct TableFreeStage {
 };
 
 /// One part of the joint fit's chi2: the static poses' accelerometer or gyro residuals, or the
-/// turns'. `dof` is its residuals less the parameters it determines (accelerometers: the 9
-/// terms and the 2 of each pose's direction; gyros at rest: the 3 biases; turns: the 9 terms
-/// of the gyro matrix); the three add up to the joint fit's dof.
+/// turns'. `dof` is its residuals less its leverage (the sum of the hat matrix's diagonal over
+/// them: the parameters it determines, the poses' directions shared with the other parts by
+/// share); the three add up to the joint fit's dof.
 struct TableFreeFitPart {
   double chi2 = 0.0;
   int residuals = 0;
-  int dof = 0;
+  double dof = 0.0;
   /// sqrt(chi2/dof) when above 1, else 1: the factor the sigmas of this part's coefficients
   /// are scaled by (docs/methods/table-free.md, "Sigmas and the fit gate").
   double sigma_scale = 1.0;
-  double chi2_per_dof() const { return dof > 0 ? chi2 / dof : 0.0; }
+  double chi2_per_dof() const { return dof > 0.0 ? chi2 / dof : 0.0; }
 };
 
 /// One turn between two poses as the fit gate sees it.
