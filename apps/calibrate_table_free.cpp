@@ -6,12 +6,33 @@
 #include <optional>
 
 #include "apps/calibrate.hpp"
+#include "apps/handheld_gate.hpp"
 #include "apps/print.hpp"
 #include "filter/plausibility/rest_plausibility.hpp"
 #include "models/earth.hpp"
 #include "report/table_free_result.hpp"
 
 namespace sinscal::cli {
+
+TableFreeRun gated_table_free_run(const Session& session, TableFreeRunOptions ro, bool force,
+                                  PlausibilityReport& gate) {
+  // The rests before the fit, then the fit's parts: a failure stops (exit 2) unless force,
+  // which records it.
+  std::optional<SensorProfile> profile;
+  if (!session.sensor_file.empty()) profile = SensorProfile::load(session.sensor_file);
+  const RestLimits limits = RestLimits::from_profile(profile ? &*profile : nullptr);
+  ro.before_fit = [&](const HandheldRecord&, const TableFreeRun& r) {
+    const double g = r.options.gravity > 0.0
+                         ? r.options.gravity
+                         : Earth::wgs84().gravity_n(r.site.lat_rad, r.site.h_m).norm();
+    gate = check_handheld(session.log, r.readings, r.detection.poses, g, limits, r.log);
+    enforce(gate, force);
+  };
+  TableFreeRun run = run_table_free(session, ro);
+  gate.checks.push_back(check_handheld_fit(run.result, run.log));
+  enforce(gate, force);
+  return run;
+}
 
 namespace {
 const std::vector<std::string> kTableFreeOnly = {"gravity",   "pose-window",     "min-pose",
@@ -94,27 +115,11 @@ SessionSummary calibrate_table_free_session(const CalibrateOptions& o,
   ro.detector.min_duration = pick("min-pose", st.min_pose, o.min_pose);
   ro.detector.use_gyro = !pick("pose-accel-only", st.pose_accel_only, o.pose_accel_only);
   ro.calibration.edge_trim = pick("edge-trim", st.edge_trim, o.edge_trim);
-  // The plausibility gate on the poses before the fit (filter/plausibility/rest_plausibility.hpp),
-  // then on the fit's chi2/dof: a failure stops (exit 2) unless --force, which records it.
-  std::optional<SensorProfile> profile;
-  if (!session.sensor_file.empty()) profile = SensorProfile::load(session.sensor_file);
-  const RestLimits limits = RestLimits::from_profile(profile ? &*profile : nullptr);
   PlausibilityReport gate;
-  ro.before_fit = [&](const HandheldRecord&, const TableFreeRun& r) {
-    const double g = r.options.gravity > 0.0
-                         ? r.options.gravity
-                         : Earth::wgs84().gravity_n(r.site.lat_rad, r.site.h_m).norm();
-    gate = check_handheld(session.log, r.readings, r.detection.poses, g, limits, r.log);
-    enforce(gate, o.force);
-  };
   const auto t0 = std::chrono::steady_clock::now();
-  TableFreeRun run = run_table_free(session, ro);
+  TableFreeRun run = gated_table_free_run(session, ro, o.force, gate);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  gate.checks.push_back(
-      check_fit(run.result.chi2_per_dof, limits, run.log, "the table-free fit's residuals"));
-  if (!gate.checks.back().passed) run.result.converged = false;
-  enforce(gate, o.force);
   // A validation record that cannot be used still leaves the calibration written.
   std::string validation_error;
   for (const auto& v : validations) try {

@@ -123,10 +123,10 @@ int cmd_diagnose(const std::vector<std::string>& args) {
   const Session any = Session::load(session_path, Session::PlanNeed::Optional);
   if (any.six_face) return diagnose_six_face_session(any, out_dir, o.alpha);
   if (!any.has_plan) {
-    if (given(*vm, "table-sigma") || vm->count("force") || vm->count("no-kalman") ||
-        given(*vm, "min-dwell") || vm->count("prefer") || given(*vm, "passes"))
+    if (given(*vm, "table-sigma") || vm->count("no-kalman") || given(*vm, "min-dwell") ||
+        vm->count("prefer") || given(*vm, "passes"))
       throw UsageError(
-          "--table-sigma, --min-dwell, --prefer, --passes, --force and --no-kalman act on table "
+          "--table-sigma, --min-dwell, --prefer, --passes and --no-kalman act on table "
           "sessions; " +
           session_path + " has no plan (a hand-held session)");
     if (given(*vm, "gravity") && !(h.run.gravity >= 9.7 && h.run.gravity <= 9.9))
@@ -142,6 +142,7 @@ int cmd_diagnose(const std::vector<std::string>& args) {
     h.out_dir = out_dir;
     h.alpha = o.alpha;
     h.plot = vm->count("no-plot") == 0;
+    h.force = vm->count("force") > 0;
     return diagnose_handheld_session(any, h);
   }
   for (const auto& name : kHandheldOnly)

@@ -18,6 +18,7 @@ struct HandheldDiagnoseOptions {
   std::string candidates;             // --candidates, comma separated (empty: all)
   std::vector<std::string> validate;  // held-out validation sessions
   TableFreeRunOptions run;            // gravity, pose detector, edge trim
+  bool force = false;                 // run even when the gate fails (apps/handheld_gate.hpp)
 };
 
 /// Calibrates a hand-held session table-free, diagnoses it, writes the files and prints the

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "apps/diagnose.hpp"
+#include "apps/handheld_gate.hpp"
 #include "filter/diagnosis/handheld_diagnosis.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/units.hpp"
@@ -128,7 +129,8 @@ int diagnose_handheld_session(const Session& session, const HandheldDiagnoseOpti
                             {"residuals.png", files.png},
                             {"allan.png", files.allan_png}});
   const auto t0 = std::chrono::steady_clock::now();
-  TableFreeRun run = run_table_free(session, o.run);
+  PlausibilityReport gate;
+  TableFreeRun run = gated_table_free_run(session, o.run, o.force, gate);
   const HandheldDiagnosis d = diagnose_handheld(run.readings, run.result, run.options, ho);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

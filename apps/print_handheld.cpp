@@ -5,6 +5,7 @@
 
 #include "apps/cli.hpp"
 #include "apps/print.hpp"
+#include "filter/plausibility/rest_plausibility.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/units.hpp"
 #include "report/table_free_result.hpp"
@@ -32,7 +33,18 @@ void print_table_free(const TableFreeRun& run, const ResultCoefficients& coeffic
   std::printf("\nGravity %.5f m/s^2 (%s); body frame: the accelerometer triad\n", r.gravity,
               run.gravity_from.c_str());
   std::printf("Fit: chi2/dof %.3f (dof %d), %d iterations, %s\n", r.chi2_per_dof, r.dof,
-              r.iterations, r.converged ? "converged" : "NOT converged");
+              r.iterations,
+              r.converged ? "converged (the solver's convergence test: cost change, gradient or "
+                            "parameter step below tolerance; not a chi2 threshold)"
+                          : "NOT converged");
+  const HandheldFitBounds b = handheld_fit_bounds(r);
+  std::printf(
+      "Fit parts (chi2/dof, sigma scale): accel poses %.3g (x%.3g), gyro poses %.3g (x%.3g), "
+      "turns %.3g (x%.3g)\nFit gate: static poses chi2 %.4g <= %.4g, turns chi2 %.4g <= %.4g "
+      "(the turns' expected excess %.3g: timing and dynamics, docs/methods/table-free.md)\n",
+      r.accel_fit.chi2_per_dof(), r.accel_fit.sigma_scale, r.gyro_rest_fit.chi2_per_dof(),
+      r.gyro_rest_fit.sigma_scale, r.turn_fit.chi2_per_dof(), r.turn_fit.sigma_scale, b.static_chi2,
+      b.static_bound, b.turn_chi2, b.turn_bound, b.turn_excess);
   std::printf("Noise per reading at rest: accel %.3g %.3g %.3g m/s^2, gyro %.3g %.3g %.3g deg/s\n",
               r.accel_noise(0), r.accel_noise(1), r.accel_noise(2),
               r.gyro_noise(0) / units::deg_per_s, r.gyro_noise(1) / units::deg_per_s,

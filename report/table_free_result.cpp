@@ -12,6 +12,14 @@ nlohmann::ordered_json vec(const Eigen::Vector3d& v, double per_unit = 1.0) {
   return nlohmann::ordered_json::array({v(0) / per_unit, v(1) / per_unit, v(2) / per_unit});
 }
 
+nlohmann::ordered_json fit_part_json(const TableFreeFitPart& f) {
+  return {{"chi2", f.chi2},
+          {"residuals", f.residuals},
+          {"dof", f.dof},
+          {"chi2_per_dof", f.chi2_per_dof()},
+          {"sigma_scale", f.sigma_scale}};
+}
+
 nlohmann::ordered_json stage(const TableFreeStage& s) {
   return {{"iterations", s.iterations},
           {"converged", s.converged},
@@ -84,12 +92,19 @@ nlohmann::ordered_json result_sections(const TableFreeRun& run) {
       {"name", "table-free"},
       {"body_frame", "accelerometer triad"},
       {"fixed_by_convention", fixed},
-      {"solver", "Ceres (Levenberg-Marquardt), covariance scaled by chi2/dof"},
+      {"solver",
+       "Ceres (Levenberg-Marquardt), covariance scaled per part (accelerometers, gyro biases, "
+       "gyro matrix) by sqrt(chi2/dof) of its part when above 1"},
       {"converged", r.converged},
+      {"termination", r.termination},
       {"iterations", r.iterations},
       {"chi2", r.chi2},
       {"dof", r.dof},
       {"chi2_per_dof", r.chi2_per_dof},
+      {"fit_parts",
+       {{"accel_poses", fit_part_json(r.accel_fit)},
+        {"gyro_poses", fit_part_json(r.gyro_rest_fit)},
+        {"turns", fit_part_json(r.turn_fit)}}},
       {"gravity", {{"value", r.gravity}, {"unit", "m/s^2"}, {"from", run.gravity_from}}}};
   if (run.has_site)
     m["site"] = {{"latitude_deg", run.site.lat_rad / units::deg},

@@ -164,6 +164,21 @@ check "diagnosis writes the report" contains "$work/dx/report.md" "## Not separa
 check "diagnose on the MPU-6050 session exits 0" test $? -eq 0
 check "diagnosis has the validation" contains "$work/dm/diagnosis.json" '"turn_rms_after_deg"'
 check "10 poses are too few for the accelerometer terms" contains "$work/dm/diagnosis.json" "needs at least 11 poses"
+# calibrate and diagnose gate a session alike (one gate function): accelerometers scaled 40 % off
+# are refused by both with the same cause, and both run with --force.
+mkdir -p "$work/gate"
+sed -e "s#^accel_scale = .*#accel_scale = 0.0035#" -e "s#\.\./\.\./\.\./data#$data#" "$xsens" > "$work/gate/session.ini"
+"$bin" calibrate --method table-free --session "$work/gate/session.ini" --out "$work/gate/r.json" > /dev/null 2> "$work/gate/cal.err"
+check "calibrate refuses a mis-scaled hand-held session" test $? -eq 2
+"$bin" diagnose --session "$work/gate/session.ini" --out "$work/gate/d" --no-plot > /dev/null 2> "$work/gate/diag.err"
+check "diagnose refuses it too" test $? -eq 2
+check "calibrate names the gravity magnitude" contains "$work/gate/cal.err" "gravity magnitude: .*|f| = 13.03 m/s^2 at rest"
+check "diagnose gives the same cause" test "$(sed 's/^sinscal [a-z]*: //' "$work/gate/cal.err")" = "$(sed 's/^sinscal [a-z]*: //' "$work/gate/diag.err")"
+"$bin" diagnose --force --session "$work/gate/session.ini" --out "$work/gate/df" --no-plot > /dev/null 2>&1
+check "diagnose --force runs it" test $? -eq 0
+check "the Xsens fit gate prints its bounds" contains "$work/xsens.txt" "Fit gate: static poses chi2"
+check "converged says what it means" contains "$work/xsens.txt" "converged (the solver's convergence test"
+
 # Bad requests: reported after the other findings are written, exit 2.
 "$bin" diagnose --pose-accel-only --session "$measured/mpu6050-calibration/session.ini" \
   --candidates accel.k2 --out "$work/dk" > /dev/null 2> "$work/dk.err"

@@ -6,9 +6,11 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <random>
 #include <sstream>
 #include <string>
 
+#include "filter/plausibility/rest_plausibility.hpp"
 #include "filter/table_free/table_free.hpp"
 #include "helpers.hpp"
 #include "models/units.hpp"
@@ -314,4 +316,108 @@ TEST_CASE("Table-free calibration of the real Xsens MTi session", "[long][table_
     CHECK(std::abs(r.accel_raw.sensitivity(i) / a_tk(i) - 1.0) < 1e-3);
     CHECK(std::abs(r.gyro_raw.sensitivity(i) - g_tk(i)) < 3.0 * r.gyro_raw.sensitivity_sigma(i));
   }
+}
+
+namespace {
+
+// A fit of 37 poses whose turns miss by `miss` rad per tangent component each (noise sigma
+// 1e-4 rad), the static poses on their noise model: the turns of `peak_rate` (rad/s) over
+// `duration` s at 100 Hz.
+TableFreeResult turn_result(double miss, double peak_rate, double duration) {
+  TableFreeResult r;
+  const int poses = 37;
+  r.accel_fit = {static_cast<double>(poses - 9), 3 * poses, poses - 9.0, 1.0};
+  r.gyro_rest_fit = {static_cast<double>(3 * poses - 3), 3 * poses, 3 * poses - 3.0, 1.0};
+  for (int p = 1; p < poses; ++p) {
+    TableFreeTurn t;
+    t.from = p;
+    t.duration = duration;
+    t.peak_rate = peak_rate;
+    t.angle = 0.6 * peak_rate * duration;
+    t.interval = 0.01;
+    t.noise_sigma = 1e-4;
+    t.chi2 = 2.0 * miss * miss / (t.noise_sigma * t.noise_sigma);
+    r.turn_fit.chi2 += t.chi2;
+    r.turns.push_back(t);
+  }
+  r.turn_fit.residuals = 2 * (poses - 1);
+  r.turn_fit.dof = r.turn_fit.residuals - 9.0;
+  r.chi2 = r.accel_fit.chi2 + r.gyro_rest_fit.chi2 + r.turn_fit.chi2;
+  r.dof = 6 * poses - 23;
+  r.chi2_per_dof = r.chi2 / r.dof;
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("Hand-held fit gate: the turns' bound tracks their rate and duration", "[table_free]") {
+  // Turns that miss by 1 deg (one 100 Hz sample at 200 deg/s is 2 deg): the fixed bound of
+  // chi2/dof 1000 refused such a session whatever its turns.
+  const TableFreeResult fast = turn_result(1.0 * units::deg, 400.0 * units::deg, 2.0);
+  CHECK(fast.chi2_per_dof > 1000.0);
+  const PlausibilityCheck passed = check_handheld_fit(fast, "sim");
+  CAPTURE(passed.detail, handheld_fit_bounds(fast).turn_bound);
+  CHECK(passed.passed);
+  // The same miss on slow, short turns is beyond what their timing and dynamics explain.
+  const TableFreeResult slow = turn_result(1.0 * units::deg, 20.0 * units::deg, 0.5);
+  const PlausibilityCheck refused = check_handheld_fit(slow, "sim");
+  CHECK_FALSE(refused.passed);
+  CHECK(refused.detail.find("turns chi2") != std::string::npos);
+  CHECK(refused.detail.find("static poses") == std::string::npos);
+  // A static stage on its noise model passes; 60 times it (beyond the bias-instability excess
+  // of 30 times its quantile, 1.36 dof here) does not.
+  TableFreeResult off = fast;
+  off.accel_fit.chi2 *= 60.0;
+  off.gyro_rest_fit.chi2 *= 60.0;
+  const PlausibilityCheck static_refused = check_handheld_fit(off, "sim");
+  CHECK_FALSE(static_refused.passed);
+  CHECK(static_refused.detail.find("static poses") != std::string::npos);
+}
+
+TEST_CASE(
+    "Table-free sigmas are scaled per triad and stage: a gyro-only excess leaves the "
+    "accelerometers' sigmas",
+    "[table_free]") {
+  const Site site = site_at(45.0);
+  const SensorProfile prof = mems_profile();
+  const SimSession s = simulate_session(prof, fine_scaling(), 11, site);
+  TableFreeOptions o;
+  o.site = site;
+  const TableFreeResult clean = calibrate_table_free_counts(s.counts, fine_scaling(), o);
+  // The gyro bias steps from pose to pose (bias instability far beyond the model: 0.05 deg/s
+  // against 0.002 deg/s of a pose mean's white noise); the turns and accelerometers untouched.
+  std::vector<ImuReading> counts = s.counts;
+  std::mt19937_64 rng(derive_seed(11, 5));
+  std::normal_distribution<double> step(0.0, 0.05 * units::deg_per_s);
+  // Steps of zero mean over the readings: the bias the fit takes (the poses' mean) and so the
+  // turns stay right, the excess is the gyro poses' alone.
+  std::vector<Eigen::Vector3d> steps;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  double n = 0.0;
+  for (const auto& p : clean.poses) {
+    steps.emplace_back(step(rng), step(rng), step(rng));
+    mean += static_cast<double>(p.last - p.first + 1) * steps.back();
+    n += static_cast<double>(p.last - p.first + 1);
+  }
+  mean /= n;
+  for (std::size_t i = 0; i < clean.poses.size(); ++i) {
+    const Eigen::Vector3d db = fine_scaling().gyro_sensitivity.cwiseProduct(steps[i] - mean);
+    for (std::size_t k = clean.poses[i].first; k <= clean.poses[i].last; ++k) counts[k].gyro += db;
+  }
+  const TableFreeResult stepped = calibrate_table_free_counts(counts, fine_scaling(), o);
+  CAPTURE(clean.accel_fit.chi2_per_dof(), clean.turn_fit.chi2_per_dof());
+  CAPTURE(stepped.accel_fit.chi2_per_dof(), stepped.gyro_rest_fit.chi2_per_dof(),
+          stepped.turn_fit.chi2_per_dof(), stepped.chi2_per_dof);
+  CHECK(stepped.gyro_rest_fit.sigma_scale > 5.0);
+  // The accelerometers see a little of it through the poses' directions the turns share (the
+  // bias the fit takes is weighted by the Earth rate's noise too): scaled by their own excess,
+  // not by the whole fit's (sqrt of 212), which one common factor gave them.
+  CHECK(stepped.accel_fit.sigma_scale < 2.0);
+  CHECK(std::sqrt(stepped.chi2_per_dof) > 5.0 * stepped.accel_fit.sigma_scale);
+  for (const char* name : {"accel.bias.x", "accel.scale.y", "accel.misalignment.zx"}) {
+    CAPTURE(name, clean.at(name).sigma, stepped.at(name).sigma);
+    CHECK(stepped.at(name).sigma < 2.0 * clean.at(name).sigma);
+  }
+  CHECK(stepped.at("gyro.bias.x").sigma > 5.0 * clean.at("gyro.bias.x").sigma);
+  CHECK(stepped.converged);
 }

@@ -1,6 +1,7 @@
 #include "filter/plausibility/rest_plausibility.hpp"
 
 #include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
 #include <filesystem>
 #include <functional>
@@ -302,6 +303,59 @@ PlausibilityCheck check_same_files(const LogFormat& log) {
                ": given as both accel_file and gyro_file: the same file for both "
                "triads (the gyros' file is another)";
   }
+  return c;
+}
+
+namespace {
+
+double chi2_quantile(double dof, double false_alarm) {
+  return boost::math::quantile(boost::math::chi_squared(std::max(dof, 1.0)), 1.0 - false_alarm);
+}
+
+// What a turn's residual variance per component is expected to be over the noise the fit gives
+// it: the noise, a timing error of one sample interval at its peak rate, an unmodelled share of
+// its angle.
+double turn_excess(const TableFreeTurn& t) {
+  if (!(t.noise_sigma > 0.0)) return 1.0;
+  const double timing = t.peak_rate * t.interval;
+  const double dynamics = HandheldFitBounds::kTurnDynamics * t.angle;
+  return 1.0 + (timing * timing + dynamics * dynamics) / (t.noise_sigma * t.noise_sigma);
+}
+
+}  // namespace
+
+HandheldFitBounds handheld_fit_bounds(const TableFreeResult& r) {
+  HandheldFitBounds b;
+  b.static_chi2 = r.accel_fit.chi2 + r.gyro_rest_fit.chi2;
+  b.static_dof = r.accel_fit.dof + r.gyro_rest_fit.dof;
+  b.static_bound = HandheldFitBounds::kStaticExcess *
+                   chi2_quantile(b.static_dof, HandheldFitBounds::kFalseAlarm);
+  b.turn_chi2 = r.turn_fit.chi2;
+  b.turn_dof = r.turn_fit.dof;
+  double sum = 0.0;
+  for (const auto& t : r.turns) sum += turn_excess(t);
+  b.turn_excess = r.turns.empty() ? 1.0 : sum / static_cast<double>(r.turns.size());
+  b.turn_bound = b.turn_excess * chi2_quantile(b.turn_dof, HandheldFitBounds::kFalseAlarm);
+  return b;
+}
+
+PlausibilityCheck check_handheld_fit(const TableFreeResult& r, const std::string& input) {
+  const HandheldFitBounds b = handheld_fit_bounds(r);
+  PlausibilityCheck c{"fit", true, ""};
+  auto part = [&](const char* what, double chi2, double dof, double bound) {
+    if (chi2 <= bound) return;
+    c.passed = false;
+    c.detail +=
+        std::string(c.detail.empty() ? input + ": the table-free fit's residuals: " : "; ") + what +
+        " chi2 " + number(chi2) + " (dof " + number(dof) + ", chi2/dof " +
+        number(chi2 / std::max(dof, 1.0)) + ") beyond its bound " + number(bound);
+  };
+  part("static poses", b.static_chi2, b.static_dof, b.static_bound);
+  part("turns", b.turn_chi2, b.turn_dof, b.turn_bound);
+  if (!c.passed)
+    c.detail +=
+        " (docs/methods/table-free.md): not the data's model; the data are not what the session "
+        "says (a wrong file, column or unit)";
   return c;
 }
 

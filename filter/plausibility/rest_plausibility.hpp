@@ -15,6 +15,7 @@
 #include "filter/plausibility/plausibility.hpp"
 #include "filter/six_face/six_face.hpp"
 #include "filter/table_free/pose_detector.hpp"
+#include "filter/table_free/table_free.hpp"
 #include "rig/handheld.hpp"
 
 namespace sinscal {
@@ -30,7 +31,7 @@ struct RestLimits {
   double gyro_noise_lo = 0.0, gyro_noise_hi = 0.0;
   double accel_noise_lo = 0.0, accel_noise_hi = 0.0;
   /// A fit whose chi2 per dof is beyond this is not the data's model (a wrong file, column or
-  /// unit): a failure, never "converged".
+  /// unit): a failure (six-face; the hand-held fit has bounds of its own, check_handheld_fit).
   double max_fit_chi2_per_dof = 1000.0;
   /// |correlation| of a gyro and an accelerometer column at or above this: one signal.
   double same_signal = 0.999;
@@ -72,6 +73,24 @@ PlausibilityCheck check_same_signal(const std::vector<ImuReading>& readings,
 
 /// "same signal" for a log split over two files: the same file given as accel_file and gyro_file.
 PlausibilityCheck check_same_files(const LogFormat& log);
+
+/// The hand-held fit gate's bounds, per part of the fit (docs/methods/table-free.md, "Sigmas and
+/// the fit gate"): the static poses' chi2 (both triads) against its chi-square quantile times
+/// kStaticExcess; the turns' against their quantile times the mean over the turns of the
+/// variance they are expected to have (noise, a timing error of one sample interval at the
+/// turn's peak rate, kTurnDynamics of its angle) over the noise the fit gives them.
+struct HandheldFitBounds {
+  static constexpr double kFalseAlarm = 1e-3;    // of each part's quantile
+  static constexpr double kStaticExcess = 30.0;  // bias instability over a pose
+  static constexpr double kTurnDynamics = 5e-3;  // unmodelled share of a turn's angle
+  double static_chi2 = 0.0, static_bound = 0.0, static_dof = 0.0;
+  double turn_chi2 = 0.0, turn_bound = 0.0, turn_dof = 0.0;
+  double turn_excess = 1.0;  // mean expected variance over the fit's, over the turns
+};
+HandheldFitBounds handheld_fit_bounds(const TableFreeResult& result);
+
+/// "fit" of a hand-held session: each part within its bound (handheld_fit_bounds).
+PlausibilityCheck check_handheld_fit(const TableFreeResult& result, const std::string& input);
 
 /// "fit": a solution's chi2 per dof against the limit; `what` names the fit.
 PlausibilityCheck check_fit(double chi2_per_dof, const RestLimits& limits, const std::string& input,

@@ -5,6 +5,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <sstream>
@@ -283,6 +284,7 @@ TableFreeStage run(ceres::Problem& problem, int max_iterations, const char* stag
   TableFreeStage st;
   st.iterations = s.num_successful_steps + s.num_unsuccessful_steps;
   st.converged = s.termination_type == ceres::CONVERGENCE;
+  st.message = s.message;
   st.chi2 = 2.0 * s.final_cost;
   st.residuals = s.num_residuals_reduced;
   st.parameters = s.num_effective_parameters_reduced;
@@ -518,10 +520,11 @@ class TableFreeSolver {
   }
 
   void add_turns(ceres::Problem& problem) {
+    turn_ids_.clear();
     for (std::size_t p = 0; p + 1 < pd_.size(); ++p)
-      problem.AddResidualBlock(
+      turn_ids_.push_back(problem.AddResidualBlock(
           new TurnCost(r_, turns_[p].k0, turns_[p].k1, turns_[p].E, turns_[p].inv_sigma), nullptr,
-          gb_, gl_, u_[p].data(), u_[p + 1].data());
+          gb_, gl_, u_[p].data(), u_[p + 1].data()));
   }
 
   // Stage 2: gyro bias from the poses' mean rates, then the gyro matrix from the turns.
@@ -546,19 +549,19 @@ class TableFreeSolver {
     ceres::Problem problem;
     for (std::size_t p = 0; p < pd_.size(); ++p) {
       const auto& d = pd_[p];
-      problem.AddResidualBlock(
+      accel_ids_.push_back(problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<AccelPoseCost, 3, kAccel, 3>(
               new AccelPoseCost{d.accel, (va_ / d.n).cwiseSqrt().cwiseInverse(), g_}),
-          nullptr, a_, u_[p].data());
+          nullptr, a_, u_[p].data()));
       Eigen::Matrix3d cov = (vg_ / d.n).asDiagonal();
       cov += o_.site ? Eigen::Matrix3d(omega_h_ * omega_h_ / 2.0 *
                                        (Eigen::Matrix3d::Identity() - u_[p] * u_[p].transpose()))
                      : Eigen::Matrix3d(Omega_ * Omega_ / 3.0 * Eigen::Matrix3d::Identity());
       const Eigen::Matrix3d L = cov.llt().matrixL();
-      problem.AddResidualBlock(
+      gyro_ids_.push_back(problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<GyroPoseCost, 3, kGyroBias, kGyroLin, 3>(
               new GyroPoseCost{d.gyro, L.inverse(), omega_v_}),
-          nullptr, gb_, gl_, u_[p].data());
+          nullptr, gb_, gl_, u_[p].data()));
     }
     add_turns(problem);
     for (auto& v : u_) problem.SetManifold(v.data(), new ceres::SphereManifold<3>());
@@ -572,6 +575,7 @@ class TableFreeSolver {
     out_.iterations =
         out_.accel_stage.iterations + out_.gyro_stage.iterations + out_.joint_stage.iterations;
     out_.converged = true;
+    out_.termination = out_.joint_stage.message;
     out_.chi2 = out_.joint_stage.chi2;
     out_.dof = out_.joint_stage.residuals - out_.joint_stage.parameters;
     if (out_.dof <= 0)
@@ -579,7 +583,76 @@ class TableFreeSolver {
                            "table-free calibration: no degrees of freedom left with " +
                                std::to_string(pd_.size()) + " poses");
     out_.chi2_per_dof = out_.chi2 / out_.dof;
+    fit_parts(problem);
     store_coefficients(covariance_of_blocks(problem));
+  }
+
+  // The residuals of some blocks at the solution.
+  static std::vector<double> residuals_of(ceres::Problem& problem,
+                                          const std::vector<ceres::ResidualBlockId>& ids) {
+    ceres::Problem::EvaluateOptions eo;
+    eo.residual_blocks = ids;
+    eo.apply_loss_function = false;
+    double cost = 0.0;
+    std::vector<double> r;
+    problem.Evaluate(eo, &cost, &r, nullptr, nullptr);
+    return r;
+  }
+
+  static TableFreeFitPart fit_part(const std::vector<double>& r, double leverage) {
+    TableFreeFitPart f;
+    for (double x : r) f.chi2 += x * x;
+    f.residuals = static_cast<int>(r.size());
+    f.dof = static_cast<double>(f.residuals) - leverage;
+    if (f.dof > 0.0) f.sigma_scale = std::max(1.0, std::sqrt(f.chi2 / f.dof));
+    return f;
+  }
+
+  // The leverage of each part (the sum of the hat matrix's diagonal over its residuals): the
+  // parameters it determines, the directions shared with the other parts counted by share.
+  std::array<double, 3> leverages(ceres::Problem& problem) const {
+    std::vector<ceres::ResidualBlockId> all = accel_ids_;
+    all.insert(all.end(), gyro_ids_.begin(), gyro_ids_.end());
+    all.insert(all.end(), turn_ids_.begin(), turn_ids_.end());
+    ceres::Problem::EvaluateOptions eo;
+    eo.residual_blocks = all;
+    ceres::CRSMatrix crs;
+    problem.Evaluate(eo, nullptr, nullptr, nullptr, &crs);
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+    for (int i = 0; i < crs.num_rows; ++i)
+      for (int k = crs.rows[static_cast<std::size_t>(i)];
+           k < crs.rows[static_cast<std::size_t>(i) + 1]; ++k)
+        J(i, crs.cols[static_cast<std::size_t>(k)]) = crs.values[static_cast<std::size_t>(k)];
+    const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(J).householderQ() *
+                              Eigen::MatrixXd::Identity(J.rows(), J.cols());
+    const Eigen::VectorXd h = Q.rowwise().squaredNorm();  // hat matrix diagonal
+    const auto na = static_cast<Eigen::Index>(3 * accel_ids_.size());
+    const auto ng = static_cast<Eigen::Index>(3 * gyro_ids_.size());
+    return {h.head(na).sum(), h.segment(na, ng).sum(), h.tail(h.size() - na - ng).sum()};
+  }
+
+  // The chi2 in parts and the turns one by one (rate, angle, duration: the fit gate's bound).
+  void fit_parts(ceres::Problem& problem) {
+    const std::array<double, 3> lev = leverages(problem);
+    out_.accel_fit = fit_part(residuals_of(problem, accel_ids_), lev[0]);
+    out_.gyro_rest_fit = fit_part(residuals_of(problem, gyro_ids_), lev[1]);
+    const std::vector<double> rt = residuals_of(problem, turn_ids_);
+    out_.turn_fit = fit_part(rt, lev[2]);
+    for (std::size_t p = 0; p < turns_.size(); ++p) {
+      const Turn& t = turns_[p];
+      TableFreeTurn o;
+      o.from = pd_[p].pose->index;
+      o.duration = r_[t.k1].t - r_[t.k0].t;
+      for (std::size_t k = t.k0 + 1; k <= t.k1; ++k) {
+        const double w = r_[k].gyro.norm();
+        o.angle += w * (r_[k].t - r_[k - 1].t);
+        o.peak_rate = std::max(o.peak_rate, w);
+      }
+      o.interval = o.duration / static_cast<double>(std::max<std::size_t>(1, t.k1 - t.k0));
+      o.noise_sigma = 1.0 / t.inv_sigma;
+      o.chi2 = rt[2 * p] * rt[2 * p] + rt[2 * p + 1] * rt[2 * p + 1];
+      out_.turns.push_back(o);
+    }
   }
 
   Eigen::Matrix<double, 21, 21, Eigen::RowMajor> covariance_of_blocks(ceres::Problem& problem) {
@@ -597,7 +670,13 @@ class TableFreeSolver {
                            "poses do not turn the unit about enough different axes)");
     Eigen::Matrix<double, 21, 21, Eigen::RowMajor> C_blocks;
     covariance.GetCovarianceMatrix(blocks, C_blocks.data());
-    C_blocks *= out_.chi2_per_dof;
+    // Each block by its own part's excess (not one factor for all: a gyro-only excess must not
+    // inflate the accelerometers' sigmas).
+    Eigen::Matrix<double, 21, 1> scale;
+    scale.segment<9>(0).setConstant(out_.accel_fit.sigma_scale);
+    scale.segment<3>(9).setConstant(out_.gyro_rest_fit.sigma_scale);
+    scale.segment<9>(12).setConstant(out_.turn_fit.sigma_scale);
+    C_blocks = scale.asDiagonal() * C_blocks * scale.asDiagonal();
     return C_blocks;
   }
 
@@ -673,6 +752,7 @@ class TableFreeSolver {
   double gl_[kGyroLin] = {0.0};
   std::vector<Eigen::Vector3d> u_;
   std::vector<Turn> turns_;
+  std::vector<ceres::ResidualBlockId> accel_ids_, gyro_ids_, turn_ids_;
 };
 
 }  // namespace

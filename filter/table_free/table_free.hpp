@@ -94,6 +94,32 @@ struct TableFreeStage {
   double chi2 = 0.0;
   int residuals = 0;
   int parameters = 0;
+  std::string message;  // the solver's termination
+};
+
+/// One part of the joint fit's chi2: the static poses' accelerometer or gyro residuals, or the
+/// turns'. `dof` is its residuals less its leverage (the sum of the hat matrix's diagonal over
+/// them: the parameters it determines, the poses' directions shared with the other parts by
+/// share); the three add up to the joint fit's dof.
+struct TableFreeFitPart {
+  double chi2 = 0.0;
+  int residuals = 0;
+  double dof = 0.0;
+  /// sqrt(chi2/dof) when above 1, else 1: the factor the sigmas of this part's coefficients
+  /// are scaled by (docs/methods/table-free.md, "Sigmas and the fit gate").
+  double sigma_scale = 1.0;
+  double chi2_per_dof() const { return dof > 0.0 ? chi2 / dof : 0.0; }
+};
+
+/// One turn between two poses as the fit gate sees it.
+struct TableFreeTurn {
+  int from = 0;              // the pose it starts from (1-based, as detected)
+  double duration = 0.0;     // s
+  double angle = 0.0;        // rad: integral of |omega| (nominal) over the turn
+  double peak_rate = 0.0;    // rad/s: largest |omega| (nominal) in the turn
+  double interval = 0.0;     // s: mean sample interval in the turn
+  double noise_sigma = 0.0;  // rad: the fit's 1-sigma per tangent component (noise, Earth)
+  double chi2 = 0.0;         // its 2 residuals at the solution
 };
 
 struct TableFreeResult {
@@ -101,7 +127,8 @@ struct TableFreeResult {
   /// The 24 base coefficients in coefficient_catalog() order, value and sigma (SI).
   std::vector<TableFreeCoefficient> coefficients;
   /// Covariance (SI) of the 21 estimated coefficients, in the order of `covariance_names`
-  /// (the coefficients above without the three fixed by convention); scaled by chi2/dof.
+  /// (the coefficients above without the three fixed by convention); each block scaled by its
+  /// part's sigma_scale (accel_fit, gyro_rest_fit, turn_fit) squared.
   Eigen::MatrixXd covariance;
   std::vector<std::string> covariance_names;
   bool has_raw = false;  // raw views filled (the readings were counts with a nominal scaling)
@@ -112,7 +139,15 @@ struct TableFreeResult {
   int dof = 0;
   double chi2_per_dof = 0.0;
   int iterations = 0;  // all stages
+  /// The joint solver stopped on its convergence test (relative change of the cost, the
+  /// gradient or the parameter step below its tolerance; `termination` says which), not on
+  /// the iteration limit. Says nothing of the chi2: the fit gate judges that.
   bool converged = false;
+  std::string termination;  // the solver's message
+  /// The joint fit's chi2 in parts (their sigma scales applied to the covariance per block:
+  /// accelerometer terms, gyro biases, gyro matrix) and the turns one by one.
+  TableFreeFitPart accel_fit, gyro_rest_fit, turn_fit;
+  std::vector<TableFreeTurn> turns;
   TableFreeStage accel_stage, gyro_stage, joint_stage;
   /// Per-reading noise at rest, pooled over the poses (SI): accel m/s^2, gyro rad/s.
   Eigen::Vector3d accel_noise = Eigen::Vector3d::Zero();
