@@ -28,12 +28,7 @@ ResultCoefficients result_coefficients(const RateTableResult& r) {
   ResultCoefficients out;
   for (const auto& c : r.coefficients) {
     if (!c.in_catalog) continue;
-    const CoefficientInfo info = info_of(c);
-    ResultCoefficient rc;
-    rc.value = c.value / info.si_per_unit;
-    rc.sigma = c.sigma / info.si_per_unit;
-    rc.unit = info.unit;
-    out[c.name] = rc;
+    out[c.name] = result_coefficient(info_of(c), c.value, c.sigma);
   }
   return out;
 }

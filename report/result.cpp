@@ -11,19 +11,26 @@
 
 namespace sinscal {
 
+ResultCoefficient result_coefficient(const CoefficientInfo& info, double value_si,
+                                     double sigma_si) {
+  ResultCoefficient c;
+  c.value = value_si / info.si_per_unit;
+  c.sigma = sigma_si / info.si_per_unit;
+  c.unit = info.unit;
+  return c;
+}
+
 ResultCoefficients result_coefficients(const std::vector<CoefficientEstimate>& est) {
   ResultCoefficients out;
   const auto& cat = coefficient_catalog();
   for (std::size_t i = 0; i < cat.size() && i < est.size(); ++i) {
     if (est[i].status == CoefficientEstimate::Status::Off) continue;
-    ResultCoefficient c;
+    const bool fixed = est[i].status == CoefficientEstimate::Status::FixedByConvention;
+    ResultCoefficient c =
+        fixed ? ResultCoefficient{} : result_coefficient(cat[i], est[i].value, est[i].sigma);
     c.unit = cat[i].unit;
-    c.fixed_by_convention = est[i].status == CoefficientEstimate::Status::FixedByConvention;
-    if (!c.fixed_by_convention) {
-      c.value = est[i].value / cat[i].si_per_unit;
-      c.sigma = est[i].sigma / cat[i].si_per_unit;
-      c.observable = est[i].observed();
-    }
+    c.fixed_by_convention = fixed;
+    if (!fixed) c.observable = est[i].observed();
     out[cat[i].name] = c;
   }
   return out;

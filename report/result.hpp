@@ -27,6 +27,10 @@ struct ResultCoefficient {
 /// Result / truth JSON: {"coefficients": {"gyro.bias.x": {"value": .., "sigma": .., "unit": ..}}}.
 using ResultCoefficients = std::map<std::string, ResultCoefficient>;
 
+/// One estimate in SI units (rad/s, m/s^2, ...) as a result coefficient in its family's
+/// engineering unit.
+ResultCoefficient result_coefficient(const CoefficientInfo& info, double value_si, double sigma_si);
+
 /// The coefficients of the blocks an estimator had on (status not Off), in engineering units.
 ResultCoefficients result_coefficients(const std::vector<CoefficientEstimate>& estimates);
 /// The Kalman filter's and the closed form's coefficients.

@@ -37,12 +37,7 @@ nlohmann::ordered_json raw_view(const TriadErrors& t, const TriadColumns& c, con
 ResultCoefficients result_coefficients(const SixFaceResult& r) {
   ResultCoefficients out;
   for (const auto& c : r.coefficients) {
-    const CoefficientInfo& info = info_of(c.name);
-    ResultCoefficient rc;
-    rc.value = c.value / info.si_per_unit;
-    rc.sigma = c.sigma / info.si_per_unit;
-    rc.unit = info.unit;
-    out[c.name] = rc;
+    out[c.name] = result_coefficient(info_of(c.name), c.value, c.sigma);
   }
   return out;
 }

@@ -36,13 +36,10 @@ ResultCoefficients result_coefficients(const TableFreeRun& run) {
   ResultCoefficients out;
   for (const auto& c : run.result.coefficients) {
     const CoefficientInfo& info = coefficient_info(c.name);
-    ResultCoefficient r;
+    ResultCoefficient r =
+        c.fixed_by_convention ? ResultCoefficient{} : result_coefficient(info, c.value, c.sigma);
     r.unit = info.unit;
     r.fixed_by_convention = c.fixed_by_convention;
-    if (!c.fixed_by_convention) {
-      r.value = c.value / info.si_per_unit;
-      r.sigma = c.sigma / info.si_per_unit;
-    }
     out[c.name] = r;
   }
   return out;
