@@ -11,6 +11,7 @@
 #include "filter/design/hand_plans.hpp"
 #include "filter/design/prediction.hpp"
 #include "filter/design/robustness.hpp"
+#include "filter/design/rounding.hpp"
 #include "filter/design/search.hpp"
 #include "helpers.hpp"
 #include "models/coefficient_families.hpp"
@@ -499,6 +500,14 @@ TEST_CASE("Design bound: below the best of every plan of three turns, and the be
   CHECK(b.lower <= b.upper);
   CHECK(b.lower <= best.second.worst_ratio);
   CHECK(best.second.worst_ratio <= found.second.worst_ratio + 1e-12);
+  // The relaxed design rounded into a plan: the budget filled to within one segment, the
+  // table's limits kept, the turns taken those the design gives time to.
+  const Plan rounded = rounded_design(lib, b, table, rot19.site);
+  const double rounded_s = build_motion(rounded, rounded.site).duration();
+  CHECK(rounded_s <= duration + 1e-6);
+  CHECK(rounded_s > duration - 13.0);  // the longest segment: a 180 deg turn and a dwell
+  CHECK(check_against_table(build_motion(rounded, rounded.site), table, 0.5).empty());
+  CHECK_FALSE(rounded.steps.empty());
   WARN("bound " << b.lower << " (relaxed " << b.upper << ", " << b.iterations
                 << " iterations) <= enumerated " << best.second.worst_ratio << " <= beam "
                 << found.second.worst_ratio << "; library " << lib.cpu_s << " s CPU");
@@ -507,8 +516,9 @@ TEST_CASE("Design bound: below the best of every plan of three turns, and the be
 TEST_CASE("Plan search: at least as good as every dwell-scaled hand plan, budgets 200-1000 s",
           "[design][search][long]") {
   // The toolbox's mode and targets. At each budget the search's worst sigma / target is at most
-  // that of rot19 and seed8, as they are and with their dwells scaled, at every budget of the
-  // sweep up to it. CI runs 200, 500 and 1000 s; SINSCAL_DESIGN_SWEEP=full runs every 100 s.
+  // that of rot19, seed8 and the toolbox's own 19-position plan (toolbox19, 982 s), as they are
+  // and with their dwells scaled, at every budget of the sweep up to it: every 100 s from 200 s
+  // to 1000 s (about 30 s of CPU).
   const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
   const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
   CalibratorOptions ko = calibrator_options_from_profile(prof);
@@ -517,11 +527,10 @@ TEST_CASE("Plan search: at least as good as every dwell-scaled hand plan, budget
   SearchOptions so = lab_targets();
   so.rate_hz = 10.0;
   so.beam = 1;
-  so.seeds = {test::load_plan("rot19.ini"), test::load_plan("seed8.ini")};
-  const char* sweep = std::getenv("SINSCAL_DESIGN_SWEEP");
-  std::vector<double> budgets = {200.0, 500.0, 1000.0};
-  if (sweep && std::string(sweep) == "full")
-    budgets = {200.0, 300.0, 400.0, 500.0, 600.0, 700.0, 800.0, 900.0, 1000.0};
+  so.seeds = {test::load_plan("rot19.ini"), test::load_plan("seed8.ini"),
+              test::load_plan("toolbox19.ini")};
+  const std::vector<double> budgets = {200.0, 300.0, 400.0, 500.0, 600.0,
+                                       700.0, 800.0, 900.0, 1000.0};
   DesignOptions d;
   d.rate_hz = so.rate_hz;
   d.history_interval = 1e9;
@@ -551,6 +560,31 @@ TEST_CASE("Plan search: at least as good as every dwell-scaled hand plan, budget
     WARN("budget " << b << " s: " << r.origin << ", " << duration << " s, worst "
                    << r.excess.worst_ratio << " (" << r.excess.worst_family << ")");
   }
+}
+
+TEST_CASE("Design: the toolbox's 19-position plan is rot19's turns with both dwells of each turn",
+          "[design][search]") {
+  // The toolbox states each turn with a dwell before it and after it (70 s and 70 s for the
+  // first, 20 s and 20 s for the others): 982 s, rot19's start and turns.
+  const Plan toolbox = test::load_plan("toolbox19.ini");
+  const Plan rot19 = test::load_plan("rot19.ini");
+  CHECK(build_motion(toolbox, toolbox.site).duration() == Approx(982.0).margin(1e-6));
+  std::vector<double> dwells = {70.0, 90.0};
+  dwells.insert(dwells.end(), 16, 40.0);
+  dwells.push_back(20.0);
+  const std::vector<double> d = plan_dwells(toolbox);
+  REQUIRE(d.size() == dwells.size());
+  for (std::size_t i = 0; i < d.size(); ++i) CHECK(d[i] == Approx(dwells[i]));
+  REQUIRE(toolbox.steps.size() == rot19.steps.size());
+  for (std::size_t i = 0; i < toolbox.steps.size(); ++i) {
+    CHECK(toolbox.steps[i].axis_name == rot19.steps[i].axis_name);
+    CHECK(toolbox.steps[i].angle == Approx(rot19.steps[i].angle));
+    CHECK(toolbox.steps[i].duration == Approx(rot19.steps[i].duration));
+  }
+  CHECK(toolbox.start.heading == rot19.start.heading);
+  CHECK(toolbox.start.pitch == rot19.start.pitch);
+  CHECK(toolbox.start.roll == rot19.start.roll);
+  CHECK(toolbox.convention == rot19.convention);
 }
 
 TEST_CASE("Plan search: a hand plan with its dwells scaled to a table time", "[design][search]") {

@@ -134,6 +134,9 @@ InformationLibrary information_library(const CalibratorOptions& options, const T
   const std::vector<Node> nodes = orientation_nodes(c, pause);
   InformationLibrary lib;
   lib.orientations = int(nodes.size());
+  while (lib.start < lib.orientations &&
+         nodes[std::size_t(lib.start)].orientation != Orientation::Identity())
+    ++lib.start;
   const Scaling s =
       scaling_of(nodes.front().grower, targets,
                  predict_plan(plan_of(nodes.front().grower.genome(), table, site, "prior"), oracle,
@@ -151,19 +154,20 @@ InformationLibrary information_library(const CalibratorOptions& options, const T
         const TurnChoice turn{axis, quarters * 90.0 * units::deg, pause};
         const Grower g = nodes[i].grower.extended(turn, c);
         const Eigen::MatrixXd after = information(g, s);
-        lib.segments.push_back(
-            {"o" + std::to_string(i) + " " + axes[axis] + " " + std::to_string(90 * quarters),
-             g.duration() - nodes[i].grower.duration(), increase(after, before, 1.0)});
         const Orientation to = turned(nodes[i].orientation, axis, quarters);
         std::size_t k = 0;
         while (nodes[k].orientation != to) ++k;
+        lib.segments.push_back(
+            {"o" + std::to_string(i) + " " + axes[axis] + " " + std::to_string(90 * quarters),
+             g.duration() - nodes[i].grower.duration(), increase(after, before, 1.0), int(i),
+             int(k), axis, quarters});
         if (rested[k]) continue;
         rested[k] = true;
         TurnChoice longer = turn;
         longer.pause += rest;
         const Grower l = nodes[i].grower.extended(longer, c);
-        lib.segments.push_back(
-            {"o" + std::to_string(k) + " static", 1.0, increase(information(l, s), after, rest)});
+        lib.segments.push_back({"o" + std::to_string(k) + " static", 1.0,
+                                increase(information(l, s), after, rest), int(k), int(k)});
       }
   }
   lib.cpu_s = double(std::clock() - c0) / CLOCKS_PER_SEC;
@@ -227,6 +231,34 @@ double best_certificate(const std::vector<Eigen::MatrixXd>& J, const Eigen::Vect
 
 }  // namespace
 
+namespace {
+
+// The smoothed maximum tau log sum exp(r / tau) of the squared ratios, and its weights (the
+// soft maximum's).
+double smooth_max(const Eigen::VectorXd& r, double tau, Eigen::VectorXd* mu = nullptr) {
+  const double m = r.maxCoeff();
+  const Eigen::ArrayXd e = ((r.array() - m) / tau).exp();
+  if (mu) *mu = e.matrix() / e.sum();
+  return m + tau * std::log(e.sum());
+}
+
+// The multiplicative step of the weighted criterion sum_k mu_k (M^-1)_kk at `it`: x_j times
+// (s_j / sum_i x_i s_i)^delta, s_j = tr(M^-1 C_mu M^-1 J_j).
+Eigen::VectorXd multiplicative_step(const std::vector<Eigen::MatrixXd>& J, const Eigen::VectorXd& x,
+                                    const Iterate& it, const Eigen::VectorXd& mu,
+                                    const std::vector<int>& targeted, double delta) {
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(it.Minv.rows(), it.Minv.cols());
+  for (std::size_t k = 0; k < targeted.size(); ++k)
+    A.noalias() +=
+        mu(Eigen::Index(k)) * it.Minv.col(targeted[k]) * it.Minv.col(targeted[k]).transpose();
+  Eigen::VectorXd s(static_cast<Eigen::Index>(J.size()));
+  for (std::size_t j = 0; j < J.size(); ++j) s(Eigen::Index(j)) = A.cwiseProduct(J[j]).sum();
+  Eigen::VectorXd next = x.cwiseProduct((s / x.dot(s)).array().pow(delta).matrix());
+  return next / next.sum();
+}
+
+}  // namespace
+
 DesignBound relaxed_bound(const InformationLibrary& lib, double budget_s, double tolerance,
                           int max_iterations) {
   std::vector<int> targeted;
@@ -239,41 +271,47 @@ DesignBound relaxed_bound(const InformationLibrary& lib, double budget_s, double
   for (std::size_t j = 0; j < m; ++j)
     J[j] = lib.segments[j].information * (budget_s / lib.segments[j].duration);
   Eigen::VectorXd x = Eigen::VectorXd::Constant(Eigen::Index(m), 1.0 / double(m));
+  Iterate it = iterate_at(lib, J, x, targeted);
   DesignBound b;
   b.budget_s = budget_s;
-  double best = std::numeric_limits<double>::infinity(), lower = 0.0;
-  Eigen::VectorXd best_x = x;
-  int worst = 0;
-  double beta = 10.0;
+  double lower = 0.0, beta = 10.0, delta = 1.0;
+  Eigen::Index k_max = 0;
+  double best = it.r.maxCoeff(&k_max);
+  int worst = targeted[std::size_t(k_max)];
   for (b.iterations = 1; b.iterations <= max_iterations; ++b.iterations) {
-    const Iterate it = iterate_at(lib, J, x, targeted);
-    Eigen::Index k_max = 0;
+    if (b.iterations % 50 == 1) lower = std::max(lower, best_certificate(J, x, it, targeted));
+    if (best - lower <= tolerance * best) break;
+    // A damped step on the smoothed maximum (sharpness beta relative to the current maximum),
+    // taken when it lowers it, else the damping halved (backtracking).
+    const double tau = it.r.maxCoeff() / beta;
+    Eigen::VectorXd mu;
+    const double f = smooth_max(it.r, tau, &mu);
+    const Eigen::VectorXd trial = multiplicative_step(J, x, it, mu, targeted, delta);
+    Iterate next = iterate_at(lib, J, trial, targeted);
+    if (!(smooth_max(next.r, tau) < f)) {
+      delta *= 0.5;
+      if (delta < 1e-3) {  // no descent at this sharpness: smoother
+        delta = 1.0;
+        beta = std::max(1.0, beta * 0.5);
+      }
+      continue;
+    }
+    x = trial;
+    it = std::move(next);
+    delta = std::min(1.0, 2.0 * delta);
+    beta = std::min(1e3, beta * 1.05);
     const double r_max = it.r.maxCoeff(&k_max);
     if (r_max < best) {
       best = r_max;
-      best_x = x;
       worst = targeted[std::size_t(k_max)];
+      b.time_s.assign(m, 0.0);
+      for (std::size_t j = 0; j < m; ++j) b.time_s[j] = x(Eigen::Index(j)) * budget_s;
     }
-    if (b.iterations % 50 == 1) lower = std::max(lower, best_certificate(J, x, it, targeted));
-    if (best - lower <= tolerance * best) break;
-    // The smoothed maximum's weights mu, and the multiplicative step of its L-optimal design.
-    const Eigen::VectorXd mu_raw = (beta * (it.r.array() / r_max - 1.0)).exp().matrix();
-    const Eigen::VectorXd mu = mu_raw / mu_raw.sum();
-    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(it.Minv.rows(), it.Minv.cols());
-    for (std::size_t k = 0; k < targeted.size(); ++k)
-      A.noalias() +=
-          mu(Eigen::Index(k)) * it.Minv.col(targeted[k]) * it.Minv.col(targeted[k]).transpose();
-    Eigen::VectorXd s(static_cast<Eigen::Index>(m));
-    for (std::size_t j = 0; j < m; ++j) s(Eigen::Index(j)) = A.cwiseProduct(J[j]).sum();
-    x = x.cwiseProduct(s / x.dot(s));
-    x /= x.sum();
-    beta = std::min(1e3, beta * 1.02);
   }
   b.lower = std::sqrt(std::max(0.0, lower));
   b.upper = std::sqrt(best);
   b.family = coefficient_catalog()[std::size_t(lib.catalog[std::size_t(worst)])].family;
-  b.time_s.resize(m);
-  for (std::size_t j = 0; j < m; ++j) b.time_s[j] = best_x(Eigen::Index(j)) * budget_s;
+  if (b.time_s.empty()) b.time_s.assign(m, budget_s / double(m));
   return b;
 }
 

@@ -21,12 +21,17 @@ struct InformationLibrary {
     std::string name;             // e.g. "o3 +x 90" (a turn from orientation 3), "o3 static"
     double duration = 0.0;        // s of table time it takes
     Eigen::MatrixXd information;  // scaled, symmetric positive semi-definite
+    int from = 0;                 // the orientation (index) it starts at
+    int to = 0;                   // the orientation it ends at (from, for a rest)
+    int axis = -1;                // 0..5 (+x -x +y -y +z -z) for a turn; -1 for a rest
+    int quarters = 0;             // the turn's angle in quarter turns (1 or 2)
   };
   std::vector<Segment> segments;
   Eigen::MatrixXd prior;       // the prior's information, scaled
   std::vector<int> catalog;    // coefficient_catalog() index of each state
   std::vector<bool> targeted;  // the state's family has a target
   int orientations = 0;        // distinct static orientations in the library
+  int start = 0;               // the orientation of the search's first start (body x up)
   double cpu_s = 0.0;          // CPU it took to build
 };
 
