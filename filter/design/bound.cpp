@@ -260,7 +260,7 @@ Eigen::VectorXd multiplicative_step(const std::vector<Eigen::MatrixXd>& J, const
 }  // namespace
 
 DesignBound relaxed_bound(const InformationLibrary& lib, double budget_s, double tolerance,
-                          int max_iterations) {
+                          int max_iterations, double decide) {
   std::vector<int> targeted;
   for (std::size_t i = 0; i < lib.targeted.size(); ++i)
     if (lib.targeted[i]) targeted.push_back(int(i));
@@ -281,6 +281,7 @@ DesignBound relaxed_bound(const InformationLibrary& lib, double budget_s, double
   for (b.iterations = 1; b.iterations <= max_iterations; ++b.iterations) {
     if (b.iterations % 50 == 1) lower = std::max(lower, best_certificate(J, x, it, targeted));
     if (best - lower <= tolerance * best) break;
+    if (decide > 0.0 && (lower > decide * decide || best < decide * decide)) break;
     // A damped step on the smoothed maximum (sharpness beta relative to the current maximum),
     // taken when it lowers it, else the damping halved (backtracking).
     const double tau = it.r.maxCoeff() / beta;
@@ -319,7 +320,7 @@ double bound_time_for_targets(const InformationLibrary& lib, double resolution_s
   double lo = 0.0, hi = max_s;  // lo: certified not to meet (0: nothing at all)
   while (hi - lo > resolution_s) {
     const double mid = 0.5 * (lo + hi);
-    if (relaxed_bound(lib, mid, 0.02, 4000).lower > 1.0)
+    if (relaxed_bound(lib, mid, 0.02, 4000, 1.0).lower > 1.0)
       lo = mid;
     else
       hi = mid;

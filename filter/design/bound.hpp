@@ -66,8 +66,10 @@ struct DesignBound {
   int iterations = 0;
   std::vector<double> time_s;  // the relaxed design's time per segment
 };
+/// With `decide` > 0 it also stops as soon as the bound is above `decide` or the relaxed design
+/// below it (all the bisection for the time needs).
 DesignBound relaxed_bound(const InformationLibrary& library, double budget_s,
-                          double tolerance = 0.02, int max_iterations = 20000);
+                          double tolerance = 0.02, int max_iterations = 20000, double decide = 0.0);
 
 /// A table time below which no plan of the library's segments meets every target (certified:
 /// the bound's `lower` exceeds 1 there), by bisection to `resolution_s`.
