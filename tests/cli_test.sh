@@ -298,6 +298,8 @@ check "... naming the segment and the rates" contains "$work/design2.err" "motio
 check "design --optimize exits 0" test $? -eq 0
 check "... meets the targets" grep -qE '^optimized .* yes ' "$work/opt.txt"
 check "... compares with rot19" grep -qE '^rot19 ' "$work/opt.txt"
+check "... prints the gap to the bound" grep -qE '^Bound \(convex relaxation .* is -?[0-9]+ % above it' "$work/opt.txt"
+check "... the found plan at or above the bound (design.json)" python3 -c "import json,sys; b=json.load(open('$work/opt/design.json'))['bound']; sys.exit(not (0 < b['lower_worst_ratio'] <= b['found_worst_ratio'] and b['gap'] >= 0))"
 "$bin" simulate --plan "$work/opt/optimized.ini" --sensor "$src/config/sensors/nav-fog-extended.ini" --out "$work/opt/session" --rate 50 --seed 5 > /dev/null
 check "simulate runs the optimized plan" test $? -eq 0
 "$bin" calibrate --session "$work/opt/session/session.ini" --method kf --out "$work/opt/result.json" > /dev/null
@@ -323,6 +325,7 @@ check "design --optimize exits 5 when no plan meets the targets" test $? -eq 5
 check "... writes no optimized.ini" test ! -e "$work/unmet/optimized.ini"
 check "... writes the best as best_unmet.ini" test -s "$work/unmet/best_unmet.ini"
 check "... and says it" grep -q "No plan found within the budget meets every target" "$work/unmet.txt"
+check "... and prints the gap to the bound" grep -qE '^Bound \(convex relaxation .* % above it' "$work/unmet.txt"
 
 # design --optimize --require: the shortest plan that determines the lever arms (they show only in
 # turns), confirmed observed by the final pass.
