@@ -108,7 +108,7 @@ double floor_grid(double s) { return std::floor(s * 10.0 + 1e-9) / 10.0; }
 
 Plan rounded_design(const InformationLibrary& lib, const DesignBound& bound, const TableSpec& table,
                     const Site& site, const std::string& name) {
-  if (bound.time_s.size() != lib.segments.size())
+  if (bound.time_s.size() != lib.segments.size() || lib.start < 0 || lib.start >= lib.orientations)
     throw std::invalid_argument("rounded design: the design is not of this library");
   const double pause = shortest_pause(table);
   const Walk w = walk(lib, bound, pause);
