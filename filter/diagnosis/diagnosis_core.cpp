@@ -1,5 +1,6 @@
 #include "filter/diagnosis/diagnosis_core.hpp"
 
+#include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/fisher_f.hpp>
 #include <cmath>
@@ -44,6 +45,32 @@ void f_verdict(TestVerdict& v, double likelihood_ratio, double scale, int dof2) 
                                           boost::math::fisher_f(v.dof, dof2), v.statistic))
                                     : 1.0;
   v.log10_p = log10_f_tail(v.statistic, v.dof, dof2);
+}
+
+TestVerdict ljung_box(const std::vector<double>& series, int lags) {
+  TestVerdict v;
+  v.test = "ljung-box";
+  const auto n = static_cast<int>(series.size());
+  const int h = lags > 0 ? lags : std::min(10, n / 5);
+  if (h < 1 || n <= h + 1) return v;
+  double mean = 0.0;
+  for (double x : series) mean += x;
+  mean /= n;
+  double c0 = 0.0;
+  for (double x : series) c0 += (x - mean) * (x - mean);
+  if (!(c0 > 0.0)) return v;
+  double q = 0.0;
+  for (int k = 1; k <= h; ++k) {
+    double ck = 0.0;
+    for (int t = k; t < n; ++t)
+      ck += (series[static_cast<std::size_t>(t)] - mean) *
+            (series[static_cast<std::size_t>(t - k)] - mean);
+    const double r = ck / c0;
+    q += r * r / (n - k);
+  }
+  v.dof = h;
+  chi2_verdict(v, "ljung-box", static_cast<double>(n) * (n + 2.0) * q);
+  return v;
 }
 
 std::string findings_cap_stop(int cap, const std::string& where, const std::string& family) {

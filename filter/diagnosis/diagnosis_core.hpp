@@ -2,7 +2,8 @@
 // diagnosis_kalman.hpp; hand-held, handheld_diagnosis.hpp; six-face, filter/six_face/six_face.hpp;
 // a chamber's soaks, thermal_diagnosis.hpp): the options of a search, the record of one
 // significance test with its p-value, the round's most significant candidate, the merging of a
-// round's single components into their families' candidates, and the statement of a findings cap.
+// round's single components into their families' candidates, the statement of a findings cap, and
+// the Ljung-Box test of an innovation sequence's whiteness.
 // docs/methods/diagnosis.md.
 #pragma once
 
@@ -56,6 +57,13 @@ void chi2_verdict(TestVerdict& v, const std::string& test, double statistic);
 /// A likelihood ratio over the extended fit's residual scale (chi-square per dof, `scale`) against
 /// F(v.dof, dof2): sets v's test ("F"), statistic, dof2, p_value and log10_p.
 void f_verdict(TestVerdict& v, double likelihood_ratio, double scale, int dof2);
+
+/// The Ljung-Box portmanteau test of a series' whiteness (the filter's normalized innovations of
+/// one update channel, in time order): Q = n (n + 2) sum over k = 1..lags of r_k^2 / (n - k),
+/// r_k the sample autocorrelation at lag k about the series' mean, against chi-square(lags):
+/// test "ljung-box", statistic Q, dof the lags (lags 0: min(10, n / 5)). dof 0 (not tested) when
+/// the series is too short for one lag (n <= lags + 1) or constant.
+TestVerdict ljung_box(const std::vector<double>& series, int lags = 0);
 
 /// Marks `v` significant below `threshold` (tested: dof > 0, and p_value below it).
 inline void mark_significant(TestVerdict& v, double threshold) {
