@@ -42,14 +42,14 @@ int diagnose_six_face_session(const Session& session, const std::string& out_dir
     std::printf("\n");
   }
   std::printf("\nWald statistic %.1f on %d dof, p = %.3g: ", t.statistic, t.dof, t.p_value);
-  if (t.detected)
-    std::printf("g-sensitivity DETECTED at alpha %.3g (largest term %.4f %s).\n", t.alpha,
+  if (t.significant)
+    std::printf("g-sensitivity DETECTED at alpha %.3g (largest term %.4f %s).\n", t.threshold,
                 t.K.cwiseAbs().maxCoeff() / per, info.unit().c_str());
   else
     std::printf(
         "not detected at alpha %.3g: below the detection limit of %.4f %s per term on this "
         "session.\n",
-        t.alpha, t.detection_limit / per, info.unit().c_str());
+        t.threshold, t.detection_limit / per, info.unit().c_str());
   if (out_dir.empty()) return 0;
   nlohmann::ordered_json K = nlohmann::ordered_json::array(), S = nlohmann::ordered_json::array();
   for (int i = 0; i < 3; ++i) {
@@ -65,8 +65,8 @@ int diagnose_six_face_session(const Session& session, const std::string& out_dir
                                       {"statistic", t.statistic},
                                       {"dof", t.dof},
                                       {"p_value", t.p_value},
-                                      {"alpha", t.alpha},
-                                      {"detected", t.detected},
+                                      {"alpha", t.threshold},
+                                      {"detected", t.significant},
                                       {"detection_limit", t.detection_limit / per}}}};
   write_atomically(out_dir + "/diagnosis.json",
                    [&](std::ostream& out) { out << j.dump(2) << "\n"; });

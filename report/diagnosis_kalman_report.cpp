@@ -12,7 +12,7 @@ namespace {
 using json = nlohmann::ordered_json;
 
 json statistic_json(const KalmanCandidateTest& c, double alpha) {
-  return {{"name", "wald_kalman"},    {"value", c.wald},      {"dof", c.dof},
+  return {{"name", "wald_kalman"},    {"value", c.statistic}, {"dof", c.dof},
           {"nis_scale", c.nis_scale}, {"p_value", c.p_value}, {"log10_p", c.log10_p},
           {"threshold", c.threshold}, {"alpha", alpha}};
 }
@@ -112,7 +112,8 @@ std::string kalman_diagnosis_markdown(const KalmanDiagnosis& k) {
     std::snprintf(line, sizeof line,
                   "- **%s**: W = %.1f on %d dof, p = %.3g; NIS per dof -> %.3f; base moved up to "
                   "%.1f sigma\n",
-                  f.family.c_str(), f.wald, f.dof, f.p_value, f.nis_per_dof, f.base_shift_sigma);
+                  f.family.c_str(), f.statistic, f.dof, f.p_value, f.nis_per_dof,
+                  f.base_shift_sigma);
     m << line;
   }
   m << "\n| round | effect | dof | W | p | significant |\n|---|---|---|---|---|---|\n";
@@ -131,7 +132,7 @@ std::string kalman_diagnosis_markdown(const KalmanDiagnosis& k) {
         continue;
       }
       std::snprintf(line, sizeof line, "| %d | %s | %d | %.2f | %.3g | %s |\n", round_number,
-                    c.family.c_str(), c.dof, c.wald, c.p_value,
+                    c.family.c_str(), c.dof, c.statistic, c.p_value,
                     c.named ? "named" : (c.significant ? "yes" : "no"));
       m << line;
     }

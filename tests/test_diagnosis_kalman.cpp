@@ -94,7 +94,7 @@ TEST_CASE("Kalman diagnosis: an effect of the turns hidden in rot19 is named fir
         smallest_z = std::min(smallest_z, std::abs(t) / e.sigma);
       }
       INFO(c.family << ": worst |error|/sigma " << worst << ", smallest |truth|/sigma "
-                    << smallest_z << ", W " << first.wald << " on " << first.dof);
+                    << smallest_z << ", W " << first.statistic << " on " << first.dof);
       CHECK(worst < 3.0);
       CHECK(smallest_z > 5.0);  // the scenario hides it at 5 detection sigmas or more
     }
@@ -108,7 +108,7 @@ TEST_CASE("Kalman diagnosis: a clean rot19 session names nothing", "[diagnosis][
   CHECK(d.findings.empty());
   REQUIRE(d.rounds.size() == 1);
   for (const auto& c : d.rounds.front()) {
-    INFO(c.family << ": W " << c.wald << " on " << c.dof << ", p " << c.p_value);
+    INFO(c.family << ": W " << c.statistic << " on " << c.dof << ", p " << c.p_value);
     CHECK(c.dof > 0);  // rot19's turns separate every effect of the turns
     CHECK(!c.significant);
   }

@@ -152,7 +152,7 @@ TEST_CASE("Six-face: a hidden gyro g-sensitivity is found on the rests, none is 
   REQUIRE(hidden.result.g_test);
   const GSensitivityTest& t = *hidden.result.g_test;
   CAPTURE(t.statistic, t.p_value, t.detection_limit);
-  CHECK(t.detected);
+  CHECK(t.significant);
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) {
       CAPTURE(i, j, t.K(i, j), hidden.truth.gyro_g_sensitivity(i, j), t.K_sigma(i, j));
@@ -162,7 +162,7 @@ TEST_CASE("Six-face: a hidden gyro g-sensitivity is found on the rests, none is 
   for (const auto& c : hidden.result.coefficients)
     CHECK(std::abs(c.value - truth_of(hidden.truth, c.name)) < 4.0 * c.sigma);
   const Run none = run_session(5, still, false, true);
-  CHECK_FALSE(none.result.g_test->detected);
+  CHECK_FALSE(none.result.g_test->significant);
   CHECK(none.result.g_test->detection_limit > 0.0);
   CHECK(none.result.g_test->detection_limit <
         0.01 * units::deg_per_s / 9.80665);  // below the profile's smallest term

@@ -4,7 +4,6 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
-#include <boost/math/distributions/fisher_f.hpp>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -267,24 +266,6 @@ std::vector<DeterminedCombination> determined_combinations(const Stage2Result& f
   return out;
 }
 
-double log10_chi2_tail(double x, int dof) {
-  if (dof <= 0) return 0.0;
-  if (!(x > 0.0)) return 0.0;
-  const double p = boost::math::cdf(boost::math::complement(boost::math::chi_squared(dof), x));
-  if (p > 1e-280) return std::log10(p);
-  // Q(s, y) = Gamma(s, y) / Gamma(s) ~ y^(s-1) e^-y / Gamma(s) (1 + (s-1)/y + ...), y = x/2.
-  const double s = 0.5 * dof, y = 0.5 * x;
-  const double ln = (s - 1.0) * std::log(y) - y - std::lgamma(s) + std::log1p((s - 1.0) / y);
-  return ln / std::log(10.0);
-}
-
-double log10_f_tail(double f, int dof1, int dof2) {
-  if (dof1 <= 0 || dof2 <= 0 || !(f > 0.0)) return 0.0;
-  const double p = boost::math::cdf(boost::math::complement(boost::math::fisher_f(dof1, dof2), f));
-  if (p > 1e-280) return std::log10(p);
-  return log10_chi2_tail(f * dof1, dof1);
-}
-
 namespace diagnosis_detail {
 
 std::vector<int> candidate_components(const std::vector<std::string>& candidates,
@@ -324,36 +305,33 @@ void test_statistic(const FitFigures& now, CandidateTest& c) {
   const double lr = std::max(0.0, now.chi2 - c.with.chi2);
   const int dof1 = c.with.fit.dof;
   c.likelihood_ratio = lr;
-  if (c.with.chi2 <= boost::math::quantile(boost::math::chi_squared(dof1), kNoiseModelLevel)) {
-    c.test = "chi2";
-    c.statistic = lr;
-    c.dof2 = 0;
-    c.p_value = boost::math::cdf(boost::math::complement(boost::math::chi_squared(c.dof), lr));
-    c.log10_p = log10_chi2_tail(lr, c.dof);
-  } else {
-    c.test = "F";
-    c.statistic = (lr / c.dof) / c.with.fit.chi2_per_dof;
-    c.dof2 = dof1;
-    c.p_value =
-        boost::math::cdf(boost::math::complement(boost::math::fisher_f(c.dof, dof1), c.statistic));
-    c.log10_p = log10_f_tail(c.statistic, c.dof, dof1);
-  }
+  if (c.with.chi2 <= boost::math::quantile(boost::math::chi_squared(dof1), kNoiseModelLevel))
+    chi2_verdict(c, "chi2", lr);
+  else
+    f_verdict(c, lr, c.with.fit.chi2_per_dof, dof1);
+}
+
+bool test_extension(const std::vector<int>& current, const FitFigures& now, CandidateTest& c,
+                    const std::function<FitFigures(const std::vector<int>&)>& fit) {
+  std::vector<int> with = current;
+  with.insert(with.end(), c.separable.begin(), c.separable.end());
+  c.with = fit(with);
+  c.dof = c.with.fit.rank - now.fit.rank;
+  if (c.dof <= 0 || c.with.fit.dof <= 0) return false;
+  test_statistic(now, c);
+  c.base_shift_sigma = largest_shift(now, c.with, current);
+  return true;
 }
 
 // Marks the round's significant candidates and returns the most significant one, or nullptr.
 CandidateTest* best_of(std::vector<CandidateTest>& round, double alpha) {
   const auto tested =
       std::count_if(round.begin(), round.end(), [](const CandidateTest& c) { return c.dof > 0; });
-  CandidateTest* best = nullptr;
-  for (auto& c : round) {
-    c.threshold = alpha / static_cast<double>(std::max<std::ptrdiff_t>(1, tested));
-    c.significant = c.dof > 0 && c.p_value < c.threshold;
-    if (c.significant &&
-        (!best || c.log10_p < best->log10_p ||
-         (c.log10_p == best->log10_p && c.likelihood_ratio > best->likelihood_ratio)))
-      best = &c;
-  }
-  return best;
+  return most_significant_of(round,
+                             alpha / static_cast<double>(std::max<std::ptrdiff_t>(1, tested)),
+                             [](const CandidateTest& a, const CandidateTest& b) {
+                               return a.likelihood_ratio > b.likelihood_ratio;
+                             });
 }
 
 // The round's most significant candidate, with the candidates that explain the residual as well
@@ -444,13 +422,8 @@ namespace {
 
 void test_candidate(const StaticDesign& design, const std::vector<int>& current,
                     const FitFigures& now, CandidateTest& c) {
-  std::vector<int> with = current;
-  with.insert(with.end(), c.separable.begin(), c.separable.end());
-  c.with = figures(design, with);
-  c.dof = c.with.fit.rank - now.fit.rank;
-  if (c.dof <= 0 || c.with.fit.dof <= 0) return;
-  test_statistic(now, c);
-  c.base_shift_sigma = largest_shift(now, c.with, current);
+  const auto fit = [&](const std::vector<int>& with) { return figures(design, with); };
+  if (!test_extension(current, now, c, fit)) return;
   const auto& p = c.with.fit.parameters;
   for (int k : c.separable) {
     const auto at = std::find(p.begin(), p.end(), k) - p.begin();
@@ -498,23 +471,8 @@ std::vector<CandidateTest> run_round(const StaticDesign& design, const std::vect
     if (!c.separable.empty()) test_candidate(design, current, now, c);
     round.push_back(std::move(c));
   }
-  const std::size_t singles = round.size();
-  for (std::size_t i = 0; i < singles; ++i) {
-    const bool first_of_family =
-        std::none_of(round.begin(), round.begin() + static_cast<std::ptrdiff_t>(i),
-                     [&](const CandidateTest& c) { return c.family == round[i].family; });
-    if (!first_of_family) continue;
-    CandidateTest all;
-    for (std::size_t j = i; j < singles; ++j)
-      if (round[j].family == round[i].family)
-        all.separable.insert(all.separable.end(), round[j].separable.begin(),
-                             round[j].separable.end());
-    if (all.separable.size() < 2) continue;
-    all.family = round[i].family;
-    all.separated_by = round[i].separated_by;
-    test_candidate(design, current, now, all);
-    round.push_back(std::move(all));
-  }
+  add_family_candidates<CandidateTest>(
+      round, {}, [&](CandidateTest& all) { test_candidate(design, current, now, all); });
   return round;
 }
 

@@ -10,19 +10,16 @@
 #include <vector>
 
 #include "filter/closed_form/closed_form.hpp"
+#include "filter/diagnosis/diagnosis_core.hpp"
 
 namespace sinscal {
 
-struct DiagnosisOptions {
-  /// Family-wise false-alarm level of one round of tests (Bonferroni over the candidates).
-  double alpha = 0.01;
+/// alpha, max_findings (6) and the candidate families (DiagnosisSearch; empty: every extended
+/// family of the family table, each of their components a candidate).
+struct DiagnosisOptions : DiagnosisSearch {
   /// A candidate component is separable when the plan shrinks its sigma (given the base
   /// coefficients) below its family's default prior divided by this.
   double separable_ratio = 3.0;
-  int max_findings = 6;
-  /// Candidate families (each of their components is a candidate); empty: every extended family
-  /// of the family table.
-  std::vector<std::string> candidates;
   /// Families the user picks out of an ambiguous set (the first of them in the set extends the
   /// model; none: the data's pick, the member with the best fit).
   std::vector<std::string> prefer;
@@ -40,12 +37,9 @@ struct DwellResidual {
   Eigen::Matrix<double, 6, 1> sigma = Eigen::Matrix<double, 6, 1>::Zero();   // of the inputs
 };
 
-/// Fit figures of one parameter set.
-struct FitFigures {
-  Stage2Result fit;
-  double chi2 = 0.0;          // whitened residual sum of squares
-  double accel_rms = 0.0;     // m/s^2: RMS of the accelerometer residuals over dwells, axes
-  double gyro_rms = 0.0;      // rad/s
+/// The held-out figures of one parameter set: each dwell (hand-held: each pose and turn) left out
+/// of the fit in turn and predicted by the others.
+struct HeldoutFigures {
   double heldout = 0.0;       // RMS of the leave-one-dwell-out prediction error, in sigmas
   double heldout_chi2 = 0.0;  // its sum of squares (whitened): the held-out dwells' chi-square
   /// The same prediction errors whitened by their predictive covariance (noise plus the other
@@ -55,11 +49,19 @@ struct FitFigures {
   double heldout_accel = 0.0;  // m/s^2, same in the sensor's units
   double heldout_gyro = 0.0;   // rad/s
   int heldout_dwells = 0;      // dwells whose prediction the others determine
+  double heldout_turn = 0.0;   // hand-held: the turns' (rad), as turn_rms
+};
+
+/// Fit figures of one parameter set, with its held-out figures.
+struct FitFigures : HeldoutFigures {
+  Stage2Result fit;
+  double chi2 = 0.0;       // whitened residual sum of squares
+  double accel_rms = 0.0;  // m/s^2: RMS of the accelerometer residuals over dwells, axes
+  double gyro_rms = 0.0;   // rad/s
   /// Hand-held sessions (filter/diagnosis/handheld_diagnosis.hpp): accel_rms, gyro_rms are the
-  /// poses' gravity-magnitude residual and rate at rest; these the turns' (rad), 0 for table
-  /// sessions.
+  /// poses' gravity-magnitude residual and rate at rest; turn_rms (and heldout_turn) the turns'
+  /// (rad), 0 for table sessions.
   double turn_rms = 0.0;
-  double heldout_turn = 0.0;
   double log_likelihood = 0.0;  // -chi2/2 (constant terms dropped)
   double bic = 0.0;             // chi2 + rank log(inputs)
 };
@@ -80,40 +82,23 @@ struct DeterminedCombination {
 std::vector<DeterminedCombination> determined_combinations(const Stage2Result& fit,
                                                            const std::vector<int>& components);
 
-/// log10 of the upper tail of chi-square(dof) at x, finite where the tail underflows (the
-/// leading term of the incomplete gamma function's asymptotic expansion): p-values of different
-/// tests and dof ranked on one scale.
-double log10_chi2_tail(double x, int dof);
-/// log10 of the upper tail of F(dof1, dof2) at f; where it underflows, that of chi-square(dof1)
-/// at dof1 f (the limit of a large dof2).
-double log10_f_tail(double f, int dof1, int dof2);
-
-/// One candidate (a component of an extended family) tested against the current model.
-struct CandidateTest {
+/// One candidate (a component of an extended family) tested against the current model; its test
+/// (TestVerdict): "chi2" while the noise model holds, the statistic the likelihood ratio,
+/// chi-square(dof); "F" when the fit's residual rejects the noise model, the statistic
+/// (likelihood_ratio / dof) / (chi2_1 / dof2), F(dof, dof2). named: the most significant, and no
+/// other family explains it.
+struct CandidateTest : TestVerdict {
   std::string family;
   std::vector<int> separable;  // catalog indices of the components the plan separates
   std::vector<int> aliased;    // those it does not
   std::string aliased_with;    // the base combination an aliased component hides in
   std::string separated_by;    // the plan feature that would separate it (family table)
-  int dof = 0;                 // extra parameters fitted (rank increase)
   /// chi2_0 - chi2_1: the whitened residual's decrease (twice the log-likelihood ratio).
   double likelihood_ratio = 0.0;
-  /// "chi2" while the noise model holds: the statistic is likelihood_ratio, chi-square(dof);
-  /// "F" when the fit's residual rejects the noise model: the statistic is
-  /// (likelihood_ratio / dof) / (chi2_1 / dof2), F(dof, dof2).
-  std::string test;
-  double statistic = 0.0;
-  int dof2 = 0;            // F: the extended fit's degrees of freedom
-  double p_value = 1.0;    // upper tail of the statistic's distribution
-  double log10_p = 0.0;    // log10 of p_value, finite where p underflows (ranks across tests)
-  double threshold = 0.0;  // p below this is significant (alpha / candidates)
-  bool significant = false;
-  bool named = false;  // the most significant, and no other family explains it
   /// Other families' candidates that explain the same residual (each insignificant once the
   /// other is in the model): the plan cannot tell them apart.
   std::vector<CandidateTest> ambiguous_with;
-  FitFigures with;                // the fit with the candidate
-  double base_shift_sigma = 0.0;  // largest move of a base coefficient, in its sigma
+  FitFigures with;  // the fit with the candidate
   /// The candidate's components that `with` determines one by one, and the combinations of the
   /// others it determines.
   std::vector<int> determined;
@@ -145,6 +130,11 @@ namespace diagnosis_detail {
 /// The test of a nested extension `c.with` of `now` (c.dof extra parameters): the chi-square test
 /// of the likelihood ratio while the noise model holds, else the F test.
 void test_statistic(const FitFigures& now, CandidateTest& c);
+/// Tests `c`, its separable components added to `current` and fitted by `fit`, against `now`:
+/// c.with, c.dof (the rank increase), its test and base shift. False (untested) when the
+/// extension adds no parameter or leaves no degree of freedom.
+bool test_extension(const std::vector<int>& current, const FitFigures& now, CandidateTest& c,
+                    const std::function<FitFigures(const std::vector<int>&)>& fit);
 /// Largest move of the first base.size() coefficients between two fits, in their sigmas before.
 double largest_shift(const FitFigures& before, const FitFigures& after,
                      const std::vector<int>& base);

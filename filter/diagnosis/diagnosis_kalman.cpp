@@ -2,7 +2,6 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
-#include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -61,20 +60,19 @@ void wald(const KalmanRun& r, double separable_remaining, KalmanCandidateTest& c
                 d(i) * d(j);
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(M);
   c.dof = 0;
-  c.wald = 0.0;
+  double w = 0.0;
   for (Eigen::Index k = 0; k < m; ++k) {
     const double mu = std::max(es.eigenvalues()(k), 0.0);
     if (mu > separable_remaining) continue;
     const double p = es.eigenvectors().col(k).dot(u);
-    c.wald += p * p / std::max(mu * (1.0 - mu), std::numeric_limits<double>::min());
+    w += p * p / std::max(mu * (1.0 - mu), std::numeric_limits<double>::min());
     ++c.dof;
   }
   c.nis_scale = std::max(1.0, r.nis_per_dof);
-  c.wald /= c.nis_scale;
-  if (c.dof > 0) {
-    c.p_value = boost::math::cdf(boost::math::complement(boost::math::chi_squared(c.dof), c.wald));
-    c.log10_p = log10_chi2_tail(c.wald, c.dof);
-  }
+  w /= c.nis_scale;
+  c.test = "wald";
+  c.statistic = w;
+  if (c.dof > 0) chi2_verdict(c, "wald", w);
 }
 
 // Largest move of an estimated coefficient of `before` (other than the candidate's), in sigma.
@@ -200,13 +198,7 @@ void TurnTests::extend(const std::string& family) {
 }
 
 KalmanCandidateTest* most_significant(std::vector<KalmanCandidateTest>& round, double threshold) {
-  KalmanCandidateTest* best = nullptr;
-  for (auto& c : round) {
-    c.threshold = threshold;
-    c.significant = c.dof > 0 && c.p_value < threshold;
-    if (c.significant && (!best || c.log10_p < best->log10_p)) best = &c;
-  }
-  return best;
+  return most_significant_of(round, threshold);
 }
 
 KalmanDiagnosis diagnose_kalman(const Session& session, const CalibratorOptions& base,

@@ -7,41 +7,34 @@
 #include <string>
 #include <vector>
 
+#include "filter/diagnosis/diagnosis_core.hpp"
 #include "filter/kalman/kalman_run.hpp"
 
 namespace sinscal {
 
-struct KalmanDiagnosisOptions {
-  /// Family-wise false-alarm level of one round of tests (Bonferroni over the candidates).
-  double alpha = 0.01;
+/// alpha, max_findings (3) and the candidate families (DiagnosisSearch: extended families of the
+/// family table not in the base model).
+struct KalmanDiagnosisOptions : DiagnosisSearch {
+  KalmanDiagnosisOptions() : DiagnosisSearch(3) {}
   /// A prior-normalized direction counts when the data leave at most this fraction of its prior
   /// variance (the rule of CoefficientEstimate::observed()).
   double separable_remaining = 0.5;
-  int max_findings = 3;
-  /// Candidate families (extended families of the family table not in the base model).
-  std::vector<std::string> candidates;
 };
 
-/// One candidate family run in the filter beside the current model.
-struct KalmanCandidateTest {
+/// One candidate family run in the filter beside the current model; its test (TestVerdict):
+/// "wald", the statistic W (after the NIS scaling) against chi-square(dof), dof the directions the
+/// data determine.
+struct KalmanCandidateTest : TestVerdict {
   std::string family;
   std::string separated_by;  // the plan feature that separates it (family table)
-  int dof = 0;               // directions the data determine
-  double wald = 0.0;         // W (after the NIS scaling)
   double nis_scale = 1.0;    // the NIS per dof W was divided by (1: none)
-  double p_value = 1.0;      // upper tail of chi-square(dof)
-  double log10_p = 0.0;      // log10 of p_value, finite where p underflows
   /// The run with the candidate stopped or diverged (the reason): not tested (dof 0).
   std::string failed;
-  double threshold = 0.0;  // p below this is significant (alpha / candidates)
-  bool significant = false;
-  bool named = false;
   std::vector<int> catalog;  // the family's coefficient indices
   /// Every coefficient of the run with the candidate (catalog order, SI).
   std::vector<CoefficientEstimate> estimates;
-  double nis_per_dof = 0.0;       // of the run with the candidate
-  double log_likelihood = 0.0;    // of the run with the candidate
-  double base_shift_sigma = 0.0;  // largest move of a coefficient of the current model, in sigma
+  double nis_per_dof = 0.0;     // of the run with the candidate
+  double log_likelihood = 0.0;  // of the run with the candidate
 };
 
 struct KalmanDiagnosis {

@@ -131,42 +131,32 @@ Stage2Options dwells_model(const Stage2Options& base, const TurnModel* turn_mode
   return model;
 }
 
+// A finding of `source`: the family, the components that joined the model, its test.
+TableFinding finding_of(TableFinding::Source source, const std::string& family,
+                        const std::vector<int>& components, const TestVerdict& test) {
+  TableFinding f;
+  static_cast<TestVerdict&>(f) = test;
+  f.source = source;
+  f.family = family;
+  f.components = components;
+  return f;
+}
+
 // A dwell finding from the member that extends the model.
 TableFinding dwell_finding(const CandidateTest& member) {
-  TableFinding f;
-  f.source = TableFinding::Source::Dwells;
-  f.family = member.family;
-  f.components = member.separable;
+  TableFinding f =
+      finding_of(TableFinding::Source::Dwells, member.family, member.separable, member);
   for (const auto& c : member.ambiguous_with)
     if (c.family != member.family && std::find(f.ambiguous_with.begin(), f.ambiguous_with.end(),
                                                c.family) == f.ambiguous_with.end())
       f.ambiguous_with.push_back(c.family);
   f.picked_by = member.picked_by;
-  f.test = member.test;
-  f.statistic = member.statistic;
-  f.dof = member.dof;
-  f.dof2 = member.dof2;
-  f.p_value = member.p_value;
-  f.log10_p = member.log10_p;
-  f.threshold = member.threshold;
-  f.base_shift_sigma = member.base_shift_sigma;
   f.dwells_after = member.with;
   return f;
 }
 
 TableFinding turn_finding(const KalmanCandidateTest& c) {
-  TableFinding f;
-  f.source = TableFinding::Source::Turns;
-  f.family = c.family;
-  f.components = c.catalog;
-  f.test = "wald";
-  f.statistic = c.wald;
-  f.dof = c.dof;
-  f.p_value = c.p_value;
-  f.log10_p = c.log10_p;
-  f.threshold = c.threshold;
-  f.base_shift_sigma = c.base_shift_sigma;
-  return f;
+  return finding_of(TableFinding::Source::Turns, c.family, c.catalog, c);
 }
 
 // The family's coefficients in the final extended calibration, and the dwells' combinations of
@@ -448,21 +438,14 @@ class TableRounds {
  private:
   // Every stop and limit of the search (TableDiagnosis::stops).
   void state_stops() {
-    char b[400];
-    for (const auto& r : d_.rejected) {
-      std::snprintf(b, sizeof b,
-                    "round %d: %s was the most significant candidate (p %.2g), but %s: not "
-                    "named, its residual is unexplained",
-                    r.finding.round, r.finding.family.c_str(), r.finding.p_value, r.reason.c_str());
-      d_.stops.emplace_back(b);
-    }
+    for (const auto& r : d_.rejected)
+      d_.stops.push_back(refused_stop(r.finding.round, r.finding.family, r.finding.p_value,
+                                      r.reason, "its residual is unexplained"));
     if (findings() >= o_.dwells.max_findings) {
       std::vector<CandidateTest> more = dwells_.round(current_, now_);
       const CandidateTest* best = diagnosis_detail::best_of(more, o_.dwells.alpha);
-      std::snprintf(b, sizeof b, "the findings cap (%d) was reached%s%s", o_.dwells.max_findings,
-                    best ? "; still significant on the dwells: " : "",
-                    best ? best->family.c_str() : "");
-      d_.stops.emplace_back(b);
+      d_.stops.push_back(
+          findings_cap_stop(o_.dwells.max_findings, "on the dwells", best ? best->family : ""));
     }
     if (!o_.dwells.thermal && o_.dwells.candidates.empty())
       d_.stops.emplace_back(

@@ -59,7 +59,10 @@ struct FindingCoefficient {
 };
 
 /// One finding of the story: the round's most significant effect, which then joined the model.
-struct TableFinding {
+/// Its test (TestVerdict): "chi2" (likelihood ratio), "F" (likelihood ratio over the residual's
+/// scale) or "wald" (the filter's estimate against zero, chi-square); base_shift_sigma the largest
+/// move of a coefficient already in the model.
+struct TableFinding : TestVerdict {
   int round = 0;  // 1-based
   enum class Source { Dwells, Turns };
   Source source = Source::Dwells;
@@ -73,13 +76,6 @@ struct TableFinding {
   /// What separates each family of the set from the base coefficients (the family table):
   /// `family` first, then each of ambiguous_with.
   std::vector<std::string> separated_by;
-  /// The test: "chi2" (likelihood ratio), "F" (likelihood ratio over the residual's scale) or
-  /// "wald" (the filter's estimate against zero, chi-square).
-  std::string test;
-  double statistic = 0.0;
-  int dof = 0, dof2 = 0;
-  double p_value = 1.0, log10_p = 0.0, threshold = 0.0;
-  double base_shift_sigma = 0.0;  // largest move of a coefficient already in the model
   /// The family's coefficients in the final extended calibration (every finding in the model).
   std::vector<FindingCoefficient> coefficients;     // catalog order
   std::vector<DeterminedCombination> combinations;  // determined only together (dwells)

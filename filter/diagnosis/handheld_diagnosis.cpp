@@ -461,41 +461,24 @@ CandidateTest separability(const HandheldFitter& fit, const std::vector<int>& cu
 
 void test_candidate(const HandheldFitter& fit, const std::vector<int>& current,
                     const FitFigures& now, CandidateTest& c) {
-  std::vector<int> with = current;
-  with.insert(with.end(), c.separable.begin(), c.separable.end());
-  c.with = fit.figures(with, false);
-  c.dof = c.with.fit.rank - now.fit.rank;
-  if (c.dof <= 0 || c.with.fit.dof <= 0) return;
-  test_statistic(now, c);
-  c.base_shift_sigma = largest_shift(now, c.with, current);
+  test_extension(current, now, c,
+                 [&](const std::vector<int>& with) { return fit.figures(with, false); });
 }
 
 // Every family's separable components together (an effect on every axis shows only partly in
-// each one alone).
+// each one alone), for the families the poses suffice for.
 void add_family_candidates(const HandheldFitter& fit, const std::vector<int>& current,
                            const FitFigures& now, int poses, std::vector<std::string>* refused,
                            std::vector<CandidateTest>& round) {
-  const std::size_t singles = round.size();
-  for (std::size_t i = 0; i < singles; ++i) {
-    const bool first_of_family =
-        std::none_of(round.begin(), round.begin() + static_cast<std::ptrdiff_t>(i),
-                     [&](const CandidateTest& c) { return c.family == round[i].family; });
-    if (!first_of_family) continue;
-    CandidateTest all;
-    for (std::size_t j = i; j < singles; ++j)
-      if (round[j].family == round[i].family)
-        all.separable.insert(all.separable.end(), round[j].separable.begin(),
-                             round[j].separable.end());
-    const int k = static_cast<int>(all.separable.size());
-    const CoefficientFamily& info = coefficient_family_info(round[i].family);
-    if (k >= 2 && poses < poses_needed(info, k) && refused && refused->empty())
+  const auto admit = [&](const std::string& family, int k) {
+    const CoefficientFamily& info = coefficient_family_info(family);
+    if (poses >= poses_needed(info, k)) return true;
+    if (refused && refused->empty())
       refused->push_back(poses_message(info, k, poses_needed(info, k), poses));
-    if (k < 2 || poses < poses_needed(info, k)) continue;
-    all.family = round[i].family;
-    all.separated_by = round[i].separated_by;
-    test_candidate(fit, current, now, all);
-    round.push_back(std::move(all));
-  }
+    return false;
+  };
+  sinscal::add_family_candidates<CandidateTest>(
+      round, admit, [&](CandidateTest& all) { test_candidate(fit, current, now, all); });
 }
 
 struct RoundContext {
@@ -625,13 +608,7 @@ HandheldDiagnosis diagnose_handheld(const std::vector<ImuReading>& readings,
   const RoundContext ctx{fit, o, static_cast<int>(design.poses()), &out.refused};
   // The held-out figures (a refit per held-out pose) only for the round's best.
   auto add_heldout = [&](const std::vector<int>& with, CandidateTest& best) {
-    const FitFigures h = fit.figures(with, true);
-    best.with.heldout = h.heldout;
-    best.with.heldout_chi2 = h.heldout_chi2;
-    best.with.heldout_accel = h.heldout_accel;
-    best.with.heldout_gyro = h.heldout_gyro;
-    best.with.heldout_turn = h.heldout_turn;
-    best.with.heldout_dwells = h.heldout_dwells;
+    static_cast<HeldoutFigures&>(best.with) = fit.figures(with, true);
   };
   run_rounds(
       rep, o.max_findings,

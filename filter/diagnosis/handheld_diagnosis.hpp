@@ -15,18 +15,15 @@
 
 namespace sinscal {
 
-struct HandheldDiagnosisOptions {
-  /// Family-wise false-alarm level of one round of tests (Bonferroni over the candidates).
-  double alpha = 0.01;
+/// alpha, max_findings (6) and the candidate families (DiagnosisSearch; empty: every extended
+/// family of the family table; {""}: none).
+struct HandheldDiagnosisOptions : DiagnosisSearch {
   /// A candidate component is separable when the sine of its smallest principal angle to the
   /// model's columns is at least this ...
   double min_angle_sine = 0.05;
   /// ... and its detection sigma (given the model) below this many of its family's default
   /// prior (beyond it, the poses do not see the effect at any plausible size).
   double plausible_ratio = 1e4;
-  int max_findings = 6;
-  /// Candidate families; empty: every extended family of the family table; {""}: none.
-  std::vector<std::string> candidates;
   /// The noise candidates (Allan deviation of the longest pose) are tested.
   bool noise = true;
   /// The noise candidates were asked for by name: a pose too short for them is refused (see

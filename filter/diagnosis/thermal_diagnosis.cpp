@@ -121,17 +121,11 @@ ThermalCandidateTest test_candidate(const std::string& candidate, const ThermalF
   t.family = candidate;
   t.dof = static_cast<int>(with.value.size() - now.value.size());
   t.likelihood_ratio = std::max(0.0, now.chi2 - with.chi2);
-  if (with.dof > 0 && with.p_value < alpha) {
+  if (with.dof > 0 && with.p_value < alpha)
     // The extended fit's residual rejects the soaks' covariance: tested against its scale.
-    t.test = "F";
-    t.dof2 = with.dof;
-    t.statistic = (t.likelihood_ratio / t.dof) / (with.chi2 / with.dof);
-    t.log10_p = log10_f_tail(t.statistic, t.dof, t.dof2);
-  } else {
-    t.test = "chi2";
-    t.statistic = t.likelihood_ratio;
-    t.log10_p = log10_chi2_tail(t.statistic, t.dof);
-  }
+    f_verdict(t, t.likelihood_ratio, with.chi2 / with.dof, with.dof);
+  else
+    chi2_verdict(t, "chi2", t.likelihood_ratio);
   t.p_value = std::pow(10.0, t.log10_p);
   return t;
 }
@@ -180,14 +174,8 @@ ThermalRound test_round(const std::vector<SoakEstimate>& soaks,
     r.tests.push_back(test_candidate(c, now, r.fits.back(), alpha));
   }
   const double threshold = alpha / static_cast<double>(std::max<std::size_t>(1, r.tests.size()));
-  for (std::size_t i = 0; i < r.tests.size(); ++i) {
-    auto& t = r.tests[i];
-    t.threshold = threshold;
-    t.significant = t.dof > 0 && t.log10_p < std::log10(threshold);
-    if (t.significant &&
-        (r.best < 0 || t.log10_p < r.tests[static_cast<std::size_t>(r.best)].log10_p))
-      r.best = static_cast<int>(i);
-  }
+  const ThermalCandidateTest* best = most_significant_of(r.tests, threshold);
+  r.best = best ? static_cast<int>(best - r.tests.data()) : -1;
   return r;
 }
 
@@ -223,9 +211,8 @@ ThermalDiagnosis diagnose_soaks(const std::vector<SoakEstimate>& soaks, double t
     d.not_testable = r.not_testable;
     if (round > options.max_findings) {  // one more round: what the cap leaves significant
       if (r.best >= 0)
-        d.stops.push_back("the findings cap (" + std::to_string(options.max_findings) +
-                          ") was reached; still significant: " +
-                          r.tests[static_cast<std::size_t>(r.best)].family);
+        d.stops.push_back(findings_cap_stop(options.max_findings, "",
+                                            r.tests[static_cast<std::size_t>(r.best)].family));
       break;
     }
     if (r.tests.empty()) break;
@@ -245,12 +232,10 @@ ThermalDiagnosis diagnose_soaks(const std::vector<SoakEstimate>& soaks, double t
     if (f.before.soaks > 0 && f.after.soaks > 0 && f.after.chi2 >= f.before.chi2) {
       d.rounds.push_back(r.tests);
       d.rejected.push_back(f.test);
-      char b[300];
-      std::snprintf(b, sizeof b,
-                    "round %d: %s was the most significant candidate (p %.2g), but the held-out "
-                    "soaks' chi-square goes from %.4g to %.4g: not named, the search stops",
-                    round, f.test.family.c_str(), f.test.p_value, f.before.chi2, f.after.chi2);
-      d.stops.emplace_back(b);
+      char b[200];
+      std::snprintf(b, sizeof b, "the held-out soaks' chi-square goes from %.4g to %.4g",
+                    f.before.chi2, f.after.chi2);
+      d.stops.push_back(refused_stop(round, f.test.family, f.test.p_value, b, "the search stops"));
       break;
     }
     r.tests[best].named = true;

@@ -7,18 +7,17 @@
 #include <string>
 #include <vector>
 
+#include "filter/diagnosis/diagnosis_core.hpp"
 #include "filter/thermal/soak_fit.hpp"
 
 namespace sinscal {
 
-struct ThermalDiagnosisOptions {
-  /// Family-wise false-alarm level of one round of tests (Bonferroni over the candidates).
-  double alpha = 0.01;
-  int max_findings = 4;
+/// alpha, max_findings (4) and the candidate thermal families (DiagnosisSearch; empty: every
+/// thermal family of the family table not in `model`).
+struct ThermalDiagnosisOptions : DiagnosisSearch {
+  ThermalDiagnosisOptions() : DiagnosisSearch(4) {}
   /// The thermal families of the model (the sensor profile's).
   std::vector<std::string> model;
-  /// Candidate thermal families; empty: every thermal family of the family table not in `model`.
-  std::vector<std::string> candidates;
 };
 
 /// Held-out soaks: each left out of the fit in turn and its coefficients predicted.
@@ -30,19 +29,12 @@ struct HeldoutSoaks {
   std::vector<double> temperature_c;  // each soak's gyro temperature (its label)
 };
 
-struct ThermalCandidateTest {
+/// One thermal family tested on the soaks; its test (TestVerdict): "chi2" or "F", dof the
+/// parameters added.
+struct ThermalCandidateTest : TestVerdict {
   std::string family;
   std::string not_testable;  // why the soaks cannot test it (empty: tested)
-  int dof = 0;               // parameters added
   double likelihood_ratio = 0.0;
-  std::string test;  // "chi2" or "F"
-  double statistic = 0.0;
-  int dof2 = 0;  // F: the extended fit's degrees of freedom
-  double p_value = 1.0;
-  double log10_p = 0.0;
-  double threshold = 0.0;  // p below this is significant
-  bool significant = false;
-  bool named = false;
 };
 
 /// A coefficient of a finding: catalog index, value and sigma (SI) in the extended fit.

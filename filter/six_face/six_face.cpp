@@ -635,18 +635,17 @@ std::vector<SixFaceCoefficient> coefficients_of(const AccelFit& a, const GyroFit
 // K against zero by its covariance (Wald, 9 dof).
 GSensitivityTest g_sensitivity_test(const GyroFit& g, double alpha) {
   GSensitivityTest t;
-  t.alpha = alpha;
+  t.dof = 9;
   t.K = g.K;
   Eigen::Matrix<double, 9, 1> k;
   for (int i = 0; i < 9; ++i) {
     k(i) = g.K(i / 3, i % 3);
     t.K_sigma(i / 3, i % 3) = std::sqrt(std::max(0.0, g.P_K(i, i)));
   }
-  t.statistic = k.dot(g.P_K.ldlt().solve(k));
+  chi2_verdict(t, "wald", k.dot(g.P_K.ldlt().solve(k)));
+  mark_significant(t, alpha);
   const boost::math::chi_squared chi2(t.dof);
-  t.p_value = boost::math::cdf(boost::math::complement(chi2, t.statistic));
-  t.detected = t.p_value < t.alpha;
-  t.detection_limit = std::sqrt(boost::math::quantile(chi2, 1.0 - t.alpha)) * t.K_sigma.maxCoeff();
+  t.detection_limit = std::sqrt(boost::math::quantile(chi2, 1.0 - alpha)) * t.K_sigma.maxCoeff();
   return t;
 }
 

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "filter/diagnosis/diagnosis_core.hpp"
 #include "models/earth.hpp"
 #include "models/imu_error_model.hpp"
 #include "models/units.hpp"
@@ -122,15 +123,11 @@ struct SixFaceOptions {
 };
 
 /// The test of the gyro g-sensitivity on the rests (SixFaceOptions::g_sensitivity): K's estimate
-/// against zero by its covariance, a Wald statistic on 9 degrees of freedom.
-struct GSensitivityTest {
+/// against zero by its covariance (TestVerdict): "wald", the statistic K^T P^-1 K on 9 degrees
+/// of freedom, the threshold alpha, significant: detected.
+struct GSensitivityTest : TestVerdict {
   Eigen::Matrix3d K = Eigen::Matrix3d::Zero();        // rad/s per m/s^2
   Eigen::Matrix3d K_sigma = Eigen::Matrix3d::Zero();  // rad/s per m/s^2
-  double statistic = 0.0;                             // K^T P^-1 K
-  int dof = 9;
-  double p_value = 1.0;
-  double alpha = 0.01;
-  bool detected = false;  // p_value < alpha
   /// rad/s per m/s^2: the largest component K can have unseen: sqrt(chi2_9(1 - alpha)) times the
   /// largest component sigma (a K of that size along its worst direction just reaches the
   /// threshold).
