@@ -199,7 +199,11 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
         r.removed_gyro_bias.z() / units::deg_per_s}},
       {"largest_turn_dwell", r.largest_turn_dwell},
       {"largest_turn_deg", r.largest_turn / units::deg},
-      {"linear_turn_deg", r.linear_turn / units::deg}};
+      {"linear_turn_deg", r.linear_turn / units::deg},
+      {"removed_accel", r.removed_accel},
+      {"largest_speed_dwell", r.largest_speed_dwell},
+      {"largest_speed_m_per_s", r.largest_speed},
+      {"linear_speed_m_per_s", r.linear_speed}};
   record_gate(sections, gate);
   record_provenance(sections, session);
   write_result_json(out_path, coefficients, sections);
@@ -220,10 +224,13 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
   if (r.linearizations > 1)
     std::printf(
         "Relinearized %d times about the closed form's own gyro biases (%.4f, %.4f, %.4f deg/s "
-        "removed): dwell %s turns %.3f deg (stage 1's linear range %.3f deg)\n",
+        "removed)%s: dwell %s turns %.3f deg (stage 1's linear range %.3f deg), dwell %s "
+        "reaches %.3g m/s (range %.3g m/s)\n",
         r.linearizations - 1, r.removed_gyro_bias.x() / units::deg_per_s,
         r.removed_gyro_bias.y() / units::deg_per_s, r.removed_gyro_bias.z() / units::deg_per_s,
-        r.largest_turn_dwell.c_str(), r.largest_turn / units::deg, r.linear_turn / units::deg);
+        r.removed_accel ? " and accelerometer bias, scale and misalignment" : "",
+        r.largest_turn_dwell.c_str(), r.largest_turn / units::deg, r.linear_turn / units::deg,
+        r.largest_speed_dwell.c_str(), r.largest_speed, r.linear_speed);
   std::printf("\nResult written to %s (%.2f s)\n", out_path.c_str(), seconds);
   return row;
 }
