@@ -11,6 +11,7 @@
 #include "apps/print.hpp"
 #include "filter/kalman/motion_from_data.hpp"
 #include "filter/plausibility/plausibility.hpp"
+#include "filter/plausibility/rest_plausibility.hpp"
 #include "models/units.hpp"
 #include "report/monitor.hpp"
 #include "report/output.hpp"
@@ -86,6 +87,27 @@ PlausibilityReport plausibility_gate(const CalibrateOptions& o, const Session& s
   return report;
 }
 
+// A divergence's cause when the data show it: the first rest's noise against the profile's.
+void add_divergence_cause(KalmanRun& kr, const Session& session, const SensorProfile& profile) {
+  double t0 = 0.0, t1 = 0.0;
+  if (kr.detected && !kr.detected->intervals.empty()) {
+    t0 = kr.detected->intervals.front().t_start;
+    t1 = kr.detected->intervals.front().t_end;
+  } else {
+    const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
+    if (timeline.dwells.empty()) return;
+    t0 = timeline.dwells.front().t_start + session.time_offset;
+    t1 = timeline.dwells.front().t_end + session.time_offset;
+  }
+  try {
+    const std::string cause =
+        rest_noise_cause(session.log, t0, t1, profile.noise.gyro.white, profile.noise.accel.white);
+    if (!cause.empty()) kr.diverged += "; the cause the data show: " + cause;
+  } catch (const std::runtime_error&) {
+    // the log read once already: nothing more to say
+  }
+}
+
 SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
                             const std::string& out_path, const std::string& monitor_path,
                             bool verbose, bool live) {
@@ -139,6 +161,7 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!kr.diverged.empty() && !o.stream) add_divergence_cause(kr, session, profile);
   const ResultCoefficients coefficients = result_coefficients(kr);
   auto sections = result_sections(kr);
   record_gate(sections, gate);
