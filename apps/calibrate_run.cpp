@@ -162,6 +162,10 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!kr.diverged.empty() && !o.stream) add_divergence_cause(kr, session, profile);
+  if (!kr.model.vector().allFinite())
+    throw std::runtime_error(session.log.file +
+                             ": the filter's estimates are not finite numbers (nothing written)" +
+                             (kr.diverged.empty() ? std::string() : ": " + kr.diverged));
   const ResultCoefficients coefficients = result_coefficients(kr);
   auto sections = result_sections(kr);
   record_gate(sections, gate);
