@@ -11,6 +11,7 @@
 #include "apps/print.hpp"
 #include "filter/kalman/motion_from_data.hpp"
 #include "filter/plausibility/plausibility.hpp"
+#include "filter/plausibility/rest_plausibility.hpp"
 #include "models/units.hpp"
 #include "report/monitor.hpp"
 #include "report/output.hpp"
@@ -86,6 +87,27 @@ PlausibilityReport plausibility_gate(const CalibrateOptions& o, const Session& s
   return report;
 }
 
+// A divergence's cause when the data show it: the first rest's noise against the profile's.
+void add_divergence_cause(KalmanRun& kr, const Session& session, const SensorProfile& profile) {
+  double t0 = 0.0, t1 = 0.0;
+  if (kr.detected && !kr.detected->intervals.empty()) {
+    t0 = kr.detected->intervals.front().t_start;
+    t1 = kr.detected->intervals.front().t_end;
+  } else {
+    const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
+    if (timeline.dwells.empty()) return;
+    t0 = timeline.dwells.front().t_start + session.time_offset;
+    t1 = timeline.dwells.front().t_end + session.time_offset;
+  }
+  try {
+    const std::string cause =
+        rest_noise_cause(session.log, t0, t1, profile.noise.gyro.white, profile.noise.accel.white);
+    if (!cause.empty()) kr.diverged += "; the cause the data show: " + cause;
+  } catch (const std::runtime_error&) {
+    // the log read once already: nothing more to say
+  }
+}
+
 SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
                             const std::string& out_path, const std::string& monitor_path,
                             bool verbose, bool live) {
@@ -139,6 +161,11 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!kr.diverged.empty() && !o.stream) add_divergence_cause(kr, session, profile);
+  if (!kr.model.vector().allFinite())
+    throw std::runtime_error(session.log.file +
+                             ": the filter's estimates are not finite numbers (nothing written)" +
+                             (kr.diverged.empty() ? std::string() : ": " + kr.diverged));
   const ResultCoefficients coefficients = result_coefficients(kr);
   auto sections = result_sections(kr);
   record_gate(sections, gate);
@@ -199,7 +226,11 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
         r.removed_gyro_bias.z() / units::deg_per_s}},
       {"largest_turn_dwell", r.largest_turn_dwell},
       {"largest_turn_deg", r.largest_turn / units::deg},
-      {"linear_turn_deg", r.linear_turn / units::deg}};
+      {"linear_turn_deg", r.linear_turn / units::deg},
+      {"removed_accel", r.removed_accel},
+      {"largest_speed_dwell", r.largest_speed_dwell},
+      {"largest_speed_m_per_s", r.largest_speed},
+      {"linear_speed_m_per_s", r.linear_speed}};
   record_gate(sections, gate);
   record_provenance(sections, session);
   write_result_json(out_path, coefficients, sections);
@@ -220,10 +251,13 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
   if (r.linearizations > 1)
     std::printf(
         "Relinearized %d times about the closed form's own gyro biases (%.4f, %.4f, %.4f deg/s "
-        "removed): dwell %s turns %.3f deg (stage 1's linear range %.3f deg)\n",
+        "removed)%s: dwell %s turns %.3f deg (stage 1's linear range %.3f deg), dwell %s "
+        "reaches %.3g m/s (range %.3g m/s)\n",
         r.linearizations - 1, r.removed_gyro_bias.x() / units::deg_per_s,
         r.removed_gyro_bias.y() / units::deg_per_s, r.removed_gyro_bias.z() / units::deg_per_s,
-        r.largest_turn_dwell.c_str(), r.largest_turn / units::deg, r.linear_turn / units::deg);
+        r.removed_accel ? " and accelerometer bias, scale and misalignment" : "",
+        r.largest_turn_dwell.c_str(), r.largest_turn / units::deg, r.linear_turn / units::deg,
+        r.largest_speed_dwell.c_str(), r.largest_speed, r.linear_speed);
   std::printf("\nResult written to %s (%.2f s)\n", out_path.c_str(), seconds);
   return row;
 }

@@ -395,9 +395,10 @@ std::string consumer_profile(bool k2) {
   return dir + "/consumer.ini";
 }
 
-SimulatedSession consumer_session(const std::string& name, bool k2) {
+SimulatedSession consumer_session(const std::string& name, bool k2,
+                                  const std::string& plan = "rot19.ini") {
   SessionSimulation spec;
-  spec.plan_path = test::source_path("config/plans/rot19.ini");
+  spec.plan_path = test::source_path("config/plans/" + plan);
   spec.data_sensor_path = consumer_profile(k2);
   spec.name = name;
   spec.seed = 3;
@@ -451,4 +452,46 @@ TEST_CASE("Closed form on consumer MEMS: stage 2's chi2 gates an error the model
   CHECK_FALSE(fit.passed);
   CHECK_THAT(fit.detail,
              Catch::Contains("stage-2 chi2 per dof") && Catch::Contains("errors the model lacks"));
+}
+
+TEST_CASE("Closed form on consumer MEMS: relinearized about the accelerometers on seed8",
+          "[closed_form]") {
+  // seed8's 180 s dwells: accelerometer inputs of 40-80 mg drive the navigator's velocity to
+  // 70-140 m/s, whose v^2/R (stage 1 neglects it) is tens of the inputs' sigmas. Relinearized
+  // about the gyro biases only, the coefficients were up to 4.7 sigma off (RMS 2.2) with a
+  // stage-2 chi2 under its bound: exit 0, wrong (issue 34).
+  const SimulatedSession sim = consumer_session("cf_consumer_seed8", false, "seed8.ini");
+  const Session s = Session::load(sim.session_path);
+  const SensorProfile prof = SensorProfile::load(s.sensor_file);
+  const TableAttitudeError table{2.5 * units::arcsec};
+  // About the gyro biases only (the first relinearization: the dwells' mean rates): within the
+  // gyros' range, beyond the accelerometers'; the gate names them.
+  const ClosedFormReport gyro_only =
+      run_closed_form_relinearized(s, default_stage1(&prof), table, 2);
+  CHECK(gyro_only.largest_turn <= gyro_only.linear_turn);
+  CHECK(gyro_only.largest_speed > 2.0 * gyro_only.linear_speed);
+  CHECK_FALSE(gyro_only.removed_accel);
+  const PlausibilityCheck refused = check_linear_range(gyro_only, "imu.csv");
+  CHECK_FALSE(refused.passed);
+  CHECK_THAT(refused.detail, Catch::Contains("the accelerometers' equivalent inputs drive"));
+  // Relinearized about the accelerometers' bias, scale and misalignment too: every coefficient
+  // within 4 sigma, RMS err/sigma below 1.5 (24 normal deviates exceed it with p = 4e-4).
+  const ClosedFormReport r = run_closed_form_relinearized(s, default_stage1(&prof), table);
+  CHECK(r.removed_accel);
+  CHECK(r.largest_speed <= r.linear_speed);
+  CHECK(check_linear_range(r, "imu.csv").passed);
+  CHECK(check_stage2_fit(r, PlausibilityLimits::from_profile(&prof), "imu.csv").passed);
+  const ResultCoefficients truth = load_truth(s);
+  double sum2 = 0.0;
+  int compared = 0;
+  for (const auto& [name, c] : result_coefficients(r)) {
+    if (!c.observable || c.fixed_by_convention || !c.sigma) continue;
+    const double z = (c.value - truth.at(name).value) / *c.sigma;
+    CAPTURE(name, c.value, *c.sigma, truth.at(name).value);
+    CHECK(std::abs(z) < 4.0);
+    sum2 += z * z;
+    ++compared;
+  }
+  REQUIRE(compared == 24);
+  CHECK(std::sqrt(sum2 / compared) < 1.5);
 }

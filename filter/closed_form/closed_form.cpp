@@ -617,26 +617,21 @@ class TurnedSource : public SampleSource {
   Eigen::Matrix3d C_;
 };
 
-// Stage 2's coefficients of samples turned by C, relative to the platform again: A = C^T A',
-// b = C^T b' (both triads), a linear map applied to the estimate and its covariance. A
-// coefficient the data did not determine spreads to those it enters.
-void turn_back(Stage2Result& r, const Eigen::Matrix3d& C) {
+// The model whose stage-2 coefficients are `theta` (SI, catalog indices `parameters`).
+ImuErrorModel model_of(const std::vector<int>& parameters, const Eigen::VectorXd& theta) {
+  ImuErrorModel m;
+  auto refs = m.coefficient_refs();
+  for (std::size_t i = 0; i < parameters.size(); ++i)
+    *refs[static_cast<std::size_t>(parameters[i])].second = theta(static_cast<Eigen::Index>(i));
+  return m;
+}
+
+// Stage 2's coefficients through an affine map of them (`map`: the coefficients' vector to the
+// new one), applied to the estimate and its covariance. A coefficient the data did not determine
+// spreads to those it enters.
+template <class Map>
+void map_coefficients(Stage2Result& r, const Map& map) {
   const auto n = static_cast<int>(r.theta.size());
-  auto map = [&](const Eigen::VectorXd& theta) {
-    ImuErrorModel m;
-    auto refs = m.coefficient_refs();
-    for (int i = 0; i < n; ++i)
-      *refs[static_cast<std::size_t>(r.parameters[static_cast<std::size_t>(i)])].second = theta(i);
-    ImuErrorModel out = m;
-    for (auto [to, from] : {std::pair{&out.accel, &m.accel}, std::pair{&out.gyro, &m.gyro}}) {
-      const Eigen::Matrix3d A = C.transpose() * from->linear();
-      to->scale = A.diagonal() - Eigen::Vector3d::Ones();
-      to->misalignment = A;
-      to->misalignment.diagonal().setZero();
-      to->bias = C.transpose() * from->bias;
-    }
-    return parameter_vector(out, r.parameters);
-  };
   const Eigen::VectorXd offset = map(Eigen::VectorXd::Zero(n));
   Eigen::MatrixXd T(n, n);
   for (int j = 0; j < n; ++j) T.col(j) = map(Eigen::VectorXd::Unit(n, j)) - offset;
@@ -661,6 +656,45 @@ void turn_back(Stage2Result& r, const Eigen::Matrix3d& C) {
       r.cov.row(i).setConstant(nan);
       r.cov.col(i).setConstant(nan);
     }
+}
+
+// Stage 2's coefficients of samples turned by C, relative to the platform again: A = C^T A',
+// b = C^T b' (both triads), a linear map applied to the estimate and its covariance.
+void turn_back(Stage2Result& r, const Eigen::Matrix3d& C) {
+  map_coefficients(r, [&](const Eigen::VectorXd& theta) {
+    const ImuErrorModel m = model_of(r.parameters, theta);
+    ImuErrorModel out = m;
+    for (auto [to, from] : {std::pair{&out.accel, &m.accel}, std::pair{&out.gyro, &m.gyro}}) {
+      const Eigen::Matrix3d A = C.transpose() * from->linear();
+      to->scale = A.diagonal() - Eigen::Vector3d::Ones();
+      to->misalignment = A;
+      to->misalignment.diagonal().setZero();
+      to->bias = C.transpose() * from->bias;
+    }
+    return parameter_vector(out, r.parameters);
+  });
+}
+
+// A triad's linear part and bias after samples compensated with `about` show `residual`: the
+// outputs y = A_a x' + b_a of x' = A_r x + b_r, i.e. A = A_a A_r, b = b_a + A_a b_r.
+void compose_triad(const TriadErrors& about, const TriadErrors& residual, TriadErrors& out) {
+  const Eigen::Matrix3d A = about.linear() * residual.linear();
+  out.scale = A.diagonal() - Eigen::Vector3d::Ones();
+  out.misalignment = A;
+  out.misalignment.diagonal().setZero();
+  out.bias = about.bias + about.linear() * residual.bias;
+}
+
+// Stage 2's coefficients of samples compensated with `about` (the residual errors), as the
+// totals: composed with it, estimate and covariance.
+void compose_with(Stage2Result& r, const ImuErrorModel& about) {
+  map_coefficients(r, [&](const Eigen::VectorXd& theta) {
+    const ImuErrorModel m = model_of(r.parameters, theta);
+    ImuErrorModel out = m;
+    compose_triad(about.accel, m.accel, out.accel);
+    compose_triad(about.gyro, m.gyro, out.gyro);
+    return parameter_vector(out, r.parameters);
+  });
 }
 
 // The alignment from the session's dwells; when significant, the dwells' attitudes turned by its
@@ -759,24 +793,43 @@ DwellTurn closed_form_turn(const EquivalentInputs& e, const Site& site) {
   for (int i = 0; i < 2; ++i)
     if (e.estimated[static_cast<std::size_t>(i)] && e.cov(i, i) > 0.0)
       sigma_f = std::min(sigma_f, std::sqrt(e.cov(i, i)));
-  const double g = Earth::wgs84().gravity_n(site.lat_rad, site.h_m).norm();
+  const Earth& earth = Earth::wgs84();
+  const double g = earth.gravity_n(site.lat_rad, site.h_m).norm();
   t.bound = std::isfinite(sigma_f) ? std::sqrt(2.0 * sigma_f / g) : HUGE_VAL;
+  double force2 = 0.0;
+  for (int i = 0; i < 3; ++i)
+    if (e.estimated[static_cast<std::size_t>(i)]) force2 += e.u(i) * e.u(i);
+  t.speed = std::sqrt(force2) * e.duration;
+  t.speed_bound =
+      std::isfinite(sigma_f) ? std::sqrt(sigma_f * earth.radius_meridian(site.lat_rad)) : HUGE_VAL;
   return t;
 }
 
 namespace {
 
-// The dwell turned farthest against its bound.
+// The dwell turned farthest against its bound, and the one whose velocity went farthest.
 void set_largest_turn(ClosedFormReport& r, const Site& site) {
-  double worst = -1.0;
+  double worst = -1.0, worst_speed = -1.0;
   for (const auto& e : r.stage1) {
     const DwellTurn t = closed_form_turn(e, site);
-    if (t.turn / t.bound <= worst) continue;
-    worst = t.turn / t.bound;
-    r.largest_turn = t.turn;
-    r.linear_turn = t.bound;
-    r.largest_turn_dwell = e.dwell.label;
+    if (t.turn / t.bound > worst) {
+      worst = t.turn / t.bound;
+      r.largest_turn = t.turn;
+      r.linear_turn = t.bound;
+      r.largest_turn_dwell = e.dwell.label;
+    }
+    if (t.speed / t.speed_bound > worst_speed) {
+      worst_speed = t.speed / t.speed_bound;
+      r.largest_speed = t.speed;
+      r.linear_speed = t.speed_bound;
+      r.largest_speed_dwell = e.dwell.label;
+    }
   }
+}
+
+bool turned_beyond(const ClosedFormReport& r) { return r.largest_turn > r.linear_turn; }
+bool beyond_range(const ClosedFormReport& r) {
+  return turned_beyond(r) || r.largest_speed > r.linear_speed;
 }
 
 // The stage-2 gyro biases (rad/s), zero where unobservable.
@@ -791,19 +844,40 @@ Eigen::Vector3d gyro_biases(const Stage2Result& s2) {
   return b;
 }
 
-// The biases compensated before stage 1 added back: the coefficients are totals.
-void add_removed_biases(ClosedFormReport& r) {
+// Whether stage 2 determined every accelerometer bias, scale factor and misalignment.
+bool accel_determined(const Stage2Result& s2) {
   const auto& cat = coefficient_catalog();
-  Stage2Result& s2 = r.stage2;
-  for (std::size_t i = 0; i < s2.parameters.size(); ++i) {
-    const auto& c = cat[static_cast<std::size_t>(s2.parameters[i])];
-    if (c.family == "gyro.bias" && s2.observable[i])
-      s2.theta(static_cast<Eigen::Index>(i)) += r.removed_gyro_bias(c.name.back() - 'x');
-  }
-  if (r.has_paper_forms) {
-    r.paper.w0x += r.removed_gyro_bias.x();
-    r.paper.w0z += r.removed_gyro_bias.z();
-  }
+  for (std::size_t i = 0; i < s2.parameters.size(); ++i)
+    if (cat[static_cast<std::size_t>(s2.parameters[i])].family.rfind("accel.", 0) == 0 &&
+        !s2.observable[i])
+      return false;
+  return true;
+}
+
+// The model to linearize about next: `about` composed with a pass's stage-2 gyro biases, and its
+// accelerometer bias, scale and misalignment when `accel` (the rest of the gyro terms stay out:
+// the Earth rate alone gives them, at sigmas far beyond their size).
+ImuErrorModel next_about(const ImuErrorModel& about, const Stage2Result& s2, bool accel) {
+  const Eigen::VectorXd theta =
+      s2.theta.unaryExpr([](double v) { return std::isfinite(v) ? v : 0.0; });
+  const ImuErrorModel m = model_of(s2.parameters, theta);
+  ImuErrorModel out = about;
+  out.gyro.bias += m.gyro.bias;
+  if (accel) compose_triad(about.accel, m.accel, out.accel);
+  return out;
+}
+
+// The paper's closed forms of a pass about `about`: its biases and misalignments added (to first
+// order, as the forms are).
+void add_about(PaperClosedForms& p, const ImuErrorModel& about) {
+  p.w0x += about.gyro.bias.x();
+  p.w0z += about.gyro.bias.z();
+  p.f0x += about.accel.bias.x();
+  p.f0z += about.accel.bias.z();
+  p.mu_xy += about.accel.misalignment(0, 1);
+  p.mu_xz += about.accel.misalignment(0, 2);
+  p.mu_zx += about.accel.misalignment(2, 0);
+  p.mu_zy += about.accel.misalignment(2, 1);
 }
 
 // The gyro biases from the dwells' mean outputs, the Earth rate at the plan's attitudes taken
@@ -834,26 +908,38 @@ ClosedFormReport run_closed_form_relinearized(const Session& session, const Stag
   set_largest_turn(r, session.site);
   r.first_gyro_bias = gyro_biases(r.stage2);
   ImuErrorModel about;
-  for (int k = 2; k <= max_linearizations && r.largest_turn > r.linear_turn; ++k) {
-    // The first relinearization about the dwells' mean rates (a stage 1 far beyond its range
-    // gives biases shrunk and of either sign: seed8's 180 s dwells at 1 deg/s turned -0.65
-    // times the truth), the next ones by stage 2's corrections to the biases already removed.
-    const Eigen::Vector3d step = k == 2 ? dwell_mean_gyro_bias(session) : gyro_biases(r.stage2);
-    if (!step.allFinite()) break;
-    about.gyro.bias += step;
+  for (int k = 2; k <= max_linearizations && beyond_range(r); ++k) {
+    // The first relinearization of a pass beyond the gyros' range about the dwells' mean rates
+    // (a stage 1 far beyond its range gives biases shrunk and of either sign: seed8's 180 s
+    // dwells at 1 deg/s turned -0.65 times the truth); otherwise by the pass's stage-2
+    // corrections, the accelerometers' too when the pass was within the gyros' range.
+    const bool turned = turned_beyond(r);
+    const bool accel = !turned && accel_determined(r.stage2);
+    ImuErrorModel step = about;
+    if (k == 2 && turned)
+      step.gyro.bias += dwell_mean_gyro_bias(session);
+    else
+      step = next_about(about, r.stage2, accel);
+    if (!step.gyro.bias.allFinite()) break;
     ClosedFormReport next;
     try {
-      next = run_closed_form(session, stage1, table, true, &about);
+      next = run_closed_form(session, stage1, table, true, &step);
     } catch (const std::invalid_argument&) {
       break;  // a linearization that cannot run (no dwell left): the last one stands
     }
+    about = step;
     next.linearizations = k;
     next.removed_gyro_bias = about.gyro.bias;
+    next.removed_accel = r.removed_accel || accel;
     next.first_gyro_bias = r.first_gyro_bias;
     set_largest_turn(next, session.site);
     r = std::move(next);
   }
-  add_removed_biases(r);
+  if (r.linearizations > 1) {
+    compose_with(r.stage2, about);
+    set_mounting(r.stage2, r.installation);
+    if (r.has_paper_forms) add_about(r.paper, about);
+  }
   return r;
 }
 

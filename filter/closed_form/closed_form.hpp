@@ -181,13 +181,24 @@ struct ClosedFormReport {
   /// input turned the attitude farthest against its bound (closed_form_turn, rad).
   std::string largest_turn_dwell;
   double largest_turn = 0.0, linear_turn = 0.0;
+  /// The same for the accelerometers: the dwell whose equivalent inputs drove the navigator's
+  /// velocity farthest against its bound (closed_form_turn, m/s), and whether the samples were
+  /// compensated with the accelerometers' bias, scale and misalignment before the last
+  /// linearization (stage2.theta holds the totals).
+  std::string largest_speed_dwell;
+  double largest_speed = 0.0, linear_speed = 0.0;
+  bool removed_accel = false;
 };
 
 /// The attitude a dwell's gyro equivalent inputs turn over the dwell (|dw| x duration, rad), and
 /// the turn stage 1's linear model tolerates there: its neglected second-order term g phi^2 / 2
-/// at the dwell's end equal to the sigma of the dwell's horizontal accelerometer inputs.
+/// at the dwell's end equal to the sigma of the dwell's horizontal accelerometer inputs. The
+/// same for the velocity error the accelerometer inputs build up (|df| x duration, m/s): the
+/// navigator's transport-rate and centripetal terms of it, of second order (v^2 / R), reach that
+/// sigma at v = sqrt(sigma_f R).
 struct DwellTurn {
   double turn = 0.0, bound = 0.0;
+  double speed = 0.0, speed_bound = 0.0;
 };
 DwellTurn closed_form_turn(const EquivalentInputs& e, const Site& site);
 
@@ -203,8 +214,11 @@ ClosedFormReport run_closed_form(const Session& session, const Stage1Options& st
 /// The closed form linearized about its own gyro biases: while a dwell's gyro inputs turn the
 /// attitude beyond stage 1's linear range (closed_form_turn), the samples are compensated with
 /// the stage-2 gyro biases so far and stage 1 and 2 run again (at most `max_linearizations`
-/// times). The report's coefficients are the totals; its largest turn says whether the last
-/// linearization is within the range (the gate refuses it otherwise, naming the gyro biases).
+/// times). While its accelerometer inputs drive the velocity beyond the range (a pass within the
+/// gyros' range, every accelerometer coefficient determined), the samples are compensated with
+/// the accelerometers' bias, scale and misalignment too. The report's coefficients are the
+/// totals (with their covariance); its largest turn and speed say whether the last linearization
+/// is within the range (the gate refuses it otherwise, naming the gyros or accelerometers).
 ClosedFormReport run_closed_form_relinearized(const Session& session, const Stage1Options& stage1,
                                               const TableAttitudeError& table,
                                               int max_linearizations = 4);

@@ -56,8 +56,15 @@ class NisWatch {
         tail_(std::isfinite(z) ? boost::math::cdf(boost::math::complement(
                                      boost::math::normal_distribution<double>(), z))
                                : 0.0) {}
-  /// Adds one update; true when the window is full and its NIS beyond the quantile.
+  /// Adds one update; true when the window is full and its NIS beyond the quantile, or at once
+  /// when the NIS is not a number (estimates run away to infinities: a NaN compares false with
+  /// any bound, and a later pass of a diverged log exited 0 with NIS per dof -nan; APOPHIS,
+  /// issue 34), even with the alarm off.
   bool add(double nis, int dof) {
+    if (!std::isfinite(nis)) {
+      not_finite_ = true;
+      return true;
+    }
     updates_.emplace_back(nis, dof);
     sum_ += nis;
     dof_ += dof;
@@ -74,6 +81,13 @@ class NisWatch {
   }
   std::string message(double t) const {
     char msg[256];
+    if (not_finite_) {
+      std::snprintf(msg, sizeof msg,
+                    "filter diverged at t = %.3f s: its NIS is not a number (the estimates ran "
+                    "away)",
+                    t);
+      return msg;
+    }
     std::snprintf(msg, sizeof msg,
                   "filter diverging at t = %.3f s: NIS per dof %.3g over the last %d updates "
                   "(%d dof; a consistent filter stays below %.3g)",
@@ -87,6 +101,7 @@ class NisWatch {
   std::deque<std::pair<double, int>> updates_;
   double sum_ = 0.0;
   int dof_ = 0;
+  bool not_finite_ = false;
 };
 
 MonitorRecord monitor_record(const Calibrator& kf, double t, bool converged_now) {

@@ -392,9 +392,29 @@ PlausibilityCheck check_stage1_fit(const std::vector<EquivalentInputs>& stage1,
   return bad.check("stage-1 fit");
 }
 
+namespace {
+// The accelerometers' part of the linear range: the velocity a dwell's inputs build up.
+PlausibilityCheck speed_range(const ClosedFormReport& r, const std::string& input) {
+  PlausibilityCheck c{"closed-form linear range", true, ""};
+  if (!(r.largest_speed > r.linear_speed)) return c;
+  c.passed = false;
+  c.detail = input + ": dwell " + r.largest_speed_dwell +
+             ": the accelerometers' equivalent inputs drive the navigator's velocity to " +
+             number(r.largest_speed, 3) + " m/s within the dwell, beyond stage 1's linear range " +
+             "of " + number(r.linear_speed, 3) +
+             " m/s (there its neglected v^2/R reaches the accelerometer inputs' sigma)" +
+             (r.removed_accel ? ", after the accelerometers' bias, scale and misalignment were "
+                                "removed: an accelerometer error the closed form does not model"
+                              : ": the accelerometer errors (bias, scale, misalignment) were not "
+                                "removed (not all determined, or the gyros beyond their range)") +
+             "; the Kalman filter (--method kf) does not linearize over a dwell";
+  return c;
+}
+}  // namespace
+
 PlausibilityCheck check_linear_range(const ClosedFormReport& r, const std::string& input) {
   PlausibilityCheck c{"closed-form linear range", true, ""};
-  if (!(r.largest_turn > r.linear_turn)) return c;
+  if (!(r.largest_turn > r.linear_turn)) return speed_range(r, input);
   const bool removed = r.linearizations > 1;
   const Eigen::Vector3d b = (removed ? r.removed_gyro_bias : r.first_gyro_bias) / units::deg_per_s;
   c.passed = false;

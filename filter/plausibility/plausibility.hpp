@@ -147,7 +147,9 @@ PlausibilityCheck check_stage1_fit(const std::vector<EquivalentInputs>& stage1,
                                    const PlausibilityLimits& limits, const std::string& input);
 /// The closed form's linear range: after its relinearizations about its own gyro biases
 /// (run_closed_form_relinearized) no dwell's gyro inputs may turn the attitude beyond what stage
-/// 1's linear model tolerates (closed_form_turn); the cause named is the gyro biases.
+/// 1's linear model tolerates (closed_form_turn); the cause named is the gyro biases. Nor may
+/// its accelerometer inputs drive the velocity beyond the range (after the relinearization about
+/// the accelerometers' bias, scale and misalignment, an accelerometer error the model lacks).
 PlausibilityCheck check_linear_range(const ClosedFormReport& r, const std::string& input);
 /// The closed form's stage 2: its residual chi2 (dof = inputs - rank) against the chi-square
 /// quantile at the normal tail of `limits.stage2_fit_z`: above it the dwells do not fit one set

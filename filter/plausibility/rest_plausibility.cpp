@@ -432,4 +432,35 @@ std::string record_statement(const LogFormat& log, std::size_t samples, double s
                   "density below follow from the declared rate)");
 }
 
+std::string rest_noise_cause(const LogFormat& log, double t0, double t1, double gyro_white,
+                             double accel_white) {
+  std::vector<ImuSample> samples;
+  LogReader reader(log);
+  reader.skip_bad_samples([](const BadSampleError&) {});
+  for (ImuSample s; reader.next(s) && s.t <= t1;)
+    if (s.t >= t0) samples.push_back(s);
+  if (samples.size() < 3 || gyro_white <= 0.0 || accel_white <= 0.0) return "";
+  const std::vector<ImuReading> readings = readings_from_samples(samples);
+  const RestStatistics st = rest_statistics(readings, 0, readings.size() - 1, "");
+  const Eigen::Vector3d g = st.gyro_density / gyro_white, a = st.accel_density / accel_white;
+  if (std::max(g.maxCoeff(), a.maxCoeff()) <= kNoiseExcess) return "";
+  std::string axes;
+  for (int i = 0; i < 3; ++i) {
+    const std::string axis(1, static_cast<char>('x' + i));
+    if (g(i) > kNoiseExcess)
+      axes += ", gyro " + axis + " " + number(st.gyro_density(i) / units::deg_per_sqrt_h, 3) +
+              " deg/sqrt(h) (" + number(g(i), 3) + "x)";
+    if (a(i) > kNoiseExcess)
+      axes += ", accel " + axis + " " + number(st.accel_density(i) / units::ug_per_sqrt_hz, 4) +
+              " ug/sqrt(Hz) (" + number(a(i), 3) + "x)";
+  }
+  return "at rest (t = " + number(t0, 4) + " to " + number(t1, 4) +
+         " s) the outputs' noise density is beyond " + number(kNoiseExcess, 2) +
+         " times the sensor profile's (" + number(gyro_white / units::deg_per_sqrt_h, 3) +
+         " deg/sqrt(h), " + number(accel_white / units::ug_per_sqrt_hz, 4) +
+         " ug/sqrt(Hz)): " + axes.substr(2) +
+         ": the filter's noise model is not the data's (outputs jumping between levels, a "
+         "profile for another unit or output rate, a filtered or decimated log)";
+}
+
 }  // namespace sinscal

@@ -108,6 +108,14 @@ PlausibilityReport check_six_face(const LogFormat& log, const std::vector<PartSt
                                   const FerrarisDeclaration& declared, double g,
                                   const RestLimits& limits, const std::string& input);
 
+/// The cause of a filter's divergence the data show, when they do: the white-noise density of the
+/// log's outputs over [t0, t1] (log time, s; a rest before the divergence, rest_statistics)
+/// against the densities the filter assumes (the profile's: rad/sqrt(s), m/s/sqrt(s)). Empty
+/// when every axis is within kNoiseExcess times them (or the interval has fewer than 3 readings).
+inline constexpr double kNoiseExcess = 3.0;
+std::string rest_noise_cause(const LogFormat& log, double t0, double t1, double gyro_white,
+                             double accel_white);
+
 /// The line a session's noise statement starts with: the record's length at the declared rate,
 /// and whether the times come from the log or from the rate alone.
 std::string record_statement(const LogFormat& log, std::size_t samples, double seconds);
