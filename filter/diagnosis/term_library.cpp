@@ -286,8 +286,8 @@ TurnRaw integrate_turns(const LibraryTurns& lt, const DwellTests& dwells, const 
   const std::vector<PlanDwell> d = dwells_in_order(dwells);
   TurnRaw r;
   if (d.size() < 2) return r;
-  std::vector<double> mids;
-  for (const auto& w : d) mids.push_back(0.5 * (w.t_start + w.t_end));
+  std::vector<double> mids(d.size());
+  for (std::size_t k = 0; k < d.size(); ++k) mids[k] = 0.5 * (d[k].t_start + d[k].t_end);
   std::vector<Segment> segs(d.size() - 1);
   for (std::size_t k = 0; k < segs.size(); ++k) {
     segs[k].C = d[k].C_b_n_known;
