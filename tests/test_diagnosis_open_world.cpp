@@ -136,6 +136,12 @@ TEST_CASE("Open world: out-of-catalog effects are unexplained, or their library 
     INFO(k.plan << " " << e.name << ": " << o.story << " | library: " << terms);
     if (!k.catalog) CHECK(o.result.findings.empty());
     CHECK(o.result.unexplained.present);
-    if (k.term) CHECK(score_terms(o.result, e) == 1);
+    if (!k.term) continue;
+    CHECK(score_terms(o.result, e) == 1);
+    // How to add the term as one family-table entry, for each kind of term.
+    REQUIRE(o.result.unexplained.library);
+    const std::string& how = o.result.unexplained.library->how_to_add;
+    CHECK(how.find(e.formula) != std::string::npos);
+    CHECK(how.find("family table") != std::string::npos);
   }
 }
