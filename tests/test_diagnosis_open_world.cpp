@@ -5,7 +5,8 @@
 // The matrix at more seeds is a documented measurement (hidden test, [.]):
 //   SINSCAL_OPEN_WORLD_SEEDS=30 build/tests/sinscal_tests "[open_world_matrix]"
 // with SINSCAL_OPEN_WORLD_FILTER=TEXT (effects whose name contains it) and
-// SINSCAL_OPEN_WORLD_PLANS=rot19.ini,seed8.ini; results in docs/accuracy.md.
+// SINSCAL_OPEN_WORLD_PLANS=rot19.ini,seed8.ini and SINSCAL_OPEN_WORLD_SCALE=S (every effect S
+// times its size); results in docs/accuracy.md.
 #include <catch2/catch.hpp>
 #include <cstdio>
 #include <cstdlib>
