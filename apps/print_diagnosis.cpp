@@ -26,11 +26,12 @@ void print_verdict(const TableDiagnosis& d) {
     if (const auto& lib = d.unexplained.library) {
       if (lib->terms.empty())
         std::printf(
-            "   No term of the out-of-catalog library (%d terms) confirmed on held-out dwells\n",
+            "   No term of the out-of-catalog library (%d terms) confirmed on held-out dwells and "
+            "turns\n",
             lib->candidates);
       for (const auto& t : lib->terms)
-        std::printf("   Library term: %s (held-out dwells chi2 %.4g -> %.4g)\n", t.text().c_str(),
-                    lib->heldout_before, lib->heldout_after);
+        std::printf("   Library term: %s (held-out dwells and turns chi2 %.4g -> %.4g)\n",
+                    t.text().c_str(), lib->heldout_before, lib->heldout_after);
       if (!lib->how_to_add.empty()) std::printf("   How: %s\n", lib->how_to_add.c_str());
     }
     if (c.dwells_sigma_scale > 1.0 || c.filter_sigma_scale > 1.0)

@@ -104,6 +104,12 @@ void add_verdict(json& j, const TableDiagnosis& d) {
                                    {"heldout_gain_needed", lib->heldout_needed},
                                    {"terms", terms},
                                    {"how_to_add", lib->how_to_add}};
+    if (lib->turn_segments > 0)
+      j["unexplained"]["library"]["turns"] = {{"segments", lib->turn_segments},
+                                              {"chi2", lib->turns_chi2},
+                                              {"dof", lib->turns_dof},
+                                              {"quantile", lib->turns_quantile},
+                                              {"rejects", lib->turns_reject}};
   }
   j["stops"] = d.stops;
 }

@@ -90,9 +90,10 @@ inline std::vector<OpenWorldEffect> open_world_effects(double mid_s) {
   e.push_back({"gyro x += 0.2 deg/h/g^2 f_z^2",
                [dph, g2](double, auto& f, auto& w) { w(0) += 0.2 * dph * f(2) * f(2) / g2; },
                "gyro", 0, "f_z^2", 0.2});
+  // 3000 ppm/(rad/s) = 52.36 ppm/(deg/s): the library's unit.
   e.push_back({"gyro x += 3000 ppm/(rad/s) omega_x |omega_x|",
-               [](double, auto&, auto& w) { w(0) += 3000e-6 * w(0) * std::abs(w(0)); }, "", 0, "",
-               0.0});
+               [](double, auto&, auto& w) { w(0) += 3000e-6 * w(0) * std::abs(w(0)); }, "gyro", 0,
+               "omega_x |omega_x|", 3000.0 * units::deg_per_s});
   e.push_back(
       {"accel y += 20 ug sin(2 pi t / 29 s)",
        [ug](double t, auto& f, auto&) { f(1) += 20.0 * ug * std::sin(2.0 * M_PI * t / 29.0); }, "",
@@ -105,17 +106,32 @@ inline std::vector<OpenWorldEffect> open_world_effects(double mid_s) {
   e.push_back({"gyro x += 0.2 deg/h/g^2 f_y f_z",
                [dph, g2](double, auto& f, auto& w) { w(0) += 0.2 * dph * f(1) * f(2) / g2; },
                "gyro", 0, "f_y f_z", 0.2});
+  e.push_back({"gyro y += 3000 ppm/(rad/s) omega_y^2",
+               [](double, auto&, auto& w) { w(1) += 3000e-6 * w(1) * w(1); }, "gyro", 1,
+               "omega_y^2", 3000.0 * units::deg_per_s});
+  // 20 ug at 600 s: 720 ug/h^2.
+  e.push_back({"accel z += 20 ug (t / 600 s)^2",
+               [ug](double t, auto& f, auto&) { f(2) += 20.0 * ug * (t / 600.0) * (t / 600.0); },
+               "accel", 2, "t^2", 20.0 * 36.0});
   return e;
 }
 
-/// A clean simulated session with the effect `index` of open_world_effects injected (its
-/// mid-session: the plan's).
+/// A clean simulated session with the effect `index` of open_world_effects injected, `scale` times
+/// its size (its mid-session: the plan's).
 inline HiddenCase open_world_case(const std::string& plan, const std::string& profile,
-                                  std::size_t index, std::uint64_t seed, double rate_hz) {
+                                  std::size_t index, std::uint64_t seed, double rate_hz,
+                                  double scale = 1.0) {
   HiddenCase c = hidden_case("open_world", plan, profile, {}, seed, rate_hz);
   const double duration = PlanTimeline::of(c.session.plan, c.session.site).duration;
   const auto effects = open_world_effects(c.session.time_offset + 0.5 * duration);
-  inject_into_log(c.session.dir + "/imu.csv", rate_hz, effects.at(index).term);
+  const ExtraTerm term = effects.at(index).term;
+  inject_into_log(c.session.dir + "/imu.csv", rate_hz,
+                  [&term, scale](double t, Eigen::Vector3d& f, Eigen::Vector3d& w) {
+                    Eigen::Vector3d f1 = f, w1 = w;
+                    term(t, f1, w1);
+                    f += scale * (f1 - f);
+                    w += scale * (w1 - w);
+                  });
   c.session = Session::load(c.session.path);
   return c;
 }

@@ -5,7 +5,8 @@
 // The matrix at more seeds is a documented measurement (hidden test, [.]):
 //   SINSCAL_OPEN_WORLD_SEEDS=30 build/tests/sinscal_tests "[open_world_matrix]"
 // with SINSCAL_OPEN_WORLD_FILTER=TEXT (effects whose name contains it) and
-// SINSCAL_OPEN_WORLD_PLANS=rot19.ini,seed8.ini; results in docs/accuracy.md.
+// SINSCAL_OPEN_WORLD_PLANS=rot19.ini,seed8.ini and SINSCAL_OPEN_WORLD_SCALE=S (every effect S
+// times its size); results in docs/accuracy.md.
 #include <catch2/catch.hpp>
 #include <cstdio>
 #include <cstdlib>
@@ -28,11 +29,12 @@ struct OpenWorldScore {
 
 // The library's terms: whether the effect's is among them within 3 sigma (1), another term
 // only (-1), or none (0).
-int score_terms(const TableDiagnosis& d, const OpenWorldEffect& e) {
+int score_terms(const TableDiagnosis& d, const OpenWorldEffect& e, double scale = 1.0) {
   if (!d.unexplained.library || d.unexplained.library->terms.empty()) return 0;
   const auto right = [&](const LibraryTerm& t) {
     return !e.sensor.empty() && t.sensor == e.sensor && t.axis == e.axis &&
-           t.formula.rfind(e.formula, 0) == 0 && std::abs(t.value - e.value) < 3.0 * t.sigma;
+           t.formula.rfind(e.formula, 0) == 0 &&
+           std::abs(t.value - scale * e.value) < 3.0 * t.sigma;
   };
   for (const auto& t : d.unexplained.library->terms) {
     if (right(t)) return 1;
@@ -43,14 +45,15 @@ int score_terms(const TableDiagnosis& d, const OpenWorldEffect& e) {
 }
 
 OpenWorldScore run_effect(const std::string& plan, std::size_t effect, int seeds,
-                          std::uint64_t seed0) {
+                          std::uint64_t seed0, double scale) {
   OpenWorldScore s;
   for (int k = 0; k < seeds; ++k) {
     const std::uint64_t seed = seed0 + static_cast<std::uint64_t>(k);
     ++s.seeds;
     DiagnosisOutcome o;
     try {
-      const HiddenCase c = open_world_case(plan, "nav-fog.ini", effect, seed, kOpenWorldRate);
+      const HiddenCase c =
+          open_world_case(plan, "nav-fog.ini", effect, seed, kOpenWorldRate, scale);
       o = diagnose_hidden(c, {});
     } catch (const std::exception& e) {
       ++s.errors;
@@ -58,7 +61,7 @@ OpenWorldScore run_effect(const std::string& plan, std::size_t effect, int seeds
       continue;
     }
     const OpenWorldEffect e = open_world_effects(0.0)[effect];
-    const int term = score_terms(o.result, e);
+    const int term = score_terms(o.result, e, scale);
     s.right_term += term > 0 ? 1 : 0;
     s.wrong_term += term < 0 ? 1 : 0;
     if (term != 0 && s.first_terms.empty())
@@ -84,6 +87,8 @@ TEST_CASE("Open world: out-of-catalog effects on rot19 and seed8, measured",
   const char* env_seeds = std::getenv("SINSCAL_OPEN_WORLD_SEEDS");
   const char* env_filter = std::getenv("SINSCAL_OPEN_WORLD_FILTER");
   const char* env_plans = std::getenv("SINSCAL_OPEN_WORLD_PLANS");
+  const char* env_scale = std::getenv("SINSCAL_OPEN_WORLD_SCALE");
+  const double scale = env_scale ? std::atof(env_scale) : 1.0;
   const int seeds = env_seeds ? std::atoi(env_seeds) : 30;
   std::vector<std::string> plans;
   std::stringstream parts(env_plans ? env_plans : "rot19.ini,seed8.ini");
@@ -96,7 +101,7 @@ TEST_CASE("Open world: out-of-catalog effects on rot19 and seed8, measured",
     for (std::size_t k = 0; k < open_world_effects(0.0).size(); ++k) {
       const OpenWorldEffect e = open_world_effects(0.0)[k];
       if (env_filter && e.name.find(env_filter) == std::string::npos) continue;
-      const OpenWorldScore s = run_effect(plan, k, seeds, 9000);
+      const OpenWorldScore s = run_effect(plan, k, seeds, 9000, scale);
       std::printf("| %s | %s | %d | %d | %d | %d | %d | %d | %d |\n", plan.c_str(), e.name.c_str(),
                   s.seeds, s.wrong_first, s.unexplained, s.right_term, s.wrong_term, s.quiet,
                   s.errors);
@@ -106,19 +111,23 @@ TEST_CASE("Open world: out-of-catalog effects on rot19 and seed8, measured",
     }
 }
 
-// CI: one seed of three cells of the matrix (seeds outside the measured ones). An anisoelastic
+// CI: one seed of four cells of the matrix (seeds outside the measured ones). An anisoelastic
 // gyro term on seed8 and a gyro g^2 term on rot19 are found by the library within 3 sigma (a
 // sign or a column wrong turns them red); a cross-axis accelerometer product on seed8 (named
-// time_delay before issue 33) names no catalog family and is reported unexplained.
+// time_delay before issue 33) names no catalog family and is reported unexplained. A gyro rate
+// nonlinearity omega_y^2 on rot19 acts only in the turns: the turns' attitude residual finds it
+// (its regressor's sign or the gyro integration's frame wrong turns it red); the catalog's
+// gyro.scale_asym, which it nearly equals on turns at one rate, may be named first.
 TEST_CASE("Open world: out-of-catalog effects are unexplained, or their library term",
           "[diagnosis][open_world][long]") {
   struct Case {
     std::string plan;
     std::size_t effect;
-    bool term;  // the library must find the effect's term
+    bool term;     // the library must find the effect's term
+    bool catalog;  // a catalog family may be named too
   };
-  for (const Case& k :
-       {Case{"seed8.ini", 5, true}, Case{"rot19.ini", 1, true}, Case{"seed8.ini", 0, false}}) {
+  for (const Case& k : {Case{"seed8.ini", 5, true, false}, Case{"rot19.ini", 1, true, false},
+                        Case{"seed8.ini", 0, false, false}, Case{"rot19.ini", 6, true, true}}) {
     const OpenWorldEffect e = open_world_effects(0.0)[k.effect];
     const HiddenCase c = open_world_case(k.plan, "nav-fog.ini", k.effect, 77, kOpenWorldRate);
     const DiagnosisOutcome o = diagnose_hidden(c, {});
@@ -126,8 +135,14 @@ TEST_CASE("Open world: out-of-catalog effects are unexplained, or their library 
     if (o.result.unexplained.library)
       for (const auto& t : o.result.unexplained.library->terms) terms += t.text() + "; ";
     INFO(k.plan << " " << e.name << ": " << o.story << " | library: " << terms);
-    CHECK(o.result.findings.empty());
+    if (!k.catalog) CHECK(o.result.findings.empty());
     CHECK(o.result.unexplained.present);
-    if (k.term) CHECK(score_terms(o.result, e) == 1);
+    if (!k.term) continue;
+    CHECK(score_terms(o.result, e) == 1);
+    // How to add the term as one family-table entry, for each kind of term.
+    REQUIRE(o.result.unexplained.library);
+    const std::string& how = o.result.unexplained.library->how_to_add;
+    CHECK(how.find(e.formula) != std::string::npos);
+    CHECK(how.find("family table") != std::string::npos);
   }
 }

@@ -316,6 +316,7 @@ class TableRounds {
   TableRounds(const std::vector<EquivalentInputs>& inputs, const Site& site,
               const Stage2Options& base, const TableDiagnosisOptions& o, const TurnModel* tm)
       : o_(o),
+        tm_(tm),
         families_(candidate_families(o.dwells)),
         dwells_(inputs, site, dwells_model(base, tm), o.dwells) {
     DiagnosisReport& rep = d_.dwells;
@@ -394,8 +395,7 @@ class TableRounds {
     }
     const std::vector<int> confirmed = demote_unexplaining();
     d_.unexplained = unexplained_of(d_, rep.residuals);
-    if (d_.unexplained.present)
-      d_.unexplained.library = fit_term_library(dwells_, confirmed, o_.dwells.alpha);
+    library(confirmed);
     state_stops();
     return std::move(d_);
   }
@@ -403,6 +403,27 @@ class TableRounds {
   int findings() const { return static_cast<int>(d_.findings.size()); }
 
  private:
+  // The out-of-catalog library (term_library.hpp) on what the model leaves: its turns' test
+  // (with a session) makes the residual unexplained too.
+  void library(const std::vector<int>& confirmed) {
+    LibraryTurns lt;
+    const bool turns =
+        tm_ && tm_->session && tm_->base.attitude != CalibratorOptions::AttitudeUpdates::None;
+    if (turns) {
+      lt.session = tm_->session;
+      lt.attitude_sigma = tm_->base.attitude_sigma;
+      lt.noise = tm_->base.noise;
+      lt.about = tm_->base.initial_model ? &*tm_->base.initial_model : nullptr;
+    }
+    LibraryFit fit = fit_term_library(dwells_, confirmed, o_.dwells.alpha, turns ? &lt : nullptr,
+                                      d_.unexplained.present);
+    if (fit.turns_reject) {
+      d_.unexplained.present = true;
+      d_.unexplained.signature.push_back(fit.turns_signature);
+    }
+    if (d_.unexplained.present) d_.unexplained.library = std::move(fit);
+  }
+
   // A finding whose data still reject the noise model with it (the dwells' findings against the
   // dwells' residual, the turns' against the filter's NIS) does not explain the evidence: it is
   // moved to `rejected`, not named. Returns the dwells' model without them (the library fits
@@ -540,6 +561,7 @@ class TableRounds {
   }
 
   const TableDiagnosisOptions& o_;
+  const TurnModel* tm_ = nullptr;
   std::vector<std::string> families_;
   DwellTests dwells_;
   std::optional<TurnTests> turns_;

@@ -1,6 +1,7 @@
 #include "filter/diagnosis/term_library.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Dense>
 #include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
@@ -8,8 +9,10 @@
 #include <limits>
 
 #include "filter/strapdown/ins_error_model.hpp"
+#include "models/attitude.hpp"
 #include "models/earth.hpp"
 #include "models/units.hpp"
+#include "rig/io/log_io.hpp"
 
 namespace sinscal {
 
@@ -22,32 +25,136 @@ constexpr double kThresholdSigma = 3.0;
 
 const char* const kAxis[3] = {"x", "y", "z"};
 
-// One library column: which sensor axis, its function of the body's specific force (m/s^2) and
-// of the dwell's middle time (s), per unit of `unit`.
+// What a column's function is of.
+enum class Kind { Product, Step, Time, Time2, Sin, Cos, RateAbs, RateSq, RateCube };
+
+// One library column: which sensor axis, its function of the body's specific force (m/s^2), rate
+// (rad/s) and plan time (s), per unit of `unit` (times si_per_unit: SI).
 struct Column {
   LibraryTerm term;
   bool gyro = false;
-  int product_a = -1, product_b = -1;  // f_a f_b / g^2; -1: a step
-  double step_t = 0.0;                 // s: 1 after this time
-  double value(const Eigen::Vector3d& f_b, double t) const {
-    if (product_a >= 0) return f_b(product_a) * f_b(product_b) / (units::g0 * units::g0);
-    return t > step_t ? 1.0 : 0.0;
+  Kind kind = Kind::Product;
+  int product_a = -1, product_b = -1;  // Product: f_a f_b / g^2
+  double param = 0.0;                  // Step: 1 after this time (s); Sin, Cos: the period (s)
+  // Acts only while the table turns (none of it at rest).
+  bool rate() const {
+    return kind == Kind::RateAbs || kind == Kind::RateSq || kind == Kind::RateCube;
+  }
+  double value(const Eigen::Vector3d& f_b, const Eigen::Vector3d& w_b, double t) const {
+    const double w = w_b(term.axis) / units::deg_per_s;  // deg/s
+    switch (kind) {
+      case Kind::Product:
+        return f_b(product_a) * f_b(product_b) / (units::g0 * units::g0);
+      case Kind::Step:
+        return t > param ? 1.0 : 0.0;
+      case Kind::Time:
+        return t / units::hour;
+      case Kind::Time2:
+        return (t / units::hour) * (t / units::hour);
+      case Kind::Sin:
+        return std::sin(2.0 * M_PI * t / param);
+      case Kind::Cos:
+        return std::cos(2.0 * M_PI * t / param);
+      case Kind::RateAbs:
+        return w * std::abs(w) * units::deg_per_s;
+      case Kind::RateSq:
+        return w * w * units::deg_per_s;
+      case Kind::RateCube:
+        return w * w * w * units::deg_per_s;
+    }
+    return 0.0;
+  }
+  // Its mean over a dwell [t0, t1] at rest (the rate terms: none; periodic: the mean of the
+  // period's sine over the dwell).
+  double dwell_value(const Eigen::Vector3d& f_b, double t0, double t1) const {
+    if (rate()) return 0.0;
+    const double w = 2.0 * M_PI / param;
+    if ((kind == Kind::Sin || kind == Kind::Cos) && t1 > t0)
+      return kind == Kind::Sin ? (std::cos(w * t0) - std::cos(w * t1)) / (w * (t1 - t0))
+                               : (std::sin(w * t1) - std::sin(w * t0)) / (w * (t1 - t0));
+    return value(f_b, Eigen::Vector3d::Zero(), 0.5 * (t0 + t1));
   }
 };
 
-LibraryTerm term_of(bool gyro, int axis, const std::string& formula, bool product) {
+LibraryTerm term_of(bool gyro, int axis, const std::string& formula, const std::string& unit,
+                    double si_per_unit) {
   LibraryTerm t;
   t.sensor = gyro ? "gyro" : "accel";
   t.axis = axis;
   t.formula = formula;
-  t.unit = gyro ? (product ? "deg/h/g^2" : "deg/h") : (product ? "ug/g^2" : "ug");
-  t.si_per_unit = gyro ? units::deg_per_h : units::ug;
+  t.unit = unit;
+  t.si_per_unit = si_per_unit;
   return t;
 }
 
-// The library: f_a f_b on each axis of both triads; bias steps at a quarter, half and three
-// quarters of the dwells (in time).
-std::vector<Column> library(const std::vector<EquivalentInputs>& inputs) {
+Column column(bool gyro, int axis, Kind kind, const std::string& formula, const std::string& unit,
+              double si_per_unit, double param = 0.0) {
+  Column c;
+  c.gyro = gyro;
+  c.kind = kind;
+  c.param = param;
+  c.term = term_of(gyro, axis, formula, unit, si_per_unit);
+  return c;
+}
+
+// The bias unit of a triad and its name.
+double bias_si(bool gyro) { return gyro ? units::deg_per_h : units::ug; }
+std::string bias_unit(bool gyro) { return gyro ? "deg/h" : "ug"; }
+
+// f_a f_b / g^2 (a <= b) on one axis.
+void add_products(std::vector<Column>& out, bool gyro, int axis) {
+  for (int a = 0; a < 3; ++a)
+    for (int b = a; b < 3; ++b) {
+      Column c = column(gyro, axis, Kind::Product,
+                        a == b ? std::string("f_") + kAxis[a] + "^2"
+                               : std::string("f_") + kAxis[a] + " f_" + kAxis[b],
+                        bias_unit(gyro) + "/g^2", bias_si(gyro));
+      c.product_a = a;
+      c.product_b = b;
+      out.push_back(c);
+    }
+}
+
+// Bias steps at a quarter, half and three quarters of the dwells (in time); the bias linear and
+// quadratic in time; the bias periodic at the plan's cycle (the median time between dwells) and
+// two, three and four cycles (sine and cosine of plan time).
+void add_time_terms(std::vector<Column>& out, bool gyro, int axis,
+                    const std::vector<double>& mids) {
+  char b[80];
+  for (const double q : {0.25, 0.5, 0.75}) {
+    const auto k = static_cast<std::size_t>(q * static_cast<double>(mids.size()));
+    if (k == 0 || k >= mids.size()) continue;
+    const double at = 0.5 * (mids[k - 1] + mids[k]);
+    std::snprintf(b, sizeof b, "step after t = %.0f s", at);
+    out.push_back(column(gyro, axis, Kind::Step, b, bias_unit(gyro), bias_si(gyro), at));
+  }
+  out.push_back(column(gyro, axis, Kind::Time, "t", bias_unit(gyro) + "/h", bias_si(gyro)));
+  out.push_back(column(gyro, axis, Kind::Time2, "t^2", bias_unit(gyro) + "/h^2", bias_si(gyro)));
+  if (mids.size() < 4) return;
+  std::vector<double> gaps;
+  for (std::size_t k = 1; k < mids.size(); ++k) gaps.push_back(mids[k] - mids[k - 1]);
+  std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2),
+                   gaps.end());
+  const double cycle = gaps[gaps.size() / 2];
+  for (const double m : {1.0, 2.0, 3.0, 4.0}) {
+    std::snprintf(b, sizeof b, "sin(2 pi t / %.4g s)", m * cycle);
+    out.push_back(column(gyro, axis, Kind::Sin, b, bias_unit(gyro), bias_si(gyro), m * cycle));
+    std::snprintf(b, sizeof b, "cos(2 pi t / %.4g s)", m * cycle);
+    out.push_back(column(gyro, axis, Kind::Cos, b, bias_unit(gyro), bias_si(gyro), m * cycle));
+  }
+}
+
+// The gyro's rate nonlinearity on its own axis: omega |omega| and omega^2 (a scale factor
+// linear in the rate, odd and even), omega^3 (quadratic in it).
+void add_rate_terms(std::vector<Column>& out, int axis) {
+  const std::string w = std::string("omega_") + kAxis[axis];
+  out.push_back(column(true, axis, Kind::RateAbs, w + " |" + w + "|", "ppm/(deg/s)", 1e-6));
+  out.push_back(column(true, axis, Kind::RateSq, w + "^2", "ppm/(deg/s)", 1e-6));
+  out.push_back(column(true, axis, Kind::RateCube, w + "^3", "ppm/(deg/s)^2", 1e-6));
+}
+
+// The library on each axis of both triads; the rate terms only with the turns.
+std::vector<Column> library(const std::vector<EquivalentInputs>& inputs, bool turns) {
   std::vector<double> mids;
   mids.reserve(inputs.size());
   for (const auto& in : inputs) mids.push_back(0.5 * (in.dwell.t_start + in.dwell.t_end));
@@ -55,29 +162,9 @@ std::vector<Column> library(const std::vector<EquivalentInputs>& inputs) {
   std::vector<Column> out;
   for (const bool gyro : {false, true})
     for (int axis = 0; axis < 3; ++axis) {
-      for (int a = 0; a < 3; ++a)
-        for (int b = a; b < 3; ++b) {
-          Column c;
-          c.gyro = gyro;
-          c.product_a = a;
-          c.product_b = b;
-          c.term = term_of(gyro, axis,
-                           a == b ? std::string("f_") + kAxis[a] + "^2"
-                                  : std::string("f_") + kAxis[a] + " f_" + kAxis[b],
-                           true);
-          out.push_back(c);
-        }
-      for (const double q : {0.25, 0.5, 0.75}) {
-        const auto k = static_cast<std::size_t>(q * static_cast<double>(mids.size()));
-        if (k == 0 || k >= mids.size()) continue;
-        Column c;
-        c.gyro = gyro;
-        c.step_t = 0.5 * (mids[k - 1] + mids[k]);
-        char b[64];
-        std::snprintf(b, sizeof b, "step after t = %.0f s", c.step_t);
-        c.term = term_of(gyro, axis, b, false);
-        out.push_back(c);
-      }
+      add_products(out, gyro, axis);
+      add_time_terms(out, gyro, axis, mids);
+      if (gyro && turns) add_rate_terms(out, axis);
     }
   return out;
 }
@@ -87,7 +174,9 @@ std::vector<Column> library(const std::vector<EquivalentInputs>& inputs) {
 struct Stacked {
   Eigen::MatrixXd A, B;
   Eigen::VectorXd y, prior;
-  std::vector<Eigen::Index> first;  // per dwell, plus the end
+  std::vector<Eigen::Index> first;  // per dwell (then per turn segment), plus the end
+  Eigen::Index turn_rows = 0;       // the last rows: the turns'
+  double turn_dof = 0.0;  // the turns' rows less their share of the model's fit (hat matrix)
 };
 
 Stacked stack(const DwellTests& dwells, const std::vector<int>& parameters,
@@ -111,7 +200,6 @@ Stacked stack(const DwellTests& dwells, const std::vector<int>& parameters,
     const auto& in = inputs[k];
     const Eigen::Matrix3d& C = in.dwell.C_b_n_known;
     const Eigen::Vector3d f_b = -C.transpose() * g_n;
-    const double t = 0.5 * (in.dwell.t_start + in.dwell.t_end);
     const auto rows = d.y.size();
     s.first.push_back(at);
     s.A.middleRows(at, rows) = d.A;
@@ -119,8 +207,9 @@ Stacked stack(const DwellTests& dwells, const std::vector<int>& parameters,
     for (Eigen::Index j = 0; j < m; ++j) {
       const Column& c = lib[static_cast<std::size_t>(j)];
       Eigen::Matrix<double, 6, 1> v = Eigen::Matrix<double, 6, 1>::Zero();
-      const Eigen::Vector3d body =
-          Eigen::Vector3d::Unit(c.term.axis) * c.value(f_b, t) * c.term.si_per_unit;
+      const Eigen::Vector3d body = Eigen::Vector3d::Unit(c.term.axis) *
+                                   c.dwell_value(f_b, in.dwell.t_start, in.dwell.t_end) *
+                                   c.term.si_per_unit;
       v.segment<3>(c.gyro ? ins_input::kGyro.index : ins_input::kAccel.index) = C * body;
       Eigen::VectorXd sel(rows);
       for (Eigen::Index r = 0; r < rows; ++r) sel(r) = v(d.rows[static_cast<std::size_t>(r)]);
@@ -132,12 +221,163 @@ Stacked stack(const DwellTests& dwells, const std::vector<int>& parameters,
   return s;
 }
 
+// One segment of the turns: from a dwell's middle to the next one's, the gyros' attitude against
+// the table's known one (rotation vector of C_pred C_known^T, NED: to first order the integral of
+// C_b_n times the gyro error, plus the two dwells' table errors), and the same integral of each
+// model and library column.
+struct Segment {
+  Eigen::Matrix3d C = Eigen::Matrix3d::Identity();  // integrated C_b_n
+  Eigen::Vector3d about = Eigen::Vector3d::Zero();  // the linearization model's share
+  Eigen::MatrixXd A, B;                             // 3 x p, 3 x m
+  double duration = 0.0;                            // s
+};
+
+// The turns' rows before whitening: residual (3 per segment), columns, durations.
+struct TurnRaw {
+  Eigen::MatrixXd A, B;
+  Eigen::VectorXd y;
+  std::vector<double> durations;
+  std::vector<int> after_dwell;  // the plan dwell each segment starts at
+};
+
+// What the integration of the turns needs.
+struct TurnsContext {
+  ImuErrorModel model;  // the Jacobian's (zero, or the linearization model)
+  const ImuErrorModel* about = nullptr;
+  std::vector<int> columns;  // catalog indices of the model's columns
+  const std::vector<Column>* lib = nullptr;
+  Eigen::Vector3d omega_ie_n = Eigen::Vector3d::Zero();
+};
+
+void accumulate(Segment& g, const ImuSample& smp, double t, const TurnsContext& x) {
+  const double dt = smp.dt;
+  if (!(dt > 0.0)) return;
+  KinematicSample ks;
+  ks.omega_ib_b = smp.dtheta_b / dt;
+  ks.f_ib_b = smp.dv_b / dt;
+  ks.t = t - 0.5 * dt;
+  ImuErrorModel::JacobianColumns J;
+  x.model.jacobian(ks, Eigen::Vector3d::Zero(), x.columns, J);
+  const auto p = static_cast<Eigen::Index>(x.columns.size());
+  g.A.leftCols(p) += g.C * J.topRows<3>().leftCols(p) * dt;
+  for (std::size_t j = 0; j < x.lib->size(); ++j) {
+    const Column& c = (*x.lib)[j];
+    if (!c.gyro) continue;
+    g.B.col(static_cast<Eigen::Index>(j)) +=
+        g.C.col(c.term.axis) * (c.value(ks.f_ib_b, ks.omega_ib_b, ks.t) * c.term.si_per_unit * dt);
+  }
+  if (x.about) g.about += g.C * (x.about->gyro_output(ks) - ks.omega_ib_b) * dt;
+  g.C = dcm_from_rotvec(-x.omega_ie_n * dt) * g.C * dcm_from_rotvec(smp.dtheta_b);
+  g.duration += dt;
+}
+
+// The plan's dwells in time order.
+std::vector<PlanDwell> dwells_in_order(const DwellTests& dwells) {
+  std::vector<PlanDwell> d;
+  for (const auto& in : dwells.dwell_inputs()) d.push_back(in.dwell);
+  std::sort(d.begin(), d.end(),
+            [](const PlanDwell& a, const PlanDwell& b) { return a.t_start < b.t_start; });
+  return d;
+}
+
+// Reads the log again and integrates each segment between consecutive dwells' middles.
+TurnRaw integrate_turns(const LibraryTurns& lt, const DwellTests& dwells, const TurnsContext& x,
+                        Eigen::Index p, Eigen::Index m) {
+  const std::vector<PlanDwell> d = dwells_in_order(dwells);
+  TurnRaw r;
+  if (d.size() < 2) return r;
+  std::vector<double> mids(d.size());
+  for (std::size_t k = 0; k < d.size(); ++k) mids[k] = 0.5 * (d[k].t_start + d[k].t_end);
+  std::vector<Segment> segs(d.size() - 1);
+  for (std::size_t k = 0; k < segs.size(); ++k) {
+    segs[k].C = d[k].C_b_n_known;
+    segs[k].A = Eigen::MatrixXd::Zero(3, p);
+    segs[k].B = Eigen::MatrixXd::Zero(3, m);
+  }
+  LogReader reader(lt.session->log);
+  ImuSample smp;
+  std::size_t k = 0;
+  while (reader.next(smp)) {
+    const double t = smp.t - lt.session->time_offset;  // plan time
+    if (t <= mids.front()) continue;
+    while (k < segs.size() && t > mids[k + 1]) ++k;
+    if (k >= segs.size()) break;
+    accumulate(segs[k], smp, t, x);
+  }
+  const auto n = static_cast<Eigen::Index>(3 * segs.size());
+  r.A = Eigen::MatrixXd::Zero(n, p);
+  r.B.resize(n, m);
+  r.y.resize(n);
+  for (std::size_t j = 0; j < segs.size(); ++j) {
+    const auto at = static_cast<Eigen::Index>(3 * j);
+    r.A.middleRows(at, 3) = segs[j].A;
+    r.B.middleRows(at, 3) = segs[j].B;
+    r.y.segment<3>(at) =
+        rotvec_from_dcm(segs[j].C * d[j + 1].C_b_n_known.transpose()) - segs[j].about;
+    r.durations.push_back(segs[j].duration);
+    r.after_dwell.push_back(d[j].index);
+  }
+  return r;
+}
+
+// The covariance of the segments' residuals: each dwell's table error (attitude_sigma about each
+// NED axis, shared by the segments before and after it) and the angle random walk over each
+// segment; its Cholesky factor whitens the rows.
+Eigen::MatrixXd turns_covariance(const TurnRaw& r, const LibraryTurns& lt) {
+  const auto S = static_cast<Eigen::Index>(r.durations.size());
+  const double t2 = lt.attitude_sigma * lt.attitude_sigma;
+  const double n2 = lt.noise.gyro.white * lt.noise.gyro.white;
+  Eigen::MatrixXd R = Eigen::MatrixXd::Zero(3 * S, 3 * S);
+  for (Eigen::Index k = 0; k < S; ++k) {
+    R.block<3, 3>(3 * k, 3 * k).diagonal().array() +=
+        2.0 * t2 + n2 * r.durations[static_cast<std::size_t>(k)];
+    if (k + 1 < S) {
+      R.block<3, 3>(3 * k, 3 * k + 3).diagonal().array() -= t2;
+      R.block<3, 3>(3 * k + 3, 3 * k).diagonal().array() -= t2;
+    }
+  }
+  return R;
+}
+
+// Appends the turns' whitened rows to the stacked system (each segment a block of 3 rows).
+TurnRaw append_turns(Stacked& s, const LibraryTurns& lt, const DwellTests& dwells,
+                     const std::vector<int>& parameters, const std::vector<Column>& lib) {
+  TurnsContext x;
+  if (lt.about) {
+    x.model = *lt.about;
+    x.about = lt.about;
+  }
+  x.columns = parameters;
+  x.lib = &lib;
+  x.omega_ie_n = Earth::wgs84().omega_ie_n(dwells.site().lat_rad);
+  TurnRaw r = integrate_turns(lt, dwells, x, s.A.cols(), s.B.cols());
+  if (r.y.size() == 0) return r;
+  const Eigen::LLT<Eigen::MatrixXd> llt(turns_covariance(r, lt));
+  const auto L = llt.matrixL();
+  const Eigen::Index n0 = s.y.size(), n = r.y.size();
+  s.A.conservativeResize(n0 + n, Eigen::NoChange);
+  s.B.conservativeResize(n0 + n, Eigen::NoChange);
+  s.y.conservativeResize(n0 + n);
+  s.A.bottomRows(n) = L.solve(r.A);
+  s.B.bottomRows(n) = L.solve(r.B);
+  s.y.tail(n) = L.solve(r.y);
+  s.first.pop_back();
+  for (Eigen::Index k = 0; k < n; k += 3) s.first.push_back(n0 + k);
+  s.first.push_back(n0 + n);
+  s.turn_rows = n;
+  return r;
+}
+
 // The model's columns projected out of y and B (the library explains what the model cannot).
 void project_out_model(Stacked& s) {
   if (s.A.cols() == 0) return;
   Eigen::MatrixXd N = s.A.transpose() * s.A;
   N.diagonal() += s.prior.cwiseInverse().cwiseAbs2();
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(N);
+  if (s.turn_rows > 0) {
+    const Eigen::MatrixXd At = s.A.bottomRows(s.turn_rows);
+    s.turn_dof = static_cast<double>(s.turn_rows) - (At * ldlt.solve(At.transpose())).trace();
+  }
   s.y -= s.A * ldlt.solve(s.A.transpose() * s.y);
   s.B -= s.A * ldlt.solve(s.A.transpose() * s.B);
 }
@@ -237,14 +477,69 @@ std::vector<LibraryTerm> aliases_of(const Stacked& s, const std::vector<Column>&
   return out;
 }
 
+// A catalog family the term is (the catalog tested it: it was not named, or refused), or "".
+std::string catalog_family_of(const LibraryTerm& t) {
+  const std::string a = kAxis[t.axis];
+  if (t.formula == "t") return t.sensor + ".bias_drift";
+  if (t.sensor == "accel" && t.formula == "f_" + a + "^2") return "accel.k2";
+  return "";
+}
+
+// How to add one term as a family.
+std::string how_to_add_one(const LibraryTerm& t) {
+  const std::string family = catalog_family_of(t);
+  const std::string where = t.sensor + " " + kAxis[t.axis] + ": " + t.formula;
+  if (!family.empty())
+    return where + " is the catalog family " + family +
+           " (tested by the rounds: not named, or refused by the held-out data)";
+  std::string out = where +
+                    ": add one entry to the family table (models/coefficient_families.cpp),"
+                    " a family such as " +
+                    t.sensor + ".library_" + kAxis[t.axis] + " with this column on the " +
+                    t.sensor + " " + kAxis[t.axis] + " axis (unit " + t.unit +
+                    "), its profile key and default prior; its term and Jacobian column in "
+                    "models/imu_error_model.cpp";
+  if (t.sensor == "gyro" && t.formula.find("^2") != std::string::npos &&
+      t.formula.rfind("omega", 0) == 0)
+    out +=
+        " (the error model already applies a k2 per triad: a gyro.k2 entry as accel.k2's, "
+        "unit ppm/(deg/s))";
+  return out;
+}
+
 std::string how_to_add(const std::vector<LibraryTerm>& terms) {
-  if (terms.empty()) return "";
-  const LibraryTerm& t = terms.front();
-  return "to model it, add one entry to the family table (models/coefficient_families.cpp): a "
-         "family such as " +
-         t.sensor + ".library_" + kAxis[t.axis] + " with the column " + t.formula + " on the " +
-         t.sensor + " " + kAxis[t.axis] + " axis (unit " + t.unit +
-         "), its profile key and default prior; its Jacobian in models/imu_error_model.cpp";
+  std::string out;
+  for (const auto& t : terms) out += (out.empty() ? "" : "; ") + how_to_add_one(t);
+  return out;
+}
+
+// The turns' residual against its noise model (after the model's columns are projected out).
+void turns_test(const Stacked& s, const TurnRaw& r, LibraryFit& out) {
+  if (s.turn_rows == 0) return;
+  out.turn_segments = static_cast<int>(r.durations.size());
+  const Eigen::VectorXd y = s.y.tail(s.turn_rows);
+  out.turns_chi2 = y.squaredNorm();
+  out.turns_dof = std::max(1.0, s.turn_dof);
+  out.turns_quantile =
+      boost::math::quantile(boost::math::chi_squared(out.turns_dof), kTurnsResidualLevel);
+  out.turns_reject = out.turns_chi2 > out.turns_quantile;
+  std::vector<std::pair<double, int>> largest;
+  for (Eigen::Index k = 0; k + 2 < s.turn_rows; k += 3)
+    largest.emplace_back(y.segment<3>(k).squaredNorm(),
+                         r.after_dwell[static_cast<std::size_t>(k / 3)]);
+  std::sort(largest.rbegin(), largest.rend());
+  char b[300];
+  std::snprintf(b, sizeof b,
+                "turns: the gyros' attitude between the dwells against the table's, chi2 %.4g on "
+                "%.4g dof (its %.0f %% quantile %.4g) over %d segments",
+                out.turns_chi2, out.turns_dof, 100.0 * kTurnsResidualLevel, out.turns_quantile,
+                out.turn_segments);
+  out.turns_signature = b;
+  for (std::size_t k = 0; k < std::min<std::size_t>(3, largest.size()); ++k) {
+    std::snprintf(b, sizeof b, "%s after dwell %d (chi2 %.3g)", k == 0 ? "; largest" : ",",
+                  largest[k].second, largest[k].first);
+    out.turns_signature += b;
+  }
 }
 
 }  // namespace
@@ -261,12 +556,17 @@ std::string LibraryTerm::text() const {
 }
 
 LibraryFit fit_term_library(const DwellTests& dwells, const std::vector<int>& parameters,
-                            double alpha) {
+                            double alpha, const LibraryTurns* turns, bool select) {
   LibraryFit out;
-  const std::vector<Column> lib = library(dwells.dwell_inputs());
+  const bool with_turns = turns && turns->session;
+  const std::vector<Column> lib = library(dwells.dwell_inputs(), with_turns);
   out.candidates = static_cast<int>(lib.size());
   Stacked s = stack(dwells, parameters, lib);
+  TurnRaw raw;
+  if (with_turns) raw = append_turns(s, *turns, dwells, parameters, lib);
   project_out_model(s);
+  turns_test(s, raw, out);
+  if (!select && !out.turns_reject) return out;
   out.chi2_before = s.y.squaredNorm();
   std::vector<Eigen::Index> cols = forward_select(s, out.heldout_after);
   out.heldout_before = heldout_chi2(s, {});

@@ -1,7 +1,9 @@
 // Effects outside the family catalog, found by their signature on a table session's static
-// dwells: what the final model leaves is fitted against a library of candidate terms wider than
-// the catalog (products f_i f_j per accelerometer and gyro axis, bias steps between dwells), by
-// sequential thresholded least squares (as in SINDy) with the threshold chosen on held-out dwells.
+// dwells and turns: what the final model leaves is fitted against a library of candidate terms
+// wider than the catalog (products f_i f_j per accelerometer and gyro axis, bias steps between
+// dwells, bias quadratic in time, periodic bias at the plan's cycle, gyro rate nonlinearity
+// omega_i |omega_i|, omega_i^2, omega_i^3 on the turns), by sequential thresholded least squares
+// (as in SINDy) with the threshold chosen on held-out dwells and turns.
 // docs/methods/diagnosis.md "Out-of-catalog terms".
 #pragma once
 
@@ -9,6 +11,8 @@
 #include <vector>
 
 #include "filter/diagnosis/diagnosis.hpp"
+#include "models/noise_model.hpp"
+#include "rig/session.hpp"
 
 namespace sinscal {
 
@@ -17,8 +21,8 @@ namespace sinscal {
 struct LibraryTerm {
   std::string sensor;   // "accel" or "gyro"
   int axis = 0;         // 0 x, 1 y, 2 z (body)
-  std::string formula;  // "f_y f_z", "step at t = 612 s"
-  std::string unit;     // "ug/g^2", "deg/h", ...
+  std::string formula;  // "f_y f_z", "step after t = 612 s", "omega_x |omega_x|"
+  std::string unit;     // "ug/g^2", "deg/h", "ppm/(deg/s)", ...
   double si_per_unit = 1.0;
   double value = 0.0;  // in `unit`
   double sigma = 0.0;  // in `unit`, scaled by the library fit's residual where it exceeds noise
@@ -44,11 +48,35 @@ struct LibraryFit {
   std::vector<LibraryTerm> terms;  // selected, held-out confirmed (empty: none)
   /// How to add the terms as a family: one entry in the family table.
   std::string how_to_add;
+  /// The turns (a session's log read again): each segment from a dwell's middle to the next
+  /// one's, the attitude the gyros integrate against the table's known attitude, whitened by the
+  /// table's attitude error and the angle random walk; the model's columns projected out.
+  int turn_segments = 0;
+  double turns_chi2 = 0.0;      // its chi-square with the model
+  double turns_dof = 0.0;       // its expected value (rows minus the model's share)
+  double turns_quantile = 0.0;  // the chi-square quantile at kTurnsResidualLevel
+  bool turns_reject = false;    // turns_chi2 beyond it: the turns hold what the model does not
+  std::string turns_signature;  // "turns: attitude residual chi2 ... ; largest after dwell ..."
 };
 
-/// Fits the residual of the model `parameters` on the dwells against the library (alpha: the
-/// level of the held-out confirmation). Terms the model's columns explain are projected out.
+/// The level of the turns' attitude-residual test.
+constexpr double kTurnsResidualLevel = 0.99;
+
+/// What the library needs of the turns: the session (its log is read again), the table's
+/// attitude sigma per dwell (rad), the gyros' noise, the model the dwells' fit is a correction
+/// to (null: zero).
+struct LibraryTurns {
+  const Session* session = nullptr;
+  double attitude_sigma = 0.0;
+  NoiseModel noise;
+  const ImuErrorModel* about = nullptr;
+};
+
+/// Fits the residual of the model `parameters` on the dwells (and with `turns`, on the turns)
+/// against the library (alpha: the level of the held-out confirmation). Terms the model's columns
+/// explain are projected out. With `select` false only the turns' test runs (the selection runs
+/// when it rejects).
 LibraryFit fit_term_library(const DwellTests& dwells, const std::vector<int>& parameters,
-                            double alpha);
+                            double alpha, const LibraryTurns* turns = nullptr, bool select = true);
 
 }  // namespace sinscal
