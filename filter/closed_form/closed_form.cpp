@@ -521,6 +521,7 @@ NormalEquations stage2_normal_equations(const std::vector<EquivalentInputs>& inp
   const int n = static_cast<int>(o.parameters.size()) + (o.base_attitude ? 3 : 0);
   NormalEquations ne{Eigen::MatrixXd::Zero(n, n), Eigen::VectorXd::Zero(n)};
   std::vector<DwellRows> rows;
+  rows.reserve(inputs.size());
   for (const auto& in : inputs) rows.push_back(stage2_rows(in, site, o, n));
   if (wanders(o.bias_wander)) {
     accumulate_correlated(ne, inputs, rows, o);
