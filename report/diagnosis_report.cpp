@@ -273,8 +273,9 @@ void markdown_finding(std::ostringstream& m, const TableFinding& f, int number) 
     for (const auto& a : f.ambiguous_with) m << " from " << a;
     m << ": each explains the dwells as well. The model was extended with " << f.family << " ("
       << (f.picked_by == "user"    ? "`--prefer`"
-          : f.picked_by == "turns" ? "the turns' pick: the best innovation log-likelihood of the "
-                                     "filter run with each; `--prefer FAMILY` picks another"
+          : f.picked_by == "turns" ? "the turns' pick: the best held-out turns (each member's "
+                                     "model predicting turns it was not fitted to); `--prefer "
+                                     "FAMILY` picks another"
                                    : "the best fit; `--prefer FAMILY` picks another")
       << "); later rounds test the rest against it. What separates them: " << f.family << ": "
       << f.separated_by.front();

@@ -67,6 +67,7 @@ double detection_sigma(const std::string& plan, const std::string& profile,
   const ClosedFormReport cal =
       run_closed_form(c.session, s1, table, !about, about ? &*about : nullptr);
   Stage2Options o = cal.stage2_options;
+  o.bias_wander = model.base.noise;  // the dwells' noise model as the diagnosis has it
   const auto& cat = coefficient_catalog();
   std::vector<int> components;
   for (std::size_t k = 0; k < cat.size(); ++k)
@@ -75,10 +76,11 @@ double detection_sigma(const std::string& plan, const std::string& profile,
   o.parameters.insert(o.parameters.end(), components.begin(), components.end());
   const Stage2Result r = solve_stage2(cal.stage1, c.session.site, o);
   std::vector<double> sigmas;
-  const double prior = coefficient_family_info(family).default_prior;
+  const std::vector<double> priors = grade_priors(model.base);  // the session's grade
   for (std::size_t j = 0; j < components.size(); ++j) {
     const auto i = first + static_cast<Eigen::Index>(j);
     const double s = std::sqrt(r.cov(i, i));
+    const double prior = priors[static_cast<std::size_t>(components[j])];
     if (r.observable[static_cast<std::size_t>(i)] && s < prior / 3.0) sigmas.push_back(s);
   }
   if (sigmas.empty()) {

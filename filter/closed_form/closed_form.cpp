@@ -9,6 +9,7 @@
 #include <map>
 #include <optional>
 #include <stdexcept>
+#include <utility>
 
 #include "filter/strapdown/dwell_navigation.hpp"
 #include "models/attitude.hpp"
@@ -363,6 +364,57 @@ Matrix6d stage2_input_covariance(const EquivalentInputs& in, const Site& site,
   return in.cov + S * table.covariance_n() * S.transpose();
 }
 
+namespace {
+
+// The time a dwell's input averages over: the dwell's middle, the time navigated.
+std::pair<double, double> averaged_interval(const EquivalentInputs& in) {
+  const double mid = 0.5 * (in.dwell.t_start + in.dwell.t_end);
+  const double half = 0.5 * (in.duration > 0.0 ? in.duration : in.dwell.t_end - in.dwell.t_start);
+  return {mid - half, mid + half};
+}
+
+// Covariance of the means over [a0, a1] and [b0, b1] (a first, disjoint, or the same interval)
+// of one axis' bias wander: a Gauss-Markov process (stationary sigma, correlation time tau) plus
+// a random walk of density q from t = 0.
+double mean_bias_covariance(std::pair<double, double> a, std::pair<double, double> b,
+                            const TriadNoise& n) {
+  if (a.first > b.first) std::swap(a, b);
+  const double ta = std::max(a.second - a.first, 1e-9), tb = std::max(b.second - b.first, 1e-9);
+  const bool same = a == b;
+  double c = 0.0;
+  if (n.bias_instability > 0.0 && n.correlation_time > 0.0) {
+    const double tau = n.correlation_time, s2 = n.bias_instability * n.bias_instability;
+    if (same) {
+      const double x = ta / tau;  // (2 / x^2) (x - 1 + e^-x): the variance of a mean over x tau
+      c += s2 * (x < 1e-4 ? 1.0 - x / 3.0 : 2.0 * (x - 1.0 + std::exp(-x)) / (x * x));
+    } else {
+      const double gap = std::max(0.0, b.first - a.second);
+      c += s2 * tau * tau * -std::expm1(-ta / tau) * -std::expm1(-tb / tau) * std::exp(-gap / tau) /
+           (ta * tb);
+    }
+  }
+  if (n.random_walk > 0.0) {  // cov(W(s), W(t)) = min(s, t)
+    const double q2 = n.random_walk * n.random_walk;
+    c +=
+        q2 * (same ? std::max(0.0, a.first) + ta / 3.0 : std::max(0.0, 0.5 * (a.first + a.second)));
+  }
+  return c;
+}
+
+}  // namespace
+
+Matrix6d stage2_wander_covariance(const EquivalentInputs& a, const EquivalentInputs& b,
+                                  const NoiseModel& noise) {
+  Matrix6d out = Matrix6d::Zero();
+  const auto ia = averaged_interval(a), ib = averaged_interval(b);
+  const Eigen::Matrix3d R = a.dwell.C_b_n_known * b.dwell.C_b_n_known.transpose();
+  out.block<3, 3>(ins_input::kAccel.index, ins_input::kAccel.index) =
+      mean_bias_covariance(ia, ib, noise.accel) * R;
+  out.block<3, 3>(ins_input::kGyro.index, ins_input::kGyro.index) =
+      mean_bias_covariance(ia, ib, noise.gyro) * R;
+  return out;
+}
+
 Eigen::VectorXd parameter_vector(const ImuErrorModel& model, const std::vector<int>& parameters) {
   const Eigen::VectorXd all = model.vector();
   Eigen::VectorXd out(static_cast<Eigen::Index>(parameters.size()));
@@ -381,43 +433,103 @@ struct NormalEquations {
   int inputs = 0;
 };
 
+// One dwell's rows of stage 2: its estimated inputs, their model columns and covariance.
+struct DwellRows {
+  std::vector<int> idx;  // which of the 6 inputs
+  Eigen::MatrixXd H, R;
+  Eigen::VectorXd u;
+};
+
+DwellRows stage2_rows(const EquivalentInputs& in, const Site& site, const Stage2Options& o, int n) {
+  const int nc = static_cast<int>(o.parameters.size());
+  const Earth& earth = Earth::wgs84();
+  Eigen::Matrix<double, 6, Eigen::Dynamic> H(6, n);
+  H.leftCols(nc) = equivalent_input_map(in, site, o.parameters, o.reference_temperature_c);
+  // The base's error aliases as the table's does: df_n += f_n x d_base, dw_n += omega_ie_n x
+  // d_base (f_n = -g_n).
+  if (o.base_attitude) {
+    H.block<3, 3>(ins_input::kAccel.index, nc) = skew(-earth.gravity_n(site.lat_rad, site.h_m));
+    H.block<3, 3>(ins_input::kGyro.index, nc) = skew(earth.omega_ie_n(site.lat_rad));
+  }
+  const Matrix6d R = stage2_input_covariance(in, site, o.table);
+  DwellRows d;
+  for (int i = 0; i < 6; ++i)
+    if (in.estimated[static_cast<std::size_t>(i)]) d.idx.push_back(i);
+  const int m = static_cast<int>(d.idx.size());
+  d.H.resize(m, n);
+  d.R.resize(m, m);
+  d.u.resize(m);
+  for (int i = 0; i < m; ++i) {
+    d.H.row(i) = H.row(d.idx[static_cast<std::size_t>(i)]);
+    d.u(i) = in.u(d.idx[static_cast<std::size_t>(i)]);
+    for (int j = 0; j < m; ++j)
+      d.R(i, j) = R(d.idx[static_cast<std::size_t>(i)], d.idx[static_cast<std::size_t>(j)]);
+  }
+  return d;
+}
+
+// Adds the rows (H, u, covariance R) to the normal equations.
+void accumulate(NormalEquations& ne, const Eigen::MatrixXd& H, const Eigen::VectorXd& u,
+                const Eigen::MatrixXd& R, const std::string& what) {
+  const Eigen::LLT<Eigen::MatrixXd> llt(R);
+  if (llt.info() != Eigen::Success)
+    throw std::runtime_error("stage 2: the covariance of " + what + " is not positive definite");
+  ne.J += H.transpose() * llt.solve(H);
+  ne.b += H.transpose() * llt.solve(u);
+  ne.uWu += u.dot(llt.solve(u));
+  ne.inputs += static_cast<int>(u.size());
+}
+
+// Every dwell's rows stacked, their covariance with the bias wander between dwells.
+void accumulate_correlated(NormalEquations& ne, const std::vector<EquivalentInputs>& inputs,
+                           const std::vector<DwellRows>& rows, const Stage2Options& o) {
+  Eigen::Index m = 0;
+  std::vector<Eigen::Index> at;
+  for (const auto& d : rows) {
+    at.push_back(m);
+    m += static_cast<Eigen::Index>(d.idx.size());
+  }
+  Eigen::MatrixXd H(m, ne.J.cols()), R = Eigen::MatrixXd::Zero(m, m);
+  Eigen::VectorXd u(m);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const auto mi = static_cast<Eigen::Index>(rows[i].idx.size());
+    H.middleRows(at[i], mi) = rows[i].H;
+    u.segment(at[i], mi) = rows[i].u;
+    R.block(at[i], at[i], mi, mi) = rows[i].R;
+    for (std::size_t j = 0; j <= i; ++j) {
+      const Matrix6d W = stage2_wander_covariance(inputs[i], inputs[j], o.bias_wander);
+      for (Eigen::Index a = 0; a < mi; ++a)
+        for (std::size_t b = 0; b < rows[j].idx.size(); ++b) {
+          const double w = W(rows[i].idx[static_cast<std::size_t>(a)], rows[j].idx[b]);
+          R(at[i] + a, at[j] + static_cast<Eigen::Index>(b)) += w;
+          if (j != i) R(at[j] + static_cast<Eigen::Index>(b), at[i] + a) += w;
+        }
+    }
+  }
+  accumulate(ne, H, u, R, "the dwells' inputs with their bias wander");
+}
+
+bool wanders(const NoiseModel& n) {
+  const auto triad = [](const TriadNoise& t) {
+    return (t.bias_instability > 0.0 && t.correlation_time > 0.0) || t.random_walk > 0.0;
+  };
+  return triad(n.gyro) || triad(n.accel);
+}
+
 NormalEquations stage2_normal_equations(const std::vector<EquivalentInputs>& inputs,
                                         const Site& site, const Stage2Options& o) {
-  const int nc = static_cast<int>(o.parameters.size());
-  const int n = nc + (o.base_attitude ? 3 : 0);
+  const int n = static_cast<int>(o.parameters.size()) + (o.base_attitude ? 3 : 0);
   NormalEquations ne{Eigen::MatrixXd::Zero(n, n), Eigen::VectorXd::Zero(n)};
-  const Earth& earth = Earth::wgs84();
-  for (const auto& in : inputs) {
-    Eigen::Matrix<double, 6, Eigen::Dynamic> H(6, n);
-    H.leftCols(nc) = equivalent_input_map(in, site, o.parameters, o.reference_temperature_c);
-    // The base's error aliases as the table's does: df_n += f_n x d_base, dw_n += omega_ie_n x
-    // d_base (f_n = -g_n).
-    if (o.base_attitude) {
-      H.block<3, 3>(ins_input::kAccel.index, nc) = skew(-earth.gravity_n(site.lat_rad, site.h_m));
-      H.block<3, 3>(ins_input::kGyro.index, nc) = skew(earth.omega_ie_n(site.lat_rad));
-    }
-    const Matrix6d R = stage2_input_covariance(in, site, o.table);
-    std::vector<int> idx;
-    for (int i = 0; i < 6; ++i)
-      if (in.estimated[static_cast<std::size_t>(i)]) idx.push_back(i);
-    const int m = static_cast<int>(idx.size());
-    Eigen::MatrixXd Hs(m, n), Rs(m, m);
-    Eigen::VectorXd us(m);
-    for (int i = 0; i < m; ++i) {
-      Hs.row(i) = H.row(idx[static_cast<std::size_t>(i)]);
-      us(i) = in.u(idx[static_cast<std::size_t>(i)]);
-      for (int j = 0; j < m; ++j)
-        Rs(i, j) = R(idx[static_cast<std::size_t>(i)], idx[static_cast<std::size_t>(j)]);
-    }
-    const Eigen::LLT<Eigen::MatrixXd> llt(Rs);
-    if (llt.info() != Eigen::Success)
-      throw std::runtime_error("stage 2: the covariance of dwell " +
-                               std::to_string(in.dwell.index) + " is not positive definite");
-    ne.J += Hs.transpose() * llt.solve(Hs);
-    ne.b += Hs.transpose() * llt.solve(us);
-    ne.uWu += us.dot(llt.solve(us));
-    ne.inputs += m;
+  std::vector<DwellRows> rows;
+  rows.reserve(inputs.size());
+  for (const auto& in : inputs) rows.push_back(stage2_rows(in, site, o, n));
+  if (wanders(o.bias_wander)) {
+    accumulate_correlated(ne, inputs, rows, o);
+    return ne;
   }
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    accumulate(ne, rows[i].H, rows[i].u, rows[i].R,
+               "dwell " + std::to_string(inputs[i].dwell.index));
   return ne;
 }
 

@@ -14,6 +14,7 @@
 #include "filter/strapdown/ins_error_model.hpp"
 #include "filter/strapdown/strapdown.hpp"
 #include "models/imu_error_model.hpp"
+#include "models/noise_model.hpp"
 #include "rig/imu_sample.hpp"
 #include "rig/session.hpp"
 #include "rig/table.hpp"
@@ -97,6 +98,12 @@ Eigen::Matrix<double, 6, Eigen::Dynamic> equivalent_input_map(const EquivalentIn
 /// error aliased into them (df_n += f_n x eps, dw_n += omega_ie_n x eps).
 Matrix6d stage2_input_covariance(const EquivalentInputs& in, const Site& site,
                                  const TableAttitudeError& table);
+/// The covariance between two dwells' equivalent inputs that the sensors' bias wander gives (both
+/// the same dwell: its variance): the bias instability as a first-order Gauss-Markov process and
+/// the rate (acceleration) random walk of `noise`, each dwell's input the mean bias over the time
+/// it was navigated, rotated to NED by each dwell's attitude. Zero for a noise model without them.
+Matrix6d stage2_wander_covariance(const EquivalentInputs& a, const EquivalentInputs& b,
+                                  const NoiseModel& noise);
 /// The stage-2 parameters of a model (SI), in the order of `parameters`.
 Eigen::VectorXd parameter_vector(const class ImuErrorModel& model,
                                  const std::vector<int>& parameters);
@@ -113,6 +120,10 @@ struct Stage2Options {
   bool base_attitude = false;
   /// T0 of the thermal coefficients (deg C): the dwells' temperatures enter as T - T0.
   double reference_temperature_c = 25.0;
+  /// The sensors' bias wander between dwells (its bias instability and random walk; the white
+  /// noise is stage 1's): the dwells' inputs correlated across dwells (stage2_wander_covariance).
+  /// Default none: independent dwells.
+  NoiseModel bias_wander;
 };
 
 struct Stage2Result {

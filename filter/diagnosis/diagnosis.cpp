@@ -39,12 +39,14 @@ struct WhiteDwell {
 class StaticDesign {
  public:
   StaticDesign(const std::vector<EquivalentInputs>& inputs, const Site& site,
-               const Stage2Options& base)
+               const Stage2Options& base, const std::vector<double>& priors = {})
       : inputs_(inputs),
         site_(site),
         table_(base.table),
         base_attitude_(base.base_attitude),
-        reference_temperature_c_(base.reference_temperature_c) {}
+        reference_temperature_c_(base.reference_temperature_c),
+        wander_(base.bias_wander),
+        priors_(priors) {}
 
   std::vector<WhiteDwell> whiten(const std::vector<int>& parameters) const {
     std::vector<WhiteDwell> out;
@@ -60,7 +62,9 @@ class StaticDesign {
             skew(-earth.gravity_n(site_.lat_rad, site_.h_m));
         H6.block<3, 3>(ins_input::kGyro.index, Hc.cols()) = skew(earth.omega_ie_n(site_.lat_rad));
       }
-      const Matrix6d R6 = stage2_input_covariance(in, site_, table_);
+      // Each dwell alone: its variance with the bias wander (stage 2 correlates the dwells).
+      const Matrix6d R6 =
+          stage2_input_covariance(in, site_, table_) + stage2_wander_covariance(in, in, wander_);
       WhiteDwell w;
       for (int i = 0; i < 6; ++i)
         if (in.estimated[static_cast<std::size_t>(i)]) w.rows.push_back(i);
@@ -90,6 +94,14 @@ class StaticDesign {
   const Site& site() const { return site_; }
   const TableAttitudeError& table() const { return table_; }
   bool base_attitude() const { return base_attitude_; }
+  const NoiseModel& wander() const { return wander_; }
+  const std::vector<double>& priors() const { return priors_; }
+  /// The prior 1-sigma (SI) of catalog coefficient k: the session's grade, else the default.
+  double prior(int k) const {
+    const auto i = static_cast<std::size_t>(k);
+    if (i < priors_.size() && priors_[i] > 0.0) return priors_[i];
+    return coefficient_family_info(coefficient_catalog()[i].family).default_prior;
+  }
 
  private:
   const std::vector<EquivalentInputs>& inputs_;
@@ -97,18 +109,20 @@ class StaticDesign {
   const TableAttitudeError& table_;
   bool base_attitude_ = false;
   double reference_temperature_c_ = 25.0;
+  NoiseModel wander_;
+  std::vector<double> priors_;
 };
 
-// The families' default priors (SI) of the parameters: a weak prior that makes every fit
-// determinate (a direction no dwell sees is predicted as zero) without pulling observed ones.
-Eigen::VectorXd prior_sigmas(const std::vector<int>& parameters, bool base_attitude) {
-  const auto& cat = coefficient_catalog();
+// The priors (SI) of the parameters, the session's grade (else the families' defaults): a weak
+// prior that makes every fit determinate (a direction no dwell sees is predicted as zero) without
+// pulling observed ones.
+Eigen::VectorXd prior_sigmas(const StaticDesign& design, const std::vector<int>& parameters) {
+  const bool base_attitude = design.base_attitude();
   Eigen::VectorXd s(static_cast<Eigen::Index>(parameters.size()) + (base_attitude ? 3 : 0));
   // The base's three angles: a weak prior of a table set up on its site (1 deg).
   if (base_attitude) s.tail<3>().setConstant(units::deg);
   for (std::size_t k = 0; k < parameters.size(); ++k)
-    s(static_cast<Eigen::Index>(k)) =
-        coefficient_family_info(cat[static_cast<std::size_t>(parameters[k])].family).default_prior;
+    s(static_cast<Eigen::Index>(k)) = design.prior(parameters[k]);
   return s;
 }
 
@@ -146,11 +160,12 @@ FitFigures figures(const StaticDesign& design, const std::vector<int>& parameter
   Stage2Options o;
   o.table = design.table();
   o.base_attitude = design.base_attitude();
+  o.bias_wander = design.wander();
   o.parameters = parameters;
   f.fit = solve_stage2(design.inputs(), design.site(), o);
   f.chi2 = f.fit.chi2_per_dof * f.fit.dof;
   const auto dwells = design.whiten(parameters);
-  const Eigen::VectorXd p0 = prior_sigmas(parameters, design.base_attitude());
+  const Eigen::VectorXd p0 = prior_sigmas(design, parameters);
   const Eigen::VectorXd theta = solve_with_prior(dwells, p0, -1);
   double sa = 0.0, sg = 0.0, ha = 0.0, hg = 0.0, hz = 0.0;
   int na = 0, ng = 0, nha = 0, nhg = 0, nz = 0, inputs = 0;
@@ -186,7 +201,7 @@ FitFigures figures(const StaticDesign& design, const std::vector<int>& parameter
 }
 
 // One component as a candidate: separable when, added alone to the current parameters, it is
-// observable with a sigma below its family's prior / ratio.
+// observable with a sigma below its prior (the session's grade) / ratio.
 CandidateTest separability(const StaticDesign& design, const std::vector<int>& current,
                            int component, const DiagnosisOptions& o) {
   const auto& cat = coefficient_catalog();
@@ -197,13 +212,14 @@ CandidateTest separability(const StaticDesign& design, const std::vector<int>& c
   Stage2Options so;
   so.table = design.table();
   so.base_attitude = design.base_attitude();
+  so.bias_wander = design.wander();
   so.parameters = current;
   so.parameters.push_back(component);
   const Stage2Result r = solve_stage2(design.inputs(), design.site(), so);
   const auto j = static_cast<Eigen::Index>(current.size());
   const double sigma = std::sqrt(r.cov(j, j));
-  const bool ok =
-      r.observable.back() && std::isfinite(sigma) && sigma < info.default_prior / o.separable_ratio;
+  const bool ok = r.observable.back() && std::isfinite(sigma) &&
+                  sigma < design.prior(component) / o.separable_ratio;
   (ok ? c.separable : c.aliased).push_back(component);
   const std::string& name = cat[static_cast<std::size_t>(component)].name;
   for (const auto& d : r.unobservable_directions)
@@ -432,12 +448,12 @@ void test_candidate(const StaticDesign& design, const std::vector<int>& current,
   c.combinations = determined_combinations(c.with.fit, c.separable);
 }
 
-DwellResidual residual_of(const EquivalentInputs& in, const Site& site,
-                          const TableAttitudeError& table) {
+DwellResidual residual_of(const EquivalentInputs& in, const Site& site, const Stage2Options& base) {
   DwellResidual d;
   d.dwell = in.dwell.index;
   d.label = in.dwell.label;
-  const Matrix6d R = stage2_input_covariance(in, site, table);
+  const Matrix6d R = stage2_input_covariance(in, site, base.table) +
+                     stage2_wander_covariance(in, in, base.bias_wander);
   for (int i = 0; i < 6; ++i) d.sigma(i) = std::sqrt(R(i, i));
   return d;
 }
@@ -446,8 +462,7 @@ DwellResidual residual_of(const EquivalentInputs& in, const Site& site,
 void fill_residuals(const StaticDesign& design, const std::vector<int>& parameters,
                     std::vector<DwellResidual>& out, bool after) {
   const auto dwells = design.whiten(parameters);
-  const Eigen::VectorXd theta =
-      solve_with_prior(dwells, prior_sigmas(parameters, design.base_attitude()), -1);
+  const Eigen::VectorXd theta = solve_with_prior(dwells, prior_sigmas(design, parameters), -1);
   for (std::size_t i = 0; i < dwells.size(); ++i) {
     const Eigen::VectorXd r = dwells[i].u - dwells[i].H * theta;
     auto& target = after ? out[i].after : out[i].before;
@@ -493,30 +508,31 @@ DwellTests::DwellTests(std::vector<EquivalentInputs> inputs, const Site& site,
 }
 
 FitFigures DwellTests::fit(const std::vector<int>& parameters) const {
-  return figures(StaticDesign(inputs_, site_, base_), parameters);
+  return figures(StaticDesign(inputs_, site_, base_, options_.prior_sigma), parameters);
 }
 
 std::vector<CandidateTest> DwellTests::round(const std::vector<int>& current,
                                              const FitFigures& now) const {
-  return run_round(StaticDesign(inputs_, site_, base_), current, now, options_);
+  return run_round(StaticDesign(inputs_, site_, base_, options_.prior_sigma), current, now,
+                   options_);
 }
 
 std::vector<WhitenedDwell> DwellTests::whitened(const std::vector<int>& parameters) const {
   std::vector<WhitenedDwell> out;
-  for (auto& w : StaticDesign(inputs_, site_, base_).whiten(parameters))
+  for (auto& w : StaticDesign(inputs_, site_, base_, options_.prior_sigma).whiten(parameters))
     out.push_back({std::move(w.A), std::move(w.L), std::move(w.y), std::move(w.rows)});
   return out;
 }
 
 Eigen::VectorXd DwellTests::prior(const std::vector<int>& parameters) const {
-  return prior_sigmas(parameters, base_.base_attitude);
+  return prior_sigmas(StaticDesign(inputs_, site_, base_, options_.prior_sigma), parameters);
 }
 
 std::vector<DwellResidual> DwellTests::residuals(const std::vector<int>& initial,
                                                  const std::vector<int>& final) const {
-  const StaticDesign design(inputs_, site_, base_);
+  const StaticDesign design(inputs_, site_, base_, options_.prior_sigma);
   std::vector<DwellResidual> out;
-  for (const auto& in : inputs_) out.push_back(residual_of(in, site_, base_.table));
+  for (const auto& in : inputs_) out.push_back(residual_of(in, site_, base_));
   fill_residuals(design, initial, out, false);
   fill_residuals(design, final, out, true);
   return out;

@@ -26,6 +26,11 @@ struct DiagnosisOptions : DiagnosisSearch {
   /// The thermal families among the default candidates: the dwells' temperatures vary (a
   /// ramp's log; each dwell's inputs at its mean temperature and rate). Set by the caller.
   bool thermal = false;
+  /// The weak prior 1-sigma (SI) of each catalog coefficient (by catalog index) in the dwells'
+  /// regularized fits, and the scale a separable candidate's sigma is compared with; absent or
+  /// 0: the family's default prior (a navigation-grade value). A session's grade sets it
+  /// (diagnosis_table.hpp grade_priors).
+  std::vector<double> prior_sigma;
 };
 
 /// Residuals of one dwell, measured minus model: df_n (m/s^2) and dw_n (rad/s), NED.

@@ -31,17 +31,31 @@ struct TurnModel {
   bool run_filter = true;  // false: the profile's families only (no turns' test)
 };
 
+/// The prior 1-sigma (SI) of every catalog coefficient for a sensor of the grade of `model` (the
+/// filter's options from a profile): the profile's own prior where it gives the family a range,
+/// else the family's default prior (navigation grade) times the ratio of the profile's prior of
+/// the triad's base family of the same kind to that family's default prior, never below the
+/// default: a rate or force offset (g-sensitivity, bias drift, bias temperature terms) follows the
+/// bias, a relative error (K2, scale asymmetry, scale temperature terms) the scale factor, a
+/// misalignment temperature term the misalignment; lever arms and the time delay keep theirs.
+std::vector<double> grade_priors(const CalibratorOptions& model);
+
 /// The turns' model of a session as `sinscal diagnose` runs it: the filter's options from the
-/// session's sensor profile, the table's attitude sigma (rad), the session's time offset.
+/// session's sensor profile (the families it lacks with priors of its grade, grade_priors), the
+/// table's attitude sigma (rad), the session's time offset.
 TurnModel turn_model_of(const Session& session, const SensorProfile& profile, double table_sigma);
 
 /// One pass's NIS per dof above this: the session's errors are too large for one linearization
 /// about zero (MEMS), and both tests linearize about a first calibration.
 constexpr double kRelinearizeNis = 1.5;
+/// Or the first pass's gyro bias turns the attitude through a dwell by more than this (rad, about
+/// 0.6 deg): stage 1's navigation errors are beyond small angles about zero (a MEMS unit).
+constexpr double kSmallAngle = 0.01;
 
 /// The model both tests linearize about, or none (about zero, as one pass of calibrate): the
 /// filter's estimate after `passes` passes over the log with the session's model; `passes` 0:
-/// automatic, 3 passes when one pass's NIS per dof is above kRelinearizeNis, else none. Sets the
+/// automatic, 3 passes when one pass's NIS per dof is above kRelinearizeNis or its gyro bias
+/// times the longest dwell above kSmallAngle, else none. Sets the
 /// model (and its base) as the filter's starting point (`model.base.initial_model`); the closed
 /// form takes it as `run_closed_form(..., false, about)` (no alignment: the model carries the
 /// mounting), so the dwells' fits are corrections to it. When a pass stops or diverges: none
