@@ -170,3 +170,43 @@ TEST_CASE(
   CHECK(excess(triad_25.gyro, triad_250.gyro) < excess(triad_2.gyro, triad_250.gyro) / 50.0);
   CHECK(excess(triad_25.accel, triad_250.accel) < excess(triad_2.accel, triad_250.accel) / 50.0);
 }
+
+TEST_CASE("Misalignment frame: design predicts the triad-frame sigmas the calibration reports",
+          "[frame][design][kalman]") {
+  // As tests/test_design.cpp "predicted sigmas are those the calibration of the plan reports",
+  // in the triad frame: rot19 simulated from nav-fog-extended (drawn coefficients, noise) and
+  // calibrated with attitude updates, converted after the estimation.
+  const Plan plan = test::load_plan("rot19.ini");
+  const SensorProfile prof =
+      SensorProfile::load(test::source_path("config/sensors/nav-fog-extended.ini"));
+  CalibratorOptions ko = calibrator_options_from_profile(prof);
+  ko.misalignment_frame = MisalignmentFrame::Triad;
+  const double rate_hz = 20.0;
+  DesignOptions d;
+  d.rate_hz = rate_hz;
+  const PlanPrediction p = predict_plan(plan, ko, prof.sigma_targets, d);
+  const Motion motion = build_motion(plan, plan.site);
+  SimulatorOptions so;
+  so.rate_hz = rate_hz;
+  so.noise_seed = 1007;
+  ImuSimulator sim(motion, prof.draw(7), prof.noise, so);
+  KalmanRunOptions run;
+  run.align = false;
+  const KalmanRun c = run_kalman(design_session(plan, rate_hz), ko, &sim, run);
+  REQUIRE(c.misalignment_frame == MisalignmentFrame::Triad);
+  REQUIRE(c.converted_to_triad_frame);
+  const auto& cat = coefficient_catalog();
+  int compared = 0;
+  for (std::size_t i = 0; i < cat.size(); ++i) {
+    const auto& e = p.run.estimates[i];
+    REQUIRE(e.status == c.estimates[i].status);
+    if (e.status != CoefficientEstimate::Status::Estimated) continue;
+    CAPTURE(cat[i].name, e.sigma, c.estimates[i].sigma);
+    CHECK(e.sigma == Approx(c.estimates[i].sigma).epsilon(0.05));  // the 5 %
+    ++compared;
+  }
+  CHECK(compared >= 30);
+  for (int f : triad_fixed_coefficients())
+    CHECK(c.estimates[static_cast<std::size_t>(f)].status ==
+          CoefficientEstimate::Status::FixedByConvention);
+}
