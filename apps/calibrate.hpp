@@ -20,6 +20,8 @@ struct CalibrateOptions {
   double arw = 0.0, vrw = 0.0, min_dwell = 20.0;  // deg/sqrt(h), ug/sqrt(Hz), s
   // both
   double table_sigma = 2.5;  // arcsec
+  /// --misalignment-frame: table | triad | empty (the method's and mode's own frame).
+  std::string misalignment_frame;
   // Kalman filter
   CalibratorOptions::AttitudeUpdates attitude = CalibratorOptions::AttitudeUpdates::Every;
   CalibratorOptions::StaticFrom static_from = CalibratorOptions::StaticFrom::Plan;
@@ -47,6 +49,10 @@ struct CalibrateOptions {
 
 /// The Kalman filter's option values (UsageError naming the option), before any session runs.
 void check_kf_values(const CalibrateOptions& o);
+/// --misalignment-frame as the estimators take it (ByMode when not given); UsageError for an
+/// unknown name, for the table frame without attitude updates (the cause) and for the methods
+/// that have no choice of frame.
+MisalignmentFrame misalignment_frame_option(const CalibrateOptions& o);
 
 /// The table-free options (--gravity, --pose-window, ...) added to `d`.
 void add_table_free_options(po::options_description& d, CalibrateOptions& o);

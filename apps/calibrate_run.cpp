@@ -44,6 +44,7 @@ CalibratorOptions kalman_options(const CalibrateOptions& o, const Session& sessi
           "--terms leaves them out)");
     set_lever_arm_reference(ko.layout, o.lever_arm_reference);
   }
+  ko.misalignment_frame = misalignment_frame_option(o);
   ko.static_from = o.static_from;
   ko.detector.window = o.static_window;
   ko.detector.min_duration = o.static_min;
@@ -188,6 +189,8 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
   std::printf("Kalman-filter calibration of '%s': %d states, %zu samples, NIS per dof %.3f\n",
               session.name.c_str(), kr.states, kr.samples, kr.nis_per_dof);
   if (kr.motion) std::printf("Motion: %s\n", kr.motion->summary().c_str());
+  std::printf("Misalignment frame: %s%s\n", misalignment_frame_name(kr.misalignment_frame).c_str(),
+              kr.converted_to_triad_frame ? " (estimated relative to the table, converted)" : "");
   print_coefficient_table(coefficients, truth);
   std::printf("\nResult written to %s (%.2f s, %.0fx real time)\n", out_path.c_str(), seconds,
               kr.duration / seconds);
@@ -217,8 +220,11 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
   gate.checks.push_back(check_linear_range(r, session.log.file));
   gate.checks.push_back(check_stage2_fit(r, limits, session.log.file));
   enforce(gate, co.force);
-  const ResultCoefficients coefficients = result_coefficients(r);
-  auto sections = result_sections(r);
+  const MisalignmentFrame frame = misalignment_frame_option(co) == MisalignmentFrame::Triad
+                                      ? MisalignmentFrame::Triad
+                                      : MisalignmentFrame::Table;
+  const ResultCoefficients coefficients = result_coefficients(r, frame);
+  auto sections = result_sections(r, frame);
   sections["linearization"] = {
       {"linearizations", r.linearizations},
       {"removed_gyro_bias_deg_per_s",
@@ -234,7 +240,7 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
   record_gate(sections, gate);
   record_provenance(sections, session);
   write_result_json(out_path, coefficients, sections);
-  const ResultCoefficients truth = load_truth(session);
+  const ResultCoefficients truth = load_truth(session, frame == MisalignmentFrame::Triad);
   SessionSummary row{session.path, session.name,
                      out_path,     "ok",
                      "",           0,
@@ -247,6 +253,7 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
       "Closed-form calibration of '%s': stage 1 %s, %s model, channels %s, table %.2f arcsec\n",
       session.name.c_str(), name_of(co.stage1).c_str(), name_of(co.model).c_str(),
       name_of(co.channels).c_str(), co.table_sigma);
+  std::printf("Misalignment frame: %s\n", misalignment_frame_name(frame).c_str());
   print_closed_form(r, coefficients, truth);
   if (r.linearizations > 1)
     std::printf(
@@ -264,8 +271,27 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
 
 }  // namespace
 
+MisalignmentFrame misalignment_frame_option(const CalibrateOptions& o) {
+  if (o.misalignment_frame.empty()) return MisalignmentFrame::ByMode;
+  if (o.method != Method::Kf && o.method != Method::ClosedForm)
+    throw UsageError(
+        "--misalignment-frame is an option of the table methods (kf, closed-form): "
+        "--method " +
+        name_of(o.method) + " reports in its own body frame");
+  MisalignmentFrame f;
+  try {
+    f = parse_misalignment_frame(o.misalignment_frame);
+    if (o.method == Method::Kf)
+      resolve_misalignment_frame(f, o.attitude != CalibratorOptions::AttitudeUpdates::None);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--misalignment-frame: ") + e.what());
+  }
+  return f;
+}
+
 // The Kalman filter's option values (--method kf), checked before any session runs.
 void check_kf_values(const CalibrateOptions& o) {
+  misalignment_frame_option(o);
   if (o.base != "estimated" && o.base != "known")
     throw UsageError("--base must be estimated or known, not '" + o.base + "'");
   if (!(o.static_window > 0.0) || !(o.static_min >= o.static_window) || !(o.static_rate > 0.0))

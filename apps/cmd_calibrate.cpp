@@ -27,6 +27,10 @@ void add_options(po::options_description& d, CalibrateOptions& o) {
        "Earth rate and plan, saturation, fits; rests without a table); the result records it")
       ("table-sigma", po::value(&o.table_sigma)->default_value(2.5),
        "table attitude error per orientation and axis, 1-sigma [arcsec]")
+      ("misalignment-frame", po::value(&o.misalignment_frame),
+       "kf, closed-form: the frame of the misalignments: table (relative to the table's platform; "
+       "the default with table-attitude updates) | triad (within the triads, the accelerometer "
+       "triad as the body frame; the default and only frame with --attitude none)")
       ("stage1", po::value(&o.stage1)->default_value(Stage1Method::Fit, "fit"),
        "closed-form: fit (weighted least squares over each dwell) | point (the paper's eq. 5)")
       ("model", po::value(&o.model)->default_value(ErrorModelKind::Coupled, "coupled"),
@@ -90,6 +94,7 @@ void check_method_options(const po::variables_map& vm, CalibrateOptions& o) {
       "passes", "motion", "base", "static-from", "static-window", "static-min", "static-rate-threshold",
       "on-bad-sample"};
   // clang-format on
+  misalignment_frame_option(o);  // the table methods only; a known name
   check_table_free_options(vm, o, {closed_form_only, kf_only, {"table-sigma"}});
   if (o.method == Method::TableFree || o.method == Method::SixFace) return;
   if (o.method == Method::RateTable) {

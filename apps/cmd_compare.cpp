@@ -68,6 +68,14 @@ int cmd_compare(const std::vector<std::string>& args) {
     throw UsageError("--max-sigma and --max-relative must be numbers >= 0");
   const bool force = vm->count("force") > 0;
   const ResultFile fa = read_result_file(files[0], force), fb = read_result_file(files[1], force);
+  // Misalignments relative to the table and within the triads are different quantities.
+  if (!fa.misalignment_frame.empty() && !fb.misalignment_frame.empty() &&
+      fa.misalignment_frame != fb.misalignment_frame)
+    throw std::runtime_error(
+        files[0] + " and " + files[1] + ": different misalignment frames (A: " +
+        fa.misalignment_frame + " frame, B: " + fb.misalignment_frame +
+        " frame): the misalignments, and the coefficients that depend on the body axes, are not "
+        "the same quantities; calibrate both with the same --misalignment-frame");
   const ResultCoefficients &a = fa.coefficients, &b = fb.coefficients;
   std::vector<CoefficientComparison> rows;
   try {
@@ -76,6 +84,9 @@ int cmd_compare(const std::vector<std::string>& args) {
     throw std::runtime_error(files[0] + " and " + files[1] + ": " + e.what());
   }
   std::printf("A = %s\nB = %s\n", files[0].c_str(), files[1].c_str());
+  if (!fa.misalignment_frame.empty() || !fb.misalignment_frame.empty())
+    std::printf("Misalignment frame: %s\n",
+                (fa.misalignment_frame.empty() ? fb : fa).misalignment_frame.c_str());
   print_overrides(fa, "A");
   print_overrides(fb, "B");
   print_one_sided(a, b, files);

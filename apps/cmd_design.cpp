@@ -26,6 +26,12 @@ CalibratorOptions design_options(const DesignCliOptions& o, const SensorProfile&
                       : table             ? table->attitude_sigma
                                           : kDefaultTableAttitudeSigma;
   ko.attitude = o.attitude;
+  if (!o.misalignment_frame.empty()) try {
+      ko.misalignment_frame = parse_misalignment_frame(o.misalignment_frame);
+      reported_frame(ko);  // the table frame needs attitude updates
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--misalignment-frame: ") + e.what());
+    }
   if (table) ko.zero_velocity_in_motion = table->reference_on_axes;
   try {
     apply_terms(ko.layout, o.terms);
@@ -189,6 +195,10 @@ int cmd_design(const std::vector<std::string>& args) {
        "table attitude error per orientation and axis [arcsec] (default: the table's, else 2.5)")
       ("attitude", po::value(&o.attitude)->default_value(CalibratorOptions::AttitudeUpdates::Every,
        "every"), "table-attitude updates, as calibrate --method kf: every | first | none")
+      ("misalignment-frame", po::value(&o.misalignment_frame),
+       "the frame of the predicted misalignments, as calibrate: table (with attitude updates, "
+       "the default) | triad (the accelerometer triad as the body frame; the default with "
+       "--attitude none)")
       ("terms", po::value(&o.terms), "extended terms on top of the profile's, as calibrate")
       ("prior-scale", po::value(&o.prior_scale)->default_value(kDefaultPriorScale),
        "prior sigma = this times the profile's largest coefficient magnitude")

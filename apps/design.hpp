@@ -16,6 +16,7 @@ namespace sinscal::cli {
 
 struct DesignCliOptions {
   std::string plan, sensor, table, out, terms, targets;
+  std::string misalignment_frame;  // table | triad | empty (by the attitude updates)
   std::vector<std::string> compare, require;
   double rate_hz = 50.0, table_sigma = 0.0, prior_scale = kDefaultPriorScale;
   CalibratorOptions::AttitudeUpdates attitude = CalibratorOptions::AttitudeUpdates::Every;

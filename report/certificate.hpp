@@ -50,6 +50,9 @@ struct Certificate {
   std::vector<CertificateFile> files;
   std::string files_note;  // why there are no hashes, when there are none
   ResultCoefficients coefficients;
+  /// The misalignments' frame, "table" or "triad" (ResultFile::misalignment_frame; empty: the
+  /// method has none).
+  std::string misalignment_frame;
   Verdict verdict = Verdict::Pass;
   std::string verdict_title;  // "Converged", "Diverged", ...
   std::vector<std::string> verdict_reasons;

@@ -26,6 +26,7 @@ const std::map<std::string, std::string>& labels() {
       {"attitude", "Table-attitude updates"},
       {"base", "Table base attitude"},
       {"body_frame", "Body frame"},
+      {"body_frame_converted_from", "Estimated in, then converted from, the frame of"},
       {"frame", "Body frame"},
       {"static_from", "Static dwells taken from"},
       {"attitude_from", "Attitude updates taken from"},

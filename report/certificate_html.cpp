@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "filter/kalman/misalignment_frame.hpp"
 #include "models/coefficient_families.hpp"
 #include "report/certificate.hpp"
 #include "report/coefficient_table.hpp"
@@ -202,6 +203,11 @@ void coefficients(std::ostringstream& h, const Certificate& c) {
                                  : "")
     << ". \"unobservable\": the data do not determine the coefficient and no value is given; "
        "\"0 (convention)\": fixed by the body-frame convention, not estimated.</p>\n";
+  if (!c.misalignment_frame.empty())
+    h << "<p class=\"note\" id=\"misalignment-frame\">Misalignments (and the other "
+         "coefficients that depend on the body axes) are given "
+      << html_escaped(misalignment_frame_words(parse_misalignment_frame(c.misalignment_frame)))
+      << ".</p>\n";
   if (!c.forced.empty()) {
     h << "<p class=\"changed\" id=\"forced\">Certified with --force although beyond the "
          "physical range of their family (models/coefficient_families.cpp):</p>\n<ul "

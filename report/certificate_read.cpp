@@ -319,6 +319,7 @@ Certificate read_certificate(const CertificateOptions& o) {
                                   : "not a calibration result (no \"method\" section)");
   Certificate c;
   c.coefficients = std::move(r.coefficients);
+  c.misalignment_frame = r.misalignment_frame;
   c.forced = std::move(r.forced);
   c.coverage_factor = o.coverage_factor;
   c.approver = o.approver;

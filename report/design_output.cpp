@@ -33,6 +33,7 @@ nlohmann::ordered_json design_json(const PlanPrediction& p, const DesignInputs& 
                 {"name", in.table_name},
                 {"attitude_accuracy_arcsec", in.attitude_sigma / units::arcsec}};
   j["ideal_imu_rate_hz"] = in.rate_hz;
+  j["misalignment_frame"] = misalignment_frame_name(p.run.misalignment_frame);
   j["states"] = p.run.states;
   j["meets_targets"] = p.meets_targets();
   const auto last = p.last_to_reach();
@@ -82,6 +83,10 @@ std::string design_tables(const PlanPrediction& p, const DesignInputs& in) {
                 in.plan_name.c_str(), p.duration, in.sensor_name.c_str(), in.table_name.c_str(),
                 in.attitude_sigma / units::arcsec);
   out += line;
+  // Predicted sigmas and targets compare in this frame (a target's own frame is the user's).
+  out += "Misalignment frame: " + misalignment_frame_name(p.run.misalignment_frame) +
+         (p.run.converted_to_triad_frame ? " (converted from the table frame)" : "") +
+         ": sigmas and targets are compared in it\n\n";
   std::snprintf(line, sizeof line, "%-22s %-9s %12s %12s  %-24s %10s\n", "family", "unit", "target",
                 "predicted", "(worst coefficient)", "reached at");
   out += line;

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "filter/kalman/misalignment_frame.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/units.hpp"
 #include "report/result.hpp"
@@ -161,6 +162,7 @@ Json document(const FirmwareExport& e) {
   d["source"] = {{"file", e.source_file}, {"bytes", e.source_bytes}, {"method", e.method}};
   d["body_frame"] = e.body_frame;
   d["body_frame_note"] = e.body_frame_note;
+  if (!e.misalignment_frame.empty()) d["misalignment_frame"] = e.misalignment_frame;
   if (!e.reference_point.empty()) d["reference_point"] = e.reference_point;
   d["units"] = {{"angular_rate", "rad/s"},
                 {"specific_force", "m/s^2"},
@@ -328,6 +330,9 @@ std::string c_header(const FirmwareExport& e) {
   h += c_comment_line("Source: " + e.source_file + " (" + std::to_string(e.source_bytes) +
                       " bytes), method " + e.method);
   h += c_comment_line("Body frame: " + e.body_frame + ": " + e.body_frame_note);
+  if (!e.misalignment_frame.empty())
+    h += c_comment_line("Misalignment frame: " + e.misalignment_frame + ": " +
+                        misalignment_frame_words(parse_misalignment_frame(e.misalignment_frame)));
   if (!e.reference_point.empty()) h += c_comment_line("Reference point: " + e.reference_point);
   h += c_comment_line(
       "Units: SI (rad/s, m/s^2, s, m; k2 in 1/(m/s^2), g-sensitivity in rad/s "
@@ -355,6 +360,8 @@ std::string c_header(const FirmwareExport& e) {
   h +=
       " */\n#pragma once\n#ifndef SINSCAL_IMU_CALIBRATION_H\n#define SINSCAL_IMU_CALIBRATION_H\n\n";
   h += "#define SINSCAL_EXPORT_FORMAT_VERSION 1\n";
+  if (!e.misalignment_frame.empty())
+    h += "#define SINSCAL_MISALIGNMENT_FRAME \"" + e.misalignment_frame + "\"\n";
   for (const auto& f : coefficient_families()) {
     if (f.base || f.thermal()) continue;  // thermal results are refused (read_export_input)
     std::string macro = "SINSCAL_HAS_" + f.name;
@@ -422,6 +429,7 @@ FirmwareExport export_of(const std::string& path, const ResultFile& r,
   e.source_bytes = std::filesystem::file_size(path, ec);
   e.method = j["method"]["name"].get<std::string>();
   body_frame_of(j["method"], e);
+  e.misalignment_frame = r.misalignment_frame;
   const std::vector<std::string> present = take_coefficients(r, e);
   // Families whole or absent; the base ones required.
   std::vector<std::string> missing;

@@ -38,6 +38,9 @@ struct FirmwareExport {
   std::string method;      // the result's method.name: "kf", "closed-form", "table-free", ...
   std::string body_frame;  // "table platform", "accelerometer triad", "box faces"
   std::string body_frame_note;
+  /// The frame of the misalignments, "table" or "triad" (ResultFile::misalignment_frame); empty
+  /// for a method without one (six-face: the box's faces).
+  std::string misalignment_frame;
   /// Where omega_ib_b and f_ib_b are (the point the lever arms are relative to); empty without
   /// lever arms.
   std::string reference_point;

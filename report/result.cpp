@@ -63,6 +63,56 @@ ResultCoefficients result_coefficients(const ClosedFormReport& r) {
 }
 
 namespace {
+// A stage-2 solution relative to the table turned into the triad frame: the coefficients the
+// conversion mixes with one the data did not determine are not determined either.
+ResultCoefficients triad_frame_coefficients(const Stage2Result& s) {
+  const auto& cat = coefficient_catalog();
+  const auto n = static_cast<Eigen::Index>(s.parameters.size());
+  Eigen::VectorXd values = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(cat.size()));
+  Eigen::MatrixXd P = s.cov.topLeftCorner(n, n);
+  std::vector<int> unknown;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const int c = s.parameters[static_cast<std::size_t>(k)];
+    if (s.observable[static_cast<std::size_t>(k)]) {
+      values(c) = s.theta(k);
+      continue;
+    }
+    unknown.push_back(c);
+    P.row(k).setZero();
+    P.col(k).setZero();
+  }
+  ImuErrorModel table_frame;
+  auto refs = table_frame.coefficient_refs();
+  for (std::size_t c = 0; c < refs.size(); ++c)
+    *refs[c].second = values(static_cast<Eigen::Index>(c));
+  const Eigen::MatrixXd J = accel_triad_frame_jacobian(table_frame);
+  const TriadFrameEstimate t = to_accel_triad_frame(values, P, s.parameters);
+  ResultCoefficients out;
+  for (std::size_t i = 0; i < t.catalog.size(); ++i) {
+    const auto c = static_cast<std::size_t>(t.catalog[i]);
+    const auto ii = static_cast<Eigen::Index>(i);
+    ResultCoefficient rc = result_coefficient(cat[c], t.values(t.catalog[i]),
+                                              std::sqrt(std::max(0.0, t.covariance(ii, ii))));
+    for (int u : unknown)
+      if (std::abs(J(t.catalog[i], u)) > 1e-12) rc.observable = false;
+    out[cat[c].name] = rc;
+  }
+  for (int c : triad_fixed_coefficients()) {
+    ResultCoefficient rc;
+    rc.unit = cat[static_cast<std::size_t>(c)].unit;
+    rc.fixed_by_convention = true;
+    out[cat[static_cast<std::size_t>(c)].name] = rc;
+  }
+  return out;
+}
+}  // namespace
+
+ResultCoefficients result_coefficients(const ClosedFormReport& r, MisalignmentFrame frame) {
+  return frame == MisalignmentFrame::Triad ? triad_frame_coefficients(r.stage2)
+                                           : result_coefficients(r.stage2);
+}
+
+namespace {
 const char* attitude_name(CalibratorOptions::AttitudeUpdates a) {
   switch (a) {
     case CalibratorOptions::AttitudeUpdates::Every:
@@ -91,9 +141,13 @@ nlohmann::ordered_json kalman_method(const KalmanRun& r) {
       {"update_interval_s", o.update_interval},
       {"prior_scale", o.prior_scale},
       {"table_sigma_arcsec", o.attitude_sigma / units::arcsec}};
+  if (r.converted_to_triad_frame) m["body_frame_converted_from"] = "table";
   std::vector<std::string> fixed;
   for (int c : StateLayout::make(o.layout).fixed)
     fixed.push_back(coefficient_catalog()[static_cast<std::size_t>(c)].name);
+  if (r.converted_to_triad_frame)
+    for (int c : triad_fixed_coefficients())
+      fixed.push_back(coefficient_catalog()[static_cast<std::size_t>(c)].name);
   if (!fixed.empty()) m["fixed_by_convention"] = fixed;
   if (!r.passes.empty()) m["passes"] = r.passes_requested;
   return m;
@@ -155,6 +209,7 @@ nlohmann::ordered_json kalman_convergence(const KalmanRun& r) {
 
 nlohmann::ordered_json result_sections(const KalmanRun& r) {
   nlohmann::ordered_json d;
+  d["misalignment_frame"] = misalignment_frame_name(r.misalignment_frame);
   d["method"] = kalman_method(r);
   d["consistency"] = {{"nis_per_dof", r.nis_per_dof}, {"samples", r.samples}};
   d["convergence"] = kalman_convergence(r);
@@ -221,9 +276,11 @@ namespace {
 const char* kInputName[6] = {"df_n", "df_e", "df_d", "dw_n", "dw_e", "dw_d"};
 }  // namespace
 
-nlohmann::ordered_json result_sections(const ClosedFormReport& r) {
+nlohmann::ordered_json result_sections(const ClosedFormReport& r, MisalignmentFrame frame) {
   const Stage1Options& s1 = r.stage1_options;
   nlohmann::ordered_json d;
+  const bool triad = frame == MisalignmentFrame::Triad;
+  d["misalignment_frame"] = misalignment_frame_name(triad ? frame : MisalignmentFrame::Table);
   d["method"] = {{"name", "closed-form"},
                  {"stage1", s1.method == Stage1Method::Fit ? "fit" : "point"},
                  {"model", s1.model == ErrorModelKind::Coupled ? "coupled" : "uncoupled"},
@@ -235,6 +292,15 @@ nlohmann::ordered_json result_sections(const ClosedFormReport& r) {
                  {"arw_deg_per_sqrt_h", s1.arw / units::deg_per_sqrt_h},
                  {"vrw_ug_per_sqrt_hz", s1.vrw / units::ug_per_sqrt_hz},
                  {"table_sigma_arcsec", r.stage2_options.table.sigma / units::arcsec}};
+  if (triad) {
+    // Estimated relative to the table, converted after the estimation.
+    d["method"]["body_frame"] = "accelerometer triad";
+    d["method"]["body_frame_converted_from"] = "table";
+    std::vector<std::string> fixed;
+    for (int c : triad_fixed_coefficients())
+      fixed.push_back(coefficient_catalog()[static_cast<std::size_t>(c)].name);
+    d["method"]["fixed_by_convention"] = fixed;
+  }
   nlohmann::ordered_json dwells = nlohmann::ordered_json::array();
   for (const auto& e : r.stage1) {
     nlohmann::ordered_json x = {

@@ -36,6 +36,10 @@ ResultCoefficients result_coefficients(const std::vector<CoefficientEstimate>& e
 /// The Kalman filter's and the closed form's coefficients.
 ResultCoefficients result_coefficients(const KalmanRun& run);
 ResultCoefficients result_coefficients(const ClosedFormReport& report);
+/// The closed form's coefficients in a misalignment frame: the table's (its own), or the triad
+/// frame, converted with the full covariance (filter/kalman/misalignment_frame.hpp); a
+/// coefficient the conversion mixes with one the data did not determine is not determined.
+ResultCoefficients result_coefficients(const ClosedFormReport& report, MisalignmentFrame frame);
 /// A stage-2 solution's coefficients (any parameter set, e.g. a diagnosis's extended model).
 ResultCoefficients result_coefficients(const Stage2Result& stage2);
 /// The "coefficients" object of a result file.
@@ -43,7 +47,8 @@ nlohmann::ordered_json coefficients_json(const ResultCoefficients& coefficients)
 
 /// The sections after "coefficients" of each method's result file.
 nlohmann::ordered_json result_sections(const KalmanRun& run);
-nlohmann::ordered_json result_sections(const ClosedFormReport& report);
+nlohmann::ordered_json result_sections(const ClosedFormReport& report,
+                                       MisalignmentFrame frame = MisalignmentFrame::Table);
 
 /// Writes a result file; `extra` (an object) adds sections after "coefficients". Written to a
 /// temporary name beside `path` and renamed when complete.
@@ -56,6 +61,12 @@ struct ResultFile {
   ResultCoefficients coefficients;
   /// With `force`: each implausible coefficient and why, the override the output must record.
   std::vector<std::string> forced;
+  /// The frame of the misalignments, "table" or "triad" (docs/formats.md "misalignment_frame"):
+  /// the field when the result has it, else the default of its method and mode (results written
+  /// before the field: the accelerometer triad without table-attitude updates and for the
+  /// table-free method, the table otherwise); empty for truth files and for methods without
+  /// such a frame (six-face: the box's faces).
+  std::string misalignment_frame;
 };
 
 /// Reads a result or truth file and checks every coefficient; throws std::runtime_error naming the

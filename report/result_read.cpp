@@ -80,6 +80,29 @@ ResultCoefficient read_coefficient(const std::string& path, const std::string& n
   return r;
 }
 
+// The misalignment frame a result states, or its method's and mode's default (results written
+// before the field); a stated frame other than table or triad is refused.
+std::string misalignment_frame_of(const std::string& path, const Json& j) {
+  if (j.contains("misalignment_frame")) {
+    const Json& f = j["misalignment_frame"];
+    if (!f.is_string() || (f.get<std::string>() != "table" && f.get<std::string>() != "triad"))
+      fail(path, "\"misalignment_frame\" must be \"table\" or \"triad\", not " + f.dump());
+    return f.get<std::string>();
+  }
+  if (!j.contains("method") || !j["method"].is_object()) return "";
+  const Json& m = j["method"];
+  auto text = [&](const char* key) {
+    return m.contains(key) && m[key].is_string() ? m[key].get<std::string>() : std::string();
+  };
+  if (text("body_frame") == "accelerometer triad") return "triad";
+  if (text("body_frame") == "table") return "table";
+  const std::string name = text("name");
+  if (name == "kf") return text("attitude") == "none" ? "triad" : "table";
+  if (name == "table-free") return "triad";
+  if (name == "closed-form") return "table";
+  return "";
+}
+
 }  // namespace
 
 std::string check_plausible(const std::string& name, const ResultCoefficient& c,
@@ -117,6 +140,7 @@ ResultFile read(const std::string& path, bool force, bool force_hint) {
     fail(path, "not a sinscal result file (no \"coefficients\" object)");
   // A calibration result names its method; a truth file (simulate's) has no sigmas.
   const bool result = f.json.contains("method");
+  f.misalignment_frame = misalignment_frame_of(path, f.json);
   for (const auto& [name, e] : f.json["coefficients"].items()) {
     const ResultCoefficient c = read_coefficient(path, name, e);
     const std::string why = check_plausible(name, c, result);

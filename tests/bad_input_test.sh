@@ -561,6 +561,13 @@ new calibrate-kf-without-sensor; mini; awk '!/^sensor/' "$d/session.ini" > "$d/s
 fixed 1 "session.ini: --method kf needs the session's sensor profile" kf
 new calibrate-min-dwell-too-long; mini
 fixed 2 "shorter than the 300" cf --min-dwell 300
+# --misalignment-frame (issue 36.3): a known frame, the table's only with attitude updates.
+new calibrate-frame-unknown; mini
+fixed 1 "--misalignment-frame: unknown misalignment frame 'case' (table or triad)" kf --misalignment-frame case
+new calibrate-frame-table-without-attitude; mini
+fixed 1 "--misalignment-frame: the table frame is not observable without table-attitude updates" kf --misalignment-frame table --attitude none
+new calibrate-frame-six-face; mini
+fixed 1 "--misalignment-frame is an option of the table methods (kf, closed-form)" S calibrate --method six-face --session session.ini --out out/r.json --misalignment-frame triad
 
 # --- hand-held: calibrate --method table-free, allan (session.ini without a plan, [site] gravity)
 tf() { S calibrate --method table-free --session session.ini --out out/result.json "$@"; }

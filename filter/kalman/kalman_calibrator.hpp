@@ -27,6 +27,7 @@
 
 #include "filter/kalman/error_propagation.hpp"
 #include "filter/kalman/measurements.hpp"
+#include "filter/kalman/misalignment_frame.hpp"
 #include "filter/kalman/state_layout.hpp"
 #include "filter/noise/static_detector.hpp"
 #include "filter/strapdown/ins_error_model.hpp"
@@ -156,6 +157,10 @@ struct CalibratorOptions {
   /// the first update after each is recorded as a prediction (HoldoutPrediction). The
   /// diagnosis leaves turns out this way to measure how well a model predicts them.
   std::vector<std::pair<double, double>> holdout;
+  /// The frame run_kalman reports the coefficients in (filter/kalman/misalignment_frame.hpp):
+  /// the filter's own (ByMode), or the triad frame after an estimation relative to the table.
+  /// The filter itself always estimates in its own frame.
+  MisalignmentFrame misalignment_frame = MisalignmentFrame::ByMode;
 };
 
 /// The first update after a held-out interval: how well the filter, which saw no measurement

@@ -9,6 +9,7 @@
 #include <limits>
 #include <memory>
 #include <sstream>
+#include <tuple>
 
 #include "filter/installation/stream_alignment.hpp"
 #include "models/attitude.hpp"
@@ -104,14 +105,70 @@ class NisWatch {
   bool not_finite_ = false;
 };
 
-MonitorRecord monitor_record(const Calibrator& kf, double t, bool converged_now) {
+// The filter estimates relative to the table and the run reports in the triad frame.
+bool converts_to_triad(const CalibratorOptions& o) {
+  return reported_frame(o) == MisalignmentFrame::Triad && !effective_layout(o).accel_triad_frame;
+}
+
+// The covariance of the coefficient states and their catalog indices, by the layout's blocks.
+std::pair<Eigen::MatrixXd, std::vector<int>> coefficient_covariance(const Calibrator& kf) {
+  std::vector<int> states, catalog;
+  for (const auto& cb : kf.layout().coefficients)
+    for (int k = 0; k < cb.block.size; ++k) {
+      states.push_back(cb.block.index + k);
+      catalog.push_back(cb.catalog[static_cast<std::size_t>(k)]);
+    }
+  const auto n = static_cast<Eigen::Index>(states.size());
+  Eigen::MatrixXd P(n, n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j < n; ++j)
+      P(i, j) =
+          kf.covariance()(states[static_cast<std::size_t>(i)], states[static_cast<std::size_t>(j)]);
+  return {P, catalog};
+}
+
+// Estimates and their covariance (rows: `catalog`) turned into the triad frame: values, sigmas,
+// the three coefficients the convention fixes.
+void estimates_to_triad_frame(std::vector<CoefficientEstimate>& est, Eigen::MatrixXd& P,
+                              std::vector<int>& catalog) {
+  Eigen::VectorXd values(static_cast<Eigen::Index>(est.size()));
+  for (std::size_t c = 0; c < est.size(); ++c) values(static_cast<Eigen::Index>(c)) = est[c].value;
+  TriadFrameEstimate t = to_accel_triad_frame(values, P, catalog);
+  for (std::size_t c = 0; c < est.size(); ++c)
+    est[c].value = t.values(static_cast<Eigen::Index>(c));
+  for (std::size_t i = 0; i < t.catalog.size(); ++i)
+    est[static_cast<std::size_t>(t.catalog[i])].sigma = std::sqrt(
+        std::max(0.0, t.covariance(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i))));
+  for (int c : triad_fixed_coefficients()) {
+    auto& e = est[static_cast<std::size_t>(c)];
+    if (e.status == CoefficientEstimate::Status::Off) continue;
+    e.status = CoefficientEstimate::Status::FixedByConvention;
+    e.value = e.sigma = 0.0;
+  }
+  P = std::move(t.covariance);
+  catalog = std::move(t.catalog);
+}
+
+// The filter's estimates in the frame the run reports.
+std::vector<CoefficientEstimate> reported_estimates(const Calibrator& kf,
+                                                    const CalibratorOptions& o) {
+  std::vector<CoefficientEstimate> est = kf.estimate();
+  if (!converts_to_triad(o)) return est;
+  auto [P, catalog] = coefficient_covariance(kf);
+  estimates_to_triad_frame(est, P, catalog);
+  return est;
+}
+
+MonitorRecord monitor_record(const Calibrator& kf, const CalibratorOptions& o, double t,
+                             bool converged_now) {
   return {t, kf.nis_dof() > 0 ? kf.nis_sum() / kf.nis_dof() : 0.0, converged_now,
-          kf.layout().accel_triad_frame, kf.estimate()};
+          kf.layout().accel_triad_frame || converts_to_triad(o), reported_estimates(kf, o)};
 }
 
 // The samples through the filter, with the supervision of each update: divergence alarm,
 // convergence, monitor records, interruption. Fills what the loop learns into `r`.
-void read_samples(Calibrator& kf, SampleSource& source, const KalmanRunOptions& run, KalmanRun& r) {
+void read_samples(Calibrator& kf, SampleSource& source, const KalmanRunOptions& run, KalmanRun& r,
+                  const CalibratorOptions& o) {
   NisWatch watch(run.nis_window, run.nis_alarm_z);
   ImuSample s;
   double t_first = 0.0, next_monitor = run.monitor_interval;
@@ -134,10 +191,12 @@ void read_samples(Calibrator& kf, SampleSource& source, const KalmanRunOptions& 
           r.diverged = watch.message(s.t);
           break;
         }
-        if (!r.converged_at && converged(kf.estimate(), run.sigma_targets)) r.converged_at = s.t;
+        if (!r.converged_at && !run.sigma_targets.empty() &&
+            converged(reported_estimates(kf, o), run.sigma_targets))
+          r.converged_at = s.t;
       }
       if (run.monitor && run.monitor_interval > 0.0 && s.t >= next_monitor - 1e-9) {
-        run.monitor(monitor_record(kf, s.t, r.converged_at.has_value()));
+        run.monitor(monitor_record(kf, o, s.t, r.converged_at.has_value()));
         next_monitor += run.monitor_interval;
       }
     }
@@ -221,23 +280,6 @@ std::vector<UnobservableDirection> unobservable_directions(const Calibrator& kf,
   return out;
 }
 
-// The covariance of the coefficient states, by the layout's blocks.
-void coefficient_covariance(const Calibrator& kf, KalmanRun& r) {
-  std::vector<int> states;
-  r.covariance_catalog.clear();
-  for (const auto& cb : kf.layout().coefficients)
-    for (int k = 0; k < cb.block.size; ++k) {
-      states.push_back(cb.block.index + k);
-      r.covariance_catalog.push_back(cb.catalog[static_cast<std::size_t>(k)]);
-    }
-  const auto n = static_cast<Eigen::Index>(states.size());
-  r.coefficient_covariance.resize(n, n);
-  for (Eigen::Index i = 0; i < n; ++i)
-    for (Eigen::Index j = 0; j < n; ++j)
-      r.coefficient_covariance(i, j) =
-          kf.covariance()(states[static_cast<std::size_t>(i)], states[static_cast<std::size_t>(j)]);
-}
-
 // The run's result from the filter at its end.
 void summarize(const Calibrator& kf, const PlanTimeline& timeline, const KalmanRunOptions& run,
                KalmanRun& r) {
@@ -245,7 +287,7 @@ void summarize(const Calibrator& kf, const PlanTimeline& timeline, const KalmanR
   r.accel_triad_frame = kf.layout().accel_triad_frame;
   r.nis_per_dof = kf.nis_dof() > 0 ? kf.nis_sum() / kf.nis_dof() : 0.0;
   r.log_likelihood = kf.log_likelihood();
-  coefficient_covariance(kf, r);
+  std::tie(r.coefficient_covariance, r.covariance_catalog) = coefficient_covariance(kf);
   r.estimates = kf.estimate();
   r.unobservable_directions = unobservable_directions(kf, r.estimates);
   const auto& cat = coefficient_catalog();
@@ -357,7 +399,7 @@ KalmanRun run_pass(const Session& session, const CalibratorOptions& options, Sam
     else
       throw std::invalid_argument("skipping bad samples needs a log reader");
   }
-  read_samples(kf, *source, run, r);
+  read_samples(kf, *source, run, r, options);
   const double last_dt =
       r.samples > 0 && r.duration > 0.0 ? r.duration / static_cast<double>(r.samples) : 0.0;
   check_against_plan(kf, timeline, reader ? session.log.file : std::string("the input"),
@@ -493,10 +535,40 @@ double largest_change(const KalmanRun& now, const KalmanRun& before) {
   return moved;
 }
 
+// The run's result in the frame the options ask for (the passes ran in the filter's own).
+void report_in_frame(KalmanRun& r, const KalmanRunOptions& run) {
+  r.misalignment_frame = reported_frame(r.options);
+  if (!converts_to_triad(r.options)) return;
+  estimates_to_triad_frame(r.estimates, r.coefficient_covariance, r.covariance_catalog);
+  r.model = in_accel_triad_frame(r.model);
+  r.accel_triad_frame = r.converted_to_triad_frame = true;
+  const auto& cat = coefficient_catalog();
+  r.unobservable.clear();
+  for (std::size_t i = 0; i < r.estimates.size(); ++i)
+    if (r.estimates[i].status == CoefficientEstimate::Status::Estimated &&
+        !r.estimates[i].observed())
+      r.unobservable.push_back(cat[i].name);
+  r.above_target = above_target(r.estimates, run.sigma_targets);
+}
+
 }  // namespace
+
+MisalignmentFrame reported_frame(const CalibratorOptions& o) {
+  const bool own_triad = effective_layout(o).accel_triad_frame;
+  if (own_triad && o.misalignment_frame == MisalignmentFrame::Table &&
+      o.attitude != CalibratorOptions::AttitudeUpdates::None)
+    throw std::invalid_argument(
+        "the table frame needs a filter that estimates relative to the "
+        "table (the layout fixes the accelerometer-triad frame)");
+  return resolve_misalignment_frame(own_triad && o.misalignment_frame == MisalignmentFrame::ByMode
+                                        ? MisalignmentFrame::Triad
+                                        : o.misalignment_frame,
+                                    o.attitude != CalibratorOptions::AttitudeUpdates::None);
+}
 
 KalmanRun run_kalman(const Session& session, const CalibratorOptions& given, SampleSource* source,
                      const KalmanRunOptions& run) {
+  reported_frame(given);  // refuses a frame the mode cannot give, before any data are read
   InstallationResult installation;
   // The alignment averages the plan's dwells: the log's, read once more before the filter, or a
   // stream's first ones, held and given again (not for dwells found in the data: the plan's
@@ -537,6 +609,7 @@ KalmanRun run_kalman(const Session& session, const CalibratorOptions& given, Sam
     r.installation.alignment_streamed = installation.alignment_streamed;
     r.options = given;
     r.motion = motion;
+    report_in_frame(r, run);
     return r;
   };
   if (run.passes <= 1) return with_installation(run_pass(session, options, source, run));

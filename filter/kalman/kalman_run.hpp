@@ -83,6 +83,11 @@ struct UnobservableDirection {
 
 /// Everything one run of the filter produced.
 struct KalmanRun {
+  /// The frame of `estimates`, `model` and `coefficient_covariance` (reported_frame()): an
+  /// estimate relative to the table converted to the triad frame has `accel_triad_frame` and
+  /// `converted_to_triad_frame` set.
+  MisalignmentFrame misalignment_frame = MisalignmentFrame::Table;
+  bool converted_to_triad_frame = false;
   CalibratorOptions options;                   // as run
   std::vector<CoefficientEstimate> estimates;  // catalog order, SI
   ImuErrorModel model;                         // the final estimate as a model (SI)
@@ -134,6 +139,11 @@ struct KalmanRun {
   /// The motion found in the data (batch runs along the plan's motion).
   std::optional<DataMotion> motion;
 };
+
+/// The frame the run's coefficients are reported in (CalibratorOptions::misalignment_frame
+/// resolved by its attitude updates); throws std::invalid_argument for the table frame without
+/// attitude updates.
+MisalignmentFrame reported_frame(const CalibratorOptions& options);
 
 /// Runs the filter over `source` (the session's log when null; several passes need the log).
 /// A bad sample (LogError) stops the run: the result keeps the estimates so far and says where

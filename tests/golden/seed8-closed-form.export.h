@@ -2,6 +2,8 @@
  * Source: tests/golden/seed8-closed-form.json (14098 bytes), method closed-form
  * Body frame: table platform: the table platform's axes as the plan draws them: the misalignments
  *    include the IMU's mounting on the platform (docs/conventions.md "Table base and mounting")
+ * Misalignment frame: table: relative to the table's platform axes (the table frame: includes the
+ *    IMU's mounting on the table, bounded by the table's attitude accuracy)
  * Units: SI (rad/s, m/s^2, s, m; k2 in 1/(m/s^2), g-sensitivity in rad/s per m/s^2, bias drift in
  *    rad/s^2 and m/s^3).
  * Terms estimated: gyro.bias, gyro.scale, gyro.misalignment, accel.bias, accel.scale,
@@ -30,6 +32,7 @@
 #define SINSCAL_IMU_CALIBRATION_H
 
 #define SINSCAL_EXPORT_FORMAT_VERSION 1
+#define SINSCAL_MISALIGNMENT_FRAME "table"
 #define SINSCAL_HAS_ACCEL_K2 0
 #define SINSCAL_HAS_GYRO_SCALE_ASYM 0
 #define SINSCAL_HAS_ACCEL_SCALE_ASYM 0
