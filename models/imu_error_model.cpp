@@ -349,6 +349,16 @@ Eigen::VectorXd ImuErrorModel::vector() const {
   return v;
 }
 
+ImuErrorModel ImuErrorModel::from_vector(const Eigen::VectorXd& v) {
+  ImuErrorModel m;
+  const auto refs = m.coefficient_refs();
+  if (static_cast<std::size_t>(v.size()) != refs.size())
+    throw std::invalid_argument("ImuErrorModel::from_vector: " + std::to_string(v.size()) +
+                                " values for " + std::to_string(refs.size()) + " coefficients");
+  for (std::size_t i = 0; i < refs.size(); ++i) *refs[i].second = v(static_cast<Eigen::Index>(i));
+  return m;
+}
+
 std::map<std::string, double> ImuErrorModel::coefficients() const {
   ImuErrorModel copy = *this;
   std::map<std::string, double> out;

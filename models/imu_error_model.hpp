@@ -158,6 +158,8 @@ class ImuErrorModel {
   std::vector<std::pair<CoefficientInfo, double*>> coefficient_refs();
   /// Every coefficient in SI, in the order of coefficient_catalog().
   Eigen::VectorXd vector() const;
+  /// The model whose SI coefficients, in catalog order, are `v` (the inverse of vector()).
+  static ImuErrorModel from_vector(const Eigen::VectorXd& v);
   /// Values in engineering units by name.
   std::map<std::string, double> coefficients() const;
   /// Sets one coefficient by name, value in its engineering unit; throws std::invalid_argument

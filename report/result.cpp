@@ -81,12 +81,8 @@ ResultCoefficients triad_frame_coefficients(const Stage2Result& s) {
     P.row(k).setZero();
     P.col(k).setZero();
   }
-  ImuErrorModel table_frame;
-  auto refs = table_frame.coefficient_refs();
-  for (std::size_t c = 0; c < refs.size(); ++c)
-    *refs[c].second = values(static_cast<Eigen::Index>(c));
-  const Eigen::MatrixXd J = accel_triad_frame_jacobian(table_frame);
   const TriadFrameEstimate t = to_accel_triad_frame(values, P, s.parameters);
+  const Eigen::MatrixXd& J = t.jacobian;
   ResultCoefficients out;
   for (std::size_t i = 0; i < t.catalog.size(); ++i) {
     const auto c = static_cast<std::size_t>(t.catalog[i]);

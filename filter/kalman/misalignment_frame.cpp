@@ -47,14 +47,6 @@ std::string misalignment_frame_words(MisalignmentFrame frame) {
 
 namespace {
 
-ImuErrorModel model_of(const Eigen::VectorXd& values) {
-  ImuErrorModel m;
-  auto refs = m.coefficient_refs();
-  for (std::size_t c = 0; c < refs.size(); ++c)
-    *refs[c].second = values(static_cast<Eigen::Index>(c));
-  return m;
-}
-
 void split(TriadErrors& t, const Eigen::Matrix3d& linear_change) {
   t.scale = linear_change.diagonal();
   t.misalignment = linear_change;
@@ -118,9 +110,10 @@ const std::vector<int>& triad_fixed_coefficients() {
 TriadFrameEstimate to_accel_triad_frame(const Eigen::VectorXd& values,
                                         const Eigen::MatrixXd& covariance,
                                         const std::vector<int>& catalog) {
-  const ImuErrorModel m = model_of(values);
-  const Eigen::MatrixXd J = accel_triad_frame_jacobian(m);
+  const ImuErrorModel m = ImuErrorModel::from_vector(values);
   TriadFrameEstimate out;
+  out.jacobian = accel_triad_frame_jacobian(m);
+  const Eigen::MatrixXd& J = out.jacobian;
   out.values = in_accel_triad_frame(m).vector();
   for (int c : triad_fixed_coefficients()) out.values(c) = 0.0;
   const auto& fixed = triad_fixed_coefficients();

@@ -45,6 +45,7 @@ struct TriadFrameEstimate {
   Eigen::VectorXd values;
   Eigen::MatrixXd covariance;
   std::vector<int> catalog;
+  Eigen::MatrixXd jacobian;  // of the conversion, catalog by catalog (accel_triad_frame_jacobian)
 };
 TriadFrameEstimate to_accel_triad_frame(const Eigen::VectorXd& values,
                                         const Eigen::MatrixXd& covariance,
