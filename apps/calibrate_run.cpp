@@ -12,6 +12,7 @@
 #include "filter/kalman/motion_from_data.hpp"
 #include "filter/plausibility/plausibility.hpp"
 #include "filter/plausibility/rest_plausibility.hpp"
+#include "filter/plausibility/turn_timing.hpp"
 #include "models/units.hpp"
 #include "report/monitor.hpp"
 #include "report/output.hpp"
@@ -61,6 +62,24 @@ void print_timing_assumption(const PlausibilityReport& report) {
       std::fprintf(stderr, "Assumption: %s\n", c.detail.c_str());
 }
 
+// The turns between rests against a log's nominal rate (no time column), with the gyro errors
+// the profile allows (its scale and misalignment ranges; without a profile, consumer MEMS).
+PlausibilityCheck turn_timing_check(const Session& session, const SensorProfile* profile) {
+  TurnTimingOptions t;
+  if (profile) {
+    auto largest = [&](const std::string& family) {
+      const auto it = profile->ranges.find(family);
+      return it != profile->ranges.end() && it->second.present()
+                 ? std::max(std::abs(it->second.lo), std::abs(it->second.hi))
+                 : 0.0;
+    };
+    t.relative = largest("gyro.scale") + largest("gyro.misalignment");
+    t.accel_direction =
+        largest("accel.bias") / units::g0 + largest("accel.scale") + largest("accel.misalignment");
+  }
+  return check_turn_timing(turn_timings(session.log, t), session.log);
+}
+
 // The plausibility gate (filter/plausibility/plausibility.hpp) before any estimate: a failure stops
 // with the checks' messages (exit 2) unless --force, which runs anyway and records them in the
 // result. Standard input cannot be read twice: a streamed log is checked by the filter's own
@@ -68,7 +87,7 @@ void print_timing_assumption(const PlausibilityReport& report) {
 // The Kalman filter's motion from the data gives the gate the log's offset and the dwells where the
 // data are still (a foreign log's smoothed turns reach into the plan's dwells).
 PlausibilityReport plausibility_gate(const CalibrateOptions& o, const Session& session,
-                                     const PlausibilityLimits& limits,
+                                     const PlausibilityLimits& limits, const SensorProfile* profile,
                                      const DataMotion* motion = nullptr) {
   if (o.stream) return {};
   const bool dwells_from_plan =
@@ -83,13 +102,34 @@ PlausibilityReport plausibility_gate(const CalibrateOptions& o, const Session& s
   } else {
     report = check_plausibility(session, l, dwells_from_plan);
   }
+  // Without a time column the turns between rests show whether the nominal rate holds.
+  if (l.assumed_rate_hz > 0.0) report.checks.push_back(turn_timing_check(session, profile));
   enforce(report, o.force);
   print_timing_assumption(report);
   return report;
 }
 
+// A log without a time column whose turns do not match its nominal rate (the gate's check, run
+// with --force): a cause of a divergence the data show (APOPHIS, issue 34).
+void add_timing_cause(std::string& message, const Session& session, const SensorProfile& profile) {
+  const PlausibilityLimits l = integrating_limits(PlausibilityLimits{}, session.log);
+  if (!(l.assumed_rate_hz > 0.0)) return;
+  try {
+    const PlausibilityCheck c = turn_timing_check(session, &profile);
+    if (!c.passed) message += "; the cause the data show: " + c.detail;
+  } catch (const std::runtime_error&) {
+    // the log read once already: nothing more to say
+  }
+}
+
 // A divergence's cause when the data show it: the first rest's noise against the profile's.
+// A run that found fewer static intervals than the plan's dwells: the same cause (the outputs at
+// rest beyond the noise the detector's bounds come from).
 void add_divergence_cause(KalmanRun& kr, const Session& session, const SensorProfile& profile) {
+  const bool too_few_static = kr.diverged.empty() && kr.detected &&
+                              kr.stopped.find(" static intervals, the plan ") != std::string::npos;
+  if (kr.diverged.empty() && !too_few_static) return;
+  std::string& message = too_few_static ? kr.stopped : kr.diverged;
   double t0 = 0.0, t1 = 0.0;
   if (kr.detected && !kr.detected->intervals.empty()) {
     t0 = kr.detected->intervals.front().t_start;
@@ -103,10 +143,11 @@ void add_divergence_cause(KalmanRun& kr, const Session& session, const SensorPro
   try {
     const std::string cause =
         rest_noise_cause(session.log, t0, t1, profile.noise.gyro.white, profile.noise.accel.white);
-    if (!cause.empty()) kr.diverged += "; the cause the data show: " + cause;
+    if (!cause.empty()) message += "; the cause the data show: " + cause;
   } catch (const std::runtime_error&) {
     // the log read once already: nothing more to say
   }
+  add_timing_cause(message, session, profile);
 }
 
 SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
@@ -124,8 +165,9 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
     } catch (const std::runtime_error&) {
       motion.reset();  // the gate and the filter read the log again and say what is wrong
     }
-  const PlausibilityReport gate = plausibility_gate(
-      o, session, PlausibilityLimits::from_profile(&profile), motion ? &*motion : nullptr);
+  const PlausibilityReport gate =
+      plausibility_gate(o, session, PlausibilityLimits::from_profile(&profile), &profile,
+                        motion ? &*motion : nullptr);
   KalmanRunOptions run;
   run.motion = motion ? &*motion : nullptr;
   run.skip_bad_samples = o.on_bad_sample == OnBadSample::Skip;
@@ -162,7 +204,8 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!kr.diverged.empty() && !o.stream) add_divergence_cause(kr, session, profile);
+  if ((!kr.diverged.empty() || !kr.stopped.empty()) && !o.stream)
+    add_divergence_cause(kr, session, profile);
   if (!kr.model.vector().allFinite())
     throw std::runtime_error(session.log.file +
                              ": the filter's estimates are not finite numbers (nothing written)" +
@@ -208,7 +251,7 @@ SessionSummary calibrate_closed_form(const CalibrateOptions& co, const Session& 
   o.channels = co.channels;
   o.min_dwell = co.min_dwell;
   const PlausibilityLimits limits = PlausibilityLimits::from_profile(profile ? &*profile : nullptr);
-  PlausibilityReport gate = plausibility_gate(co, session, limits);
+  PlausibilityReport gate = plausibility_gate(co, session, limits, profile ? &*profile : nullptr);
   if (co.arw > 0.0) o.arw = co.arw * units::deg_per_sqrt_h;
   if (co.vrw > 0.0) o.vrw = co.vrw * units::ug_per_sqrt_hz;
   const auto t0 = std::chrono::steady_clock::now();

@@ -482,7 +482,8 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
       throw ConfigError(ini.where("plan.rotation_acceleration") + "must be positive");
     ini.check_keys("start", angle_keys);
     p.start = read_angles(ini, "start", p.convention);
-    p.start_dwell = read_static_time(ini, "start.dwell", limits, false);
+    // 0: the log begins while the table already turns at the first segment's rate.
+    p.start_dwell = read_static_time(ini, "start.dwell", limits, true);
     if (ini.has("rotations.axes")) {
       read_rotations_section(ini, p);
     } else {
@@ -506,6 +507,10 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
       }
     }
     if (p.steps.empty()) throw ConfigError(ini.path() + ": a rotation plan needs rotations");
+    if (!(p.start_dwell > 0.0) && !p.steps.front().constant_rate)
+      throw ConfigError(ini.where("start.dwell") +
+                        "0 only when the plan begins in a rate-table segment (its first turn "
+                        "with 'hold' or 'revolutions'): a turn of known angle starts from a rest");
   } else {
     throw ConfigError(ini.where("plan.type") + "expected 'orientations' or 'rotations', got '" +
                       type + "'");
@@ -535,7 +540,10 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
     p.steps.insert(p.steps.end(), one_steps.begin(), one_steps.end());
   }
   // The whole plan's duration (dwells, moves, turns, pauses), as the motion has it.
-  const double total = build_motion(p, Site{}).duration();
+  // (A plan without a start rest, [start] dwell = 0, is timed with a 1 s one taken off again.)
+  Plan timed = p;
+  if (p.type == Type::Rotations && !(p.start_dwell > 0.0)) timed.start_dwell = 1.0;
+  const double total = build_motion(timed, Site{}).duration() - timed.start_dwell + p.start_dwell;
   if (!(total <= limits.max_duration))
     throw ConfigError(ini.path() + ": the plan lasts " + days(total) +
                       " days, longer than the plan limit of " + days(limits.max_duration) +
@@ -667,6 +675,13 @@ Motion build_motion(const Plan& plan, const Site& site, const TableErrors& error
     } catch (const UnreachableOrientation&) {
       table_known = false;
     }
+    // A plan that begins in its first rate-table segment has no start rest: no motion starts
+    // from it (the rate-table method reads the segments' means alone, rate_segments).
+    if (!(plan.start_dwell > 0.0))
+      throw ConfigError(plan.path +
+                        ": [start] dwell = 0 (the plan begins in its first rate-table segment): "
+                        "only --method rate-table reads such a plan; the other methods need a "
+                        "rest to start from");
     add_dwell("start", known, actual, plan.start_dwell);
     for (std::size_t i = 0; i < plan.steps.size(); ++i) {
       const RotationStep& st = plan.steps[i];

@@ -14,6 +14,7 @@
 #include "filter/installation/stream_alignment.hpp"
 #include "models/attitude.hpp"
 #include "models/coefficient_families.hpp"
+#include "models/units.hpp"
 #include "rig/plan.hpp"
 
 namespace sinscal {
@@ -229,9 +230,17 @@ void check_against_plan(const Calibrator& kf, const PlanTimeline& timeline,
   std::ostringstream m;
   if (const StaticDetector* detector = kf.detector()) {
     if (detector->dwells().size() < timeline.dwells.size()) {
+      // The detector's bounds come from the sensor profile's noise: outputs at rest noisier than
+      // that (a real BMI160 table log whose gyro toggles between two levels 1 deg/s apart: no
+      // rest in any pass, while the message blamed the plan alone; APOPHIS, issue 34) are never
+      // still.
       m << input << ": the data have " << detector->dwells().size()
         << " static intervals, the plan " << timeline.dwells.size()
-        << " dwells: the plan does not match the data";
+        << " dwells: the plan does not match the data, or the outputs at rest scatter beyond "
+           "the detector's bounds from the sensor profile's noise (rates within "
+        << detector->gyro_bound() / units::deg_per_s << " deg/s and specific forces within "
+        << detector->accel_bound() / units::ug << " ug of their mean, a mean rate below "
+        << detector->rate_threshold() / units::deg_per_s << " deg/s)";
       r.stopped = m.str();
     }
     return;
@@ -629,6 +638,11 @@ KalmanRun run_kalman(const Session& session, const CalibratorOptions& given, Sam
     if (pass > 1) p.largest_change_over_sigma = largest_change(r, previous);
     passes.push_back(p);
     if (last || !r.stopped.empty() || !r.diverged.empty()) {  // bad input, an interruption
+      // An earlier pass runs without the divergence alarm: its stop is said to be its own.
+      const std::string which = "pass " + std::to_string(pass) + " of " +
+                                std::to_string(run.passes) + " (without the divergence alarm): ";
+      if (!last && !r.stopped.empty() && !r.interrupted) r.stopped = which + r.stopped;
+      if (!last && !r.diverged.empty()) r.diverged = which + r.diverged;
       r.passes = passes;
       r.passes_requested = run.passes;
       return with_installation(std::move(r));

@@ -316,7 +316,8 @@ std::vector<RateSegment> rate_segments(const Plan& plan, const Site& site) {
   } else {
     const Table table(plan.table);
     Eigen::Matrix3d known = C_b_n_from_euler(plan.convention, plan.start);
-    out.push_back(static_segment("start", known, plan.start_dwell));
+    // No start rest ([start] dwell = 0): the log begins in the first rate-table segment.
+    if (plan.start_dwell > 0.0) out.push_back(static_segment("start", known, plan.start_dwell));
     for (std::size_t i = 0; i < plan.steps.size(); ++i)
       walk_step(plan, table, plan.steps[i], i, known, out);
   }

@@ -1,0 +1,105 @@
+#include "apophis_like.hpp"
+
+#include <cstdio>
+#include <fstream>
+#include <random>
+
+#include "models/attitude.hpp"
+#include "models/units.hpp"
+
+namespace sinscal::test {
+
+namespace {
+
+// The true motion on a fine grid: rate about the body (rad/s) and attitude, phase by phase.
+struct Truth {
+  std::vector<Eigen::Vector3d> omega_b;
+  std::vector<Eigen::Matrix3d> C_b_n;
+};
+
+constexpr double kStep = 1e-3;  // s
+
+void append_turn(const ApophisPhase& p, Eigen::Matrix3d& C, Truth& t) {
+  const double ramp = p.rate / p.accel;
+  const double total = 2.0 * ramp + p.hold;
+  for (double s = 0.0; s < total; s += kStep) {
+    const double r = s < ramp ? p.accel * s : (s > ramp + p.hold ? p.accel * (total - s) : p.rate);
+    t.omega_b.push_back(r * p.axis_b);
+    t.C_b_n.push_back(C);
+    C = C * rotation(p.axis_b, r * kStep);
+  }
+}
+
+Truth truth_of(const ApophisLike& spec) {
+  Truth t;
+  Eigen::Matrix3d C = spec.C_b_n_start;
+  for (const auto& p : spec.phases) {
+    if (p.rest > 0.0) {
+      for (double s = 0.0; s < p.rest; s += kStep) {
+        t.omega_b.push_back(Eigen::Vector3d::Zero());
+        t.C_b_n.push_back(C);
+      }
+      continue;
+    }
+    append_turn(p, C, t);
+  }
+  return t;
+}
+
+}  // namespace
+
+std::string write_apophis_like(const std::string& dir, const ApophisLike& spec) {
+  const Truth truth = truth_of(spec);
+  std::mt19937 rng(spec.seed);
+  std::uniform_real_distribution<double> interval(1.0 / spec.max_hz, 1.0 / spec.min_hz);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  std::bernoulli_distribution flip(0.3);
+  const double gyro_white = spec.gyro_white > 0.0 ? spec.gyro_white : 0.05 * units::deg_per_s;
+  const double accel_white = spec.accel_white > 0.0 ? spec.accel_white : 1e-3 * units::g0;
+  const Eigen::Vector3d& gyro_bias = spec.gyro_bias;
+  const Eigen::Vector3d& accel_bias = spec.accel_bias;
+  const Eigen::Vector3d f_n(0.0, 0.0, -units::g0);
+  std::ofstream log(dir + "/log.csv");
+  log << "ax,ay,az,gx,gy,gz\n";
+  bool high = false;
+  for (double t = 0.0;; t += interval(rng)) {
+    const auto k = static_cast<std::size_t>(t / kStep);
+    if (k >= truth.omega_b.size()) break;
+    Eigen::Vector3d w = truth.omega_b[k] + gyro_bias, f = truth.C_b_n[k].transpose() * f_n;
+    f += accel_bias;
+    for (int i = 0; i < 3; ++i) {
+      w(i) += gyro_white * unit(rng);
+      f(i) += accel_white * unit(rng);
+    }
+    if (spec.toggling) {
+      if (flip(rng)) high = !high;
+      w.y() += high ? 1.02 * units::deg_per_s : 0.0;
+      f.y() += high ? 0.018 * units::g0 : 0.0;
+    }
+    char line[200];
+    std::snprintf(line, sizeof line, "%.7f,%.7f,%.7f,%.6f,%.6f,%.6f\n", f.x() / units::g0,
+                  f.y() / units::g0, f.z() / units::g0, w.x() / units::deg_per_s,
+                  w.y() / units::deg_per_s, w.z() / units::deg_per_s);
+    log << line;
+  }
+  std::ofstream(dir + "/plan.ini") << spec.plan_text;
+  std::ofstream session(dir + "/session.ini");
+  session << "[session]\nname = apophis-like\nrate = 15 Hz\nplan = plan.ini\n";
+  if (!spec.sensor_text.empty()) {
+    std::ofstream(dir + "/sensor.ini") << spec.sensor_text;
+    session << "sensor = sensor.ini\n";
+  }
+  session << "\n[log]\nfile = log.csv\nformat = custom\nheader_lines = 1\n"
+             "columns = ax ay az gx gy gz\ngyro = rate\ngyro_unit = deg/s\naccel = rate\n"
+             "accel_unit = g\n";
+  return dir + "/session.ini";
+}
+
+std::string bmi160_profile_text() {
+  return "[sensor]\nname = bmi160\n\n[gyro]\nbias = 0 3 deg/s\nscale = 0 40000 ppm\n"
+         "misalignment = 0 3600 arcsec\ng_sensitivity = 0 0.1 deg/s/g\narw = 0.42 deg/sqrt(h)\n"
+         "range = 2000 deg/s\n\n[accel]\nbias = 0 80 mg\nscale = 0 40000 ppm\n"
+         "misalignment = 0 3600 arcsec\nvrw = 180 ug/sqrt(Hz)\nrange = 16 g\n";
+}
+
+}  // namespace sinscal::test

@@ -1,0 +1,58 @@
+// Sessions generated with the structure of the APOPHIS BMI160 table logs (issue 34): readings at an
+// irregular 12-18 Hz logged without a time column (the session states 15 Hz), rests whose outputs
+// toggle between two levels (the log's gyro y by about 1 deg/s, its accelerometer y by 18 mg) on
+// top of white noise, constant-rate turns and moves of a table between rests. Written to disk in
+// the documented formats (docs/formats.md): session.ini, plan.ini, sensor.ini, log.csv.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace sinscal::test {
+
+/// One phase of the generated motion: a rest, or a turn about a body axis (unit, signed) at
+/// `rate` (rad/s) reached and left at `accel` (rad/s^2), holding the rate for `hold` s.
+struct ApophisPhase {
+  double rest = 0.0;  // s at rest (a rest when > 0)
+  Eigen::Vector3d axis_b = Eigen::Vector3d::UnitZ();
+  double rate = 0.0, accel = 0.0, hold = 0.0;
+};
+
+inline ApophisPhase rest_phase(double seconds) {
+  ApophisPhase p;
+  p.rest = seconds;
+  return p;
+}
+inline ApophisPhase turn_phase(const Eigen::Vector3d& axis_b, double rate, double accel,
+                               double hold) {
+  ApophisPhase p;
+  p.axis_b = axis_b;
+  p.rate = rate;
+  p.accel = accel;
+  p.hold = hold;
+  return p;
+}
+
+struct ApophisLike {
+  std::vector<ApophisPhase> phases;
+  Eigen::Matrix3d C_b_n_start = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();  // z up
+  double min_hz = 12.0, max_hz = 18.0;  // the readings' true rate: uniform in the interval
+  bool toggling = true;                 // two-level gyro y and accel y outputs, as the log's
+  double gyro_white = 0.0;              // rad/s per reading (0: as the log's, 0.05 deg/s)
+  double accel_white = 0.0;             // m/s^2 per reading (0: as the log's, 1 mg)
+  /// The sensors' biases (rad/s, m/s^2; the log's size by default).
+  Eigen::Vector3d gyro_bias = Eigen::Vector3d(-1.27, 0.38, -1.15) * (M_PI / 180.0);
+  Eigen::Vector3d accel_bias = Eigen::Vector3d(-0.03, 0.05, -0.02) * 9.80665;
+  unsigned seed = 1;
+  std::string plan_text;    // plan.ini
+  std::string sensor_text;  // sensor.ini (empty: none in the session)
+};
+
+/// Writes the session into `dir`; returns the path of its session.ini.
+std::string write_apophis_like(const std::string& dir, const ApophisLike& spec);
+
+/// The BMI160's data-sheet profile (docs/measured/apophis/bmi160.ini).
+std::string bmi160_profile_text();
+
+}  // namespace sinscal::test
