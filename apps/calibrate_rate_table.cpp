@@ -2,6 +2,7 @@
 // (a tumble) calibrated from the segments' mean outputs (filter/rate_table/rate_table.hpp): the
 // segments found in the log in the plan's order, the fit, its result file and table.
 #include <cstdio>
+#include <functional>
 #include <iostream>
 
 #include "apps/calibrate.hpp"
@@ -20,7 +21,19 @@ SessionSummary calibrate_rate_table_session(const CalibrateOptions& o,
   ro.nominal_rate_hz = session.rate_hz;
   ro.table_sigma = o.table_sigma * units::arcsec;
   const auto segments = rate_segments(session.plan, session.site);
-  const auto readings = read_rate_readings(session.log);
+  // Bad readings (a NaN field, a damaged line) stop the run, or with --on-bad-sample skip are
+  // left out of the means, counted and the first named.
+  std::size_t skipped = 0;
+  std::string first_skipped;
+  std::function<void(const BadSampleError&)> on_skip;
+  if (o.on_bad_sample == OnBadSample::Skip)
+    on_skip = [&](const BadSampleError& e) {
+      if (skipped++ == 0) first_skipped = e.what();
+    };
+  const auto readings = read_rate_readings(session.log, on_skip);
+  if (skipped > 0 && verbose)
+    std::fprintf(stderr, "Skipped %zu bad readings (--on-bad-sample skip), the first: %s\n",
+                 skipped, first_skipped.c_str());
   std::vector<SegmentMean> means;
   try {
     means = find_segments(readings, segments, ro);

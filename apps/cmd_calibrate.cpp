@@ -100,12 +100,13 @@ void check_method_options(const po::variables_map& vm, CalibrateOptions& o) {
   if (o.method == Method::RateTable) {
     for (const auto& list : {closed_form_only, kf_only})
       for (const auto& name : list)
-        if (vm.count(name) && !vm[name].defaulted())
+        if (vm.count(name) && !vm[name].defaulted() && name != "on-bad-sample")
           throw UsageError("--" + name + " is not an option of --method rate-table");
   }
   const bool kf = o.method == Method::Kf;
   for (const auto& name : kf ? closed_form_only : kf_only)
-    if (vm.count(name) && !vm[name].defaulted())
+    if (vm.count(name) && !vm[name].defaulted() &&
+        !(o.method == Method::RateTable && name == "on-bad-sample"))
       throw UsageError("--" + name + " acts in --method " + (kf ? "closed-form" : "kf") +
                        " only, not in --method " + name_of(o.method));
   if (!(o.table_sigma > 0.0 && o.table_sigma < 3600.0))

@@ -483,7 +483,9 @@ Plan Plan::parse(const std::string& path, const std::string& text) {
     ini.check_keys("start", angle_keys);
     p.start = read_angles(ini, "start", p.convention);
     // 0: the log begins while the table already turns at the first segment's rate.
-    p.start_dwell = read_static_time(ini, "start.dwell", limits, true);
+    p.start_dwell = ini.get_quantity("start.dwell", Q::Time, "s") == 0.0
+                        ? 0.0
+                        : read_static_time(ini, "start.dwell", limits, false);
     if (ini.has("rotations.axes")) {
       read_rotations_section(ini, p);
     } else {

@@ -2,6 +2,7 @@
 // an irregular 12-18 Hz without a time column, rests whose outputs toggle between two levels.
 // Regression tests for what the real logs showed.
 #include <catch2/catch.hpp>
+#include <cmath>
 
 #include "apophis_like.hpp"
 #include "filter/kalman/kalman_calibrator.hpp"
@@ -166,4 +167,57 @@ TEST_CASE("Turn timing: a log without time whose readings come at an irregular 1
   const auto regular = turn_timings(r.log, o);
   REQUIRE(regular.size() == 2);
   CHECK(check_turn_timing(regular, r.log).passed);
+}
+
+namespace {
+// Board 1's whole rate test: the plan (docs/measured/apophis/rate-plan.ini) and the data's longer
+// turns (the log's turns last 41-55 s at the nominal rate where the plan says 25-40 s).
+test::ApophisLike board1_rate_session() {
+  test::ApophisLike spec;
+  const double rate = 25.0 * units::deg_per_s, accel = 25.0 * units::deg_per_s;
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitX(), y = Eigen::Vector3d::UnitY(),
+                        z = Eigen::Vector3d::UnitZ();
+  spec.phases = {test::rest_phase(8.0),
+                 test::turn_phase(-z, rate, accel, 45.0),
+                 test::turn_phase(z, rate, accel, 40.0),
+                 test::rest_phase(20.0),
+                 test::turn_phase(-y, rate, accel, 45.0),
+                 test::turn_phase(y, rate, accel, 55.0),
+                 test::turn_phase(-x, rate, accel, 42.0),
+                 test::turn_phase(x, rate, accel, 47.0),
+                 test::rest_phase(5.0)};
+  spec.plan_text =
+      "[plan]\nname = apophis-like-rate-1\ntype = rotations\nconvention = ned-frd\n"
+      "rotation_acceleration = 25 deg/s^2\n\n[site]\nlatitude = 28.6 deg\n\n"
+      "[start]\nheading = 0 deg\npitch = 0 deg\nroll = 180 deg\ndwell = 8 s\n\n"
+      "[rotations]\naxes = -z +z -y +y -x +x\nrate = 25 deg/s\nholds = 40 40 40 40 25 35 s\n"
+      "pauses = 0 15 0 0 0 0 s\n";
+  spec.sensor_text = test::bmi160_profile_text();
+  return spec;
+}
+}  // namespace
+
+TEST_CASE("Several passes on a diverging log: a quiet pass's NaN stops the run, named",
+          "[kalman][passes][apophis]") {
+  // `calibrate --method kf --static-from plan --passes 2 --attitude first` on the APOPHIS rate log
+  // exited 0 with "NIS per dof -nan". The mechanism: the first pass runs without the divergence
+  // alarm; on a log whose noise is far beyond the profile's and whose turns do not follow the
+  // plan's timing, its estimates run away until the filter's numbers are no longer numbers
+  // (t = 119 s on the log); the next pass started from that model, every NIS was NaN, and a NaN
+  // compares false with the alarm's bound. The generated board-1 session (accelerometer noise
+  // 6 mg per reading as the log's, seed 2) runs away the same way (t = 130 s).
+  test::ApophisLike spec = board1_rate_session();
+  spec.seed = 2;
+  spec.accel_white = 6e-3 * units::g0;
+  const std::string dir = test::temp_dir("apophis_like_nan");
+  const Session s = Session::load(test::write_apophis_like(dir, spec));
+  CalibratorOptions o = calibrator_options_from_profile(SensorProfile::load(s.sensor_file));
+  o.attitude = CalibratorOptions::AttitudeUpdates::First;
+  KalmanRunOptions run;
+  run.passes = 2;
+  const KalmanRun r = run_kalman(s, o, nullptr, run);
+  CAPTURE(r.nis_per_dof, r.diverged, r.stopped);
+  CHECK_THAT(r.diverged, Catch::Contains("pass 1 of 2") && Catch::Contains("not a number"));
+  // Never a run without a divergence whose estimates or NIS are not numbers.
+  CHECK((!r.diverged.empty() || (r.model.vector().allFinite() && std::isfinite(r.nis_per_dof))));
 }

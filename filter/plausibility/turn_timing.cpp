@@ -139,21 +139,36 @@ std::vector<TurnTiming> turn_timings(const LogFormat& log, const TurnTimingOptio
 
 PlausibilityCheck check_turn_timing(const std::vector<TurnTiming>& turns, const LogFormat& log) {
   PlausibilityCheck c{"turn timing", true, ""};
+  // The turn furthest beyond its tolerance (or closest to it), and how many disagree.
+  const TurnTiming* worst = nullptr;
+  int disagree = 0;
   for (const auto& t : turns) {
-    if (t.agrees()) continue;
-    c.passed = false;
-    c.detail = log.file + ": the log's time does not match the nominal rate: turn " +
-               std::to_string(t.turn) + " (readings " + std::to_string(t.first + 1) + "-" +
-               std::to_string(t.last) + ") integrates to " + deg(t.integrated) +
-               " deg, the rests' gravity differ by " + deg(t.gravity_angle) +
-               " deg (the integrated turn leaves gravity " + deg(t.disagreement) +
-               " deg from the next rest's, beyond " + deg(t.tolerance) +
-               " deg of noise and the profile's sensor errors): without a time column each "
-               "reading is taken as 1 / rate, and the integrating methods need the true intervals";
+    disagree += t.agrees() ? 0 : 1;
+    if (!worst || t.disagreement / t.tolerance > worst->disagreement / worst->tolerance) worst = &t;
+  }
+  if (!worst) {
+    c.detail = log.file + ": no turn between two rests to judge the nominal rate by";
     return c;
   }
-  c.detail = log.file + ": " + std::to_string(turns.size()) +
-             " turns between rests agree with the nominal rate";
+  const std::string turn = "turn " + std::to_string(worst->turn) + " (readings " +
+                           std::to_string(worst->first + 1) + "-" + std::to_string(worst->last) +
+                           ") integrates to " + deg(worst->integrated) +
+                           " deg, the rests' gravity differ by " + deg(worst->gravity_angle) +
+                           " deg (the integrated turn leaves gravity " + deg(worst->disagreement) +
+                           " deg from the next rest's, ";
+  if (disagree == 0) {
+    c.detail =
+        log.file + ": " + std::to_string(turns.size()) +
+        " turns between rests agree with the nominal rate; the closest to its bound: " + turn +
+        "within " + deg(worst->tolerance) + " deg)";
+    return c;
+  }
+  c.passed = false;
+  c.detail = log.file + ": the log's time does not match the nominal rate: " + turn + "beyond " +
+             deg(worst->tolerance) + " deg of noise and the profile's sensor errors; " +
+             std::to_string(disagree) + " of " + std::to_string(turns.size()) +
+             " turns disagree): without a time column each reading is taken as 1 / rate, and "
+             "the integrating methods need the true intervals";
   return c;
 }
 

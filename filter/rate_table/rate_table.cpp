@@ -325,8 +325,10 @@ std::vector<RateSegment> rate_segments(const Plan& plan, const Site& site) {
   return out;
 }
 
-std::vector<RateReading> read_rate_readings(const LogFormat& log) {
+std::vector<RateReading> read_rate_readings(
+    const LogFormat& log, const std::function<void(const BadSampleError&)>& on_skip) {
   LogReader reader(log);
+  if (on_skip) reader.skip_bad_samples(on_skip);
   std::vector<RateReading> out;
   ImuSample s;
   while (reader.next(s)) {

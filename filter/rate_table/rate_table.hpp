@@ -10,6 +10,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -49,8 +50,11 @@ struct RateReading {
 };
 
 /// Every reading of a log as rates and specific force (its increments over its interval); throws
-/// LogError naming the file and line (a reading without an interval, no readings).
-std::vector<RateReading> read_rate_readings(const LogFormat& log);
+/// LogError naming the file and line (a reading without an interval, no readings). With
+/// `on_skip`, bad readings (a NaN field, a damaged line) are left out and passed to it instead of
+/// stopping the read (`calibrate --on-bad-sample skip`).
+std::vector<RateReading> read_rate_readings(
+    const LogFormat& log, const std::function<void(const BadSampleError&)>& on_skip = nullptr);
 
 /// The means of one segment found in the log.
 struct SegmentMean {
