@@ -985,6 +985,12 @@ L=$(lno "$d/sim/plan.ini" '^roll = 180'); awk -v n="$L" 'NR == n { $0 = "roll = 
 fixed 2 "rate table: accel.scale.z comes out at|the plan's attitudes, axes or rates are not what the data show" rtcal
 rtnew three-axis-plan-two-axis-table; cp "$src/config/plans/six-face-3axis.ini" "$d/plan.ini"; cp "$src/config/tables/two-axis-20.ini" "$d/table.ini"
 fixed 2 "plan.ini: a plan for a three-axis table ([table] axes = 3), and table.ini has 2 axes" S design --plan plan.ini --sensor sensor.ini --table table.ini
+# A plan without a start rest ([start] dwell = 0): only when its first turn is a rate-table
+# segment, and only the rate-table method reads it.
+rtnew start-dwell-zero-angle-first; cp "$src/config/plans/rot19.ini" "$d/plan.ini"; set_key "$d/plan.ini" dwell "0 s"
+fixed 2 "plan.ini:$L: 'start.dwell'|0 only when the plan begins in a rate-table segment" sim
+rtnew start-dwell-zero-simulate; set_key "$d/plan.ini" dwell "0 s"
+fixed 2 "plan.ini: [start] dwell = 0|only --method rate-table reads such a plan" sim
 rtnew rate-table-kf-option
 fixed 1 "--passes is not an option of --method rate-table" rtcal --passes 2
 # Irregular sample intervals (issue 34, item 4): the integrating methods refuse them, naming the

@@ -234,6 +234,7 @@ void check_against_plan(const Calibrator& kf, const PlanTimeline& timeline,
       // that (a real BMI160 table log whose gyro toggles between two levels 1 deg/s apart: no
       // rest in any pass, while the message blamed the plan alone; APOPHIS, issue 34) are never
       // still.
+      m.precision(3);
       m << input << ": the data have " << detector->dwells().size()
         << " static intervals, the plan " << timeline.dwells.size()
         << " dwells: the plan does not match the data, or the outputs at rest scatter beyond "
