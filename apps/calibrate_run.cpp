@@ -122,9 +122,9 @@ void add_timing_cause(std::string& message, const Session& session, const Sensor
   }
 }
 
-// A divergence's cause when the data show it: the first rest's noise against the profile's.
-// A run that found fewer static intervals than the plan's dwells: the same cause (the outputs at
-// rest beyond the noise the detector's bounds come from).
+// A divergence's cause when the data show it: the first rest's noise against the profile's, the
+// log's time against its turns. The same for a run that found fewer static intervals than the
+// plan's dwells (outputs at rest beyond the noise the detector's bounds come from).
 void add_divergence_cause(KalmanRun& kr, const Session& session, const SensorProfile& profile) {
   const bool too_few_static = kr.diverged.empty() && kr.detected &&
                               kr.stopped.find(" static intervals, the plan ") != std::string::npos;
