@@ -17,99 +17,123 @@ struct Reading {
   double dt = 0.0;
 };
 
+// Each reading of the log in order, with its index (bad readings left out). The log is read once
+// per call: three streaming passes keep the memory bounded whatever the log's length.
+template <typename F>
+void for_each_reading(const LogFormat& log, F take) {
+  LogReader reader(log);
+  reader.skip_bad_samples([](const BadSampleError&) {});
+  ImuSample s;
+  std::size_t k = 0;
+  while (reader.next(s))
+    if (s.dt > 0.0) take(k++, Reading{s.dtheta_b / s.dt, s.dv_b / s.dt, s.dt});
+}
+
 // A rest's readings [a, b) and their means and per-reading variances (summed over the axes).
 struct Rest {
   std::size_t a = 0, b = 0;
   Eigen::Vector3d omega = Eigen::Vector3d::Zero(), f = Eigen::Vector3d::Zero();
+  Eigen::Vector3d sum_omega2 = Eigen::Vector3d::Zero(), sum_f2 = Eigen::Vector3d::Zero();
   double var_omega = 0.0, var_f = 0.0;
 };
 
-std::vector<Reading> read_all(const LogFormat& log) {
-  LogReader reader(log);
-  reader.skip_bad_samples([](const BadSampleError&) {});
-  std::vector<Reading> out;
-  ImuSample s;
-  while (reader.next(s))
-    if (s.dt > 0.0) out.push_back({s.dtheta_b / s.dt, s.dv_b / s.dt, s.dt});
-  return out;
-}
-
-Rest rest_of(const std::vector<Reading>& r, std::size_t a, std::size_t b) {
-  Rest x;
-  x.a = a;
-  x.b = b;
-  const double n = static_cast<double>(b - a);
-  for (std::size_t k = a; k < b; ++k) {
-    x.omega += r[k].omega / n;
-    x.f += r[k].f / n;
-  }
-  for (std::size_t k = a; k < b; ++k) {
-    x.var_omega += (r[k].omega - x.omega).squaredNorm() / std::max(1.0, n - 1.0);
-    x.var_f += (r[k].f - x.f).squaredNorm() / std::max(1.0, n - 1.0);
-  }
-  return x;
-}
-
-// The rests: runs of the smoothed rate below the threshold, trimmed by the smoothing window.
-std::vector<Rest> rests_of(const std::vector<Reading>& r, double rate_hz,
-                           const TurnTimingOptions& o) {
-  const auto h = static_cast<std::size_t>(std::max(1.0, std::round(0.5 * o.smoothing * rate_hz)));
-  std::vector<bool> still(r.size(), false);
-  for (std::size_t k = 0; k < r.size(); ++k) {
-    const std::size_t lo = k >= h ? k - h : 0, hi = std::min(r.size(), k + h + 1);
-    Eigen::Vector3d m = Eigen::Vector3d::Zero();
-    for (std::size_t j = lo; j < hi; ++j) m += r[j].omega;
-    still[k] = (m / static_cast<double>(hi - lo)).norm() < o.rate_threshold;
-  }
+// Pass 1: the rests, runs of the centred moving average of the rates (2h + 1 readings) below the
+// threshold, at least min_len + 2h long, trimmed by h at both ends.
+std::vector<Rest> find_rests(const LogFormat& log, std::size_t h, std::size_t min_len,
+                             double threshold) {
   std::vector<Rest> out;
-  const auto min_len = static_cast<std::size_t>(o.min_rest * rate_hz);
-  for (std::size_t k = 0; k < r.size();) {
-    if (!still[k]) {
-      ++k;
-      continue;
-    }
-    std::size_t e = k;
-    while (e < r.size() && still[e]) ++e;
-    if (e - k >= min_len + 2 * h) out.push_back(rest_of(r, k + h, e - h));
-    k = e;
-  }
+  std::vector<Eigen::Vector3d> ring(2 * h + 1, Eigen::Vector3d::Zero());
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  std::size_t run_start = 0, n = 0;
+  bool in_run = false;
+  auto classify = [&](std::size_t k, bool still) {  // reading k is still or not
+    if (still && !in_run) run_start = k;
+    if (!still && in_run && k - run_start >= min_len + 2 * h)
+      out.push_back(Rest{run_start + h, k - h});
+    in_run = still;
+  };
+  for_each_reading(log, [&](std::size_t k, const Reading& r) {
+    sum += r.omega - ring[k % ring.size()];
+    ring[k % ring.size()] = r.omega;
+    n = k + 1;
+    // The window of reading k - h is full from k = 2h on (the first h: their own readings).
+    if (k >= 2 * h) classify(k - h, (sum / static_cast<double>(ring.size())).norm() < threshold);
+  });
+  classify(n > h ? n - h : 0, false);  // the last h readings: a run ends before them
   return out;
+}
+
+// Pass 2: the rests' means and variances.
+void rest_statistics(const LogFormat& log, std::vector<Rest>& rests) {
+  std::size_t i = 0;
+  for_each_reading(log, [&](std::size_t k, const Reading& r) {
+    while (i < rests.size() && k >= rests[i].b) ++i;
+    if (i == rests.size() || k < rests[i].a) return;
+    Rest& x = rests[i];
+    x.omega += r.omega;
+    x.f += r.f;
+    x.sum_omega2 += r.omega.cwiseAbs2();
+    x.sum_f2 += r.f.cwiseAbs2();
+  });
+  for (Rest& x : rests) {
+    const double n = static_cast<double>(x.b - x.a);
+    x.omega /= n;
+    x.f /= n;
+    const double m = std::max(1.0, n - 1.0);
+    x.var_omega = std::max(0.0, (x.sum_omega2 - n * x.omega.cwiseAbs2()).sum() / m);
+    x.var_f = std::max(0.0, (x.sum_f2 - n * x.f.cwiseAbs2()).sum() / m);
+  }
 }
 
 double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
 }
 
-// The turn from rest A to rest B: the gyros integrated at the readings' intervals, less the
-// rests' mean rate (bias and Earth rate).
-TurnTiming turn_between(const std::vector<Reading>& r, const Rest& A, const Rest& B,
-                        const TurnTimingOptions& o) {
-  TurnTiming t;
-  t.first = A.b;
-  t.last = B.a;
-  const Eigen::Vector3d bias = 0.5 * (A.omega + B.omega);
-  Eigen::Matrix3d C = Eigen::Matrix3d::Identity();  // body at B to body at A
-  double duration = 0.0;
-  for (std::size_t k = A.b; k < B.a; ++k) {
-    const Eigen::Vector3d step = (r[k].omega - bias) * r[k].dt;
-    C = C * dcm_from_rotvec(step);
-    t.path += step.norm();
-    duration += r[k].dt;
-  }
-  t.integrated = rotvec_from_dcm(C).norm();
-  t.gravity_angle = angle_between(A.f, B.f);
-  t.disagreement = angle_between(C.transpose() * A.f, B.f);
-  // Noise: each rest's mean direction (per axis across gravity), the bias's mean and its change
-  // between the rests over the turn's time; the gyros' errors the profile allows over the path,
-  // the accelerometers' in each rest's direction.
+// The bound of a turn's disagreement. Noise: each rest's mean direction (per axis across
+// gravity), the bias's mean and its change between the rests over the turn's time; the gyros'
+// errors the profile allows over the path, the accelerometers' in each rest's direction.
+double tolerance(const Rest& A, const Rest& B, double duration, double path,
+                 const TurnTimingOptions& o) {
   const auto nA = static_cast<double>(A.b - A.a), nB = static_cast<double>(B.b - B.a);
   const double g2 = 0.5 * (A.f.squaredNorm() + B.f.squaredNorm());
   const double var_dir = (A.var_f / nA + B.var_f / nB) / g2;
   const double var_bias = 0.25 * (A.var_omega / nA + B.var_omega / nB) * duration * duration;
   const double bias_change = 0.5 * (A.omega - B.omega).norm() * duration;
-  t.tolerance = o.sigmas * std::sqrt(var_dir + var_bias) + bias_change + o.relative * t.path +
-                2.0 * o.accel_direction;
-  return t;
+  return o.sigmas * std::sqrt(var_dir + var_bias) + bias_change + o.relative * path +
+         2.0 * o.accel_direction;
+}
+
+// Pass 3: each turn from one rest to the next, the gyros integrated at the readings' intervals
+// less the two rests' mean rate (bias and Earth rate).
+std::vector<TurnTiming> integrate_turns(const LogFormat& log, const std::vector<Rest>& rests,
+                                        const TurnTimingOptions& o) {
+  std::vector<TurnTiming> turns(rests.size() > 1 ? rests.size() - 1 : 0);
+  std::vector<Eigen::Matrix3d> C(turns.size(), Eigen::Matrix3d::Identity());  // B's body to A's
+  std::vector<double> duration(turns.size(), 0.0);
+  std::size_t i = 0;
+  for_each_reading(log, [&](std::size_t k, const Reading& r) {
+    while (i < turns.size() && k >= rests[i + 1].a) ++i;
+    if (i == turns.size() || k < rests[i].b) return;
+    const Eigen::Vector3d step = (r.omega - 0.5 * (rests[i].omega + rests[i + 1].omega)) * r.dt;
+    C[i] = C[i] * dcm_from_rotvec(step);
+    turns[i].path += step.norm();
+    duration[i] += r.dt;
+  });
+  std::vector<TurnTiming> out;
+  for (std::size_t j = 0; j < turns.size(); ++j) {
+    TurnTiming t = turns[j];
+    const Rest &A = rests[j], &B = rests[j + 1];
+    if (t.path < o.min_turn) continue;
+    t.turn = static_cast<int>(out.size()) + 1;
+    t.first = A.b;
+    t.last = B.a;
+    t.integrated = rotvec_from_dcm(C[j]).norm();
+    t.gravity_angle = angle_between(A.f, B.f);
+    t.disagreement = angle_between(C[j].transpose() * A.f, B.f);
+    t.tolerance = tolerance(A, B, duration[j], t.path, o);
+    out.push_back(t);
+  }
+  return out;
 }
 
 std::string deg(double rad) {
@@ -121,20 +145,19 @@ std::string deg(double rad) {
 }  // namespace
 
 std::vector<TurnTiming> turn_timings(const LogFormat& log, const TurnTimingOptions& o) {
-  const std::vector<Reading> r = read_all(log);
-  if (r.empty()) return {};
-  double total = 0.0;
-  for (const auto& x : r) total += x.dt;
-  const double rate_hz = static_cast<double>(r.size()) / total;
-  const std::vector<Rest> rests = rests_of(r, rate_hz, o);
-  std::vector<TurnTiming> out;
-  for (std::size_t i = 0; i + 1 < rests.size(); ++i) {
-    TurnTiming t = turn_between(r, rests[i], rests[i + 1], o);
-    if (t.path < o.min_turn) continue;
-    t.turn = static_cast<int>(out.size()) + 1;
-    out.push_back(t);
-  }
-  return out;
+  // The window and the shortest rest in readings, at the log's nominal rate (or its first
+  // reading's interval when it has a time column and no rate).
+  double rate_hz = log.rate_hz;
+  if (!(rate_hz > 0.0))
+    for_each_reading(log, [&](std::size_t, const Reading& r) {
+      if (!(rate_hz > 0.0)) rate_hz = 1.0 / r.dt;
+    });
+  if (!(rate_hz > 0.0)) return {};
+  const auto h = static_cast<std::size_t>(std::max(1.0, std::round(0.5 * o.smoothing * rate_hz)));
+  const auto min_len = static_cast<std::size_t>(o.min_rest * rate_hz);
+  std::vector<Rest> rests = find_rests(log, h, min_len, o.rate_threshold);
+  rest_statistics(log, rests);
+  return integrate_turns(log, rests, o);
 }
 
 PlausibilityCheck check_turn_timing(const std::vector<TurnTiming>& turns, const LogFormat& log) {

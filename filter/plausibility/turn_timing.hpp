@@ -42,7 +42,8 @@ struct TurnTiming {
 };
 
 /// Every turn between two rests of the log (its readings at the reader's intervals: the nominal
-/// rate without a time column); throws LogError as the reader does.
+/// rate without a time column), in three streaming reads (memory independent of the log's
+/// length); throws LogError as the reader does.
 std::vector<TurnTiming> turn_timings(const LogFormat& log, const TurnTimingOptions& options);
 
 /// The gate's check "turn timing": fails on the first turn that disagrees, naming it.
