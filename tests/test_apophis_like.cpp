@@ -3,6 +3,8 @@
 // Regression tests for what the real logs showed.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <fstream>
+#include <sstream>
 
 #include "apophis_like.hpp"
 #include "filter/kalman/kalman_calibrator.hpp"
@@ -109,6 +111,21 @@ TEST_CASE("Rate table: a plan that begins in its first rate segment (no start re
     }
   }
   CHECK(seen_bias);
+  // A damaged reading (board 3's tumble log has NaN fields): it stops the read naming its line,
+  // or is left out and counted (calibrate --method rate-table --on-bad-sample skip).
+  {
+    std::ifstream in(dir + "/log.csv");
+    std::ostringstream text;
+    int line = 0;
+    for (std::string l; std::getline(in, l);) text << (++line == 100 ? "nan,0,1,0,0,0" : l) << "\n";
+    in.close();
+    std::ofstream(dir + "/log.csv") << text.str();
+    CHECK_THROWS_WITH(read_rate_readings(s.log), Catch::Contains("log.csv:100"));
+    int skipped = 0;
+    const auto kept = read_rate_readings(s.log, [&](const BadSampleError&) { ++skipped; });
+    CHECK(skipped == 1);
+    CHECK(kept.size() == static_cast<std::size_t>(line - 2));  // less the header and the bad one
+  }
   // The methods that integrate need a rest to start from: refused, named.
   CHECK_THROWS_WITH(PlanTimeline::of(s.plan, s.site), Catch::Contains("[start] dwell = 0"));
   // A plan whose first turn has a known angle cannot begin without a rest.
