@@ -90,9 +90,13 @@ nlohmann::ordered_json result_sections(const TableFreeRun& run) {
       {"body_frame", "accelerometer triad"},
       {"fixed_by_convention", fixed},
       {"solver",
-       "Ceres (Levenberg-Marquardt), covariance scaled per part (accelerometers, gyro biases, "
-       "gyro matrix) by sqrt(chi2/dof) of its part when above 1"},
+       "Ceres (Levenberg-Marquardt), each part (accelerometer poses, gyro poses, turns) weighted "
+       "by its own variance factor max(1, chi2/dof), re-estimated until it settles; the "
+       "covariance is the weighted fit's"},
       {"converged", r.converged},
+      {"step_over_sigma", r.step_over_sigma},
+      {"variance_rounds", r.variance_rounds},
+      {"variance_settled", r.variance_settled},
       {"termination", r.termination},
       {"iterations", r.iterations},
       {"chi2", r.chi2},

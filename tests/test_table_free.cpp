@@ -320,11 +320,19 @@ TEST_CASE("Table-free calibration of the real Xsens MTi session", "[long][table_
 
 namespace {
 
+// The gate's limits of a unit without bias wander (white noise only).
+RestLimits white_limits() {
+  RestLimits l;
+  l.source = "white noise";
+  return l;
+}
+
 // A fit of 37 poses whose turns miss by `miss` rad per tangent component each (noise sigma
 // 1e-4 rad), the static poses on their noise model: the turns of `peak_rate` (rad/s) over
 // `duration` s at 100 Hz.
 TableFreeResult turn_result(double miss, double peak_rate, double duration) {
   TableFreeResult r;
+  r.converged = true;
   const int poses = 37;
   r.accel_fit = {static_cast<double>(poses - 9), 3 * poses, poses - 9.0, 1.0};
   r.gyro_rest_fit = {static_cast<double>(3 * poses - 3), 3 * poses, 3 * poses - 3.0, 1.0};
@@ -355,23 +363,24 @@ TEST_CASE("Hand-held fit gate: the turns' bound tracks their rate and duration",
   // chi2/dof 1000 refused such a session whatever its turns.
   const TableFreeResult fast = turn_result(1.0 * units::deg, 400.0 * units::deg, 2.0);
   CHECK(fast.chi2_per_dof > 1000.0);
-  const PlausibilityCheck passed = check_handheld_fit(fast, "sim");
-  CAPTURE(passed.detail, handheld_fit_bounds(fast).turn_bound);
+  const RestLimits white = white_limits();
+  const PlausibilityCheck passed = check_handheld_fit(fast, white, "sim");
+  CAPTURE(passed.detail, handheld_fit_bounds(fast, white).turns.bound);
   CHECK(passed.passed);
   // The same miss on slow, short turns is beyond what their timing and dynamics explain.
   const TableFreeResult slow = turn_result(1.0 * units::deg, 20.0 * units::deg, 0.5);
-  const PlausibilityCheck refused = check_handheld_fit(slow, "sim");
+  const PlausibilityCheck refused = check_handheld_fit(slow, white, "sim");
   CHECK_FALSE(refused.passed);
   CHECK(refused.detail.find("turns chi2") != std::string::npos);
-  CHECK(refused.detail.find("static poses") == std::string::npos);
-  // A static stage on its noise model passes; 60 times it (beyond the bias-instability excess
-  // of 30 times its quantile, 1.36 dof here) does not.
+  CHECK(refused.detail.find("poses") == std::string::npos);
+  // A static stage on its noise model passes; 3 times it (beyond the white-noise quantile of
+  // its dof, no bias wander in the profile) does not, and names its stage alone.
   TableFreeResult off = fast;
-  off.accel_fit.chi2 *= 60.0;
-  off.gyro_rest_fit.chi2 *= 60.0;
-  const PlausibilityCheck static_refused = check_handheld_fit(off, "sim");
+  off.accel_fit.chi2 *= 3.0;
+  const PlausibilityCheck static_refused = check_handheld_fit(off, white, "sim");
   CHECK_FALSE(static_refused.passed);
-  CHECK(static_refused.detail.find("static poses") != std::string::npos);
+  CHECK(static_refused.detail.find("accelerometer poses") != std::string::npos);
+  CHECK(static_refused.detail.find("gyro poses") == std::string::npos);
 }
 
 TEST_CASE(

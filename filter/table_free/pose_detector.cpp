@@ -48,6 +48,7 @@ void reading_statistics(const std::vector<ImuReading>& readings, std::size_t fir
 namespace {
 
 constexpr int kChannels = 6;
+constexpr double kAxisRise = 3.0;  // an accelerometer axis's noise over its reference, one axis
 using ChannelValues = std::array<double, kChannels>;
 
 void check_options(const PoseDetectorOptions& o) {
@@ -141,11 +142,17 @@ class RestClassifier {
   void classify() {
     std::size_t count = 0;
     for (std::size_t i = 0; i < is_static.size(); ++i) {
-      double sa = 0.0, sg = 0.0;
+      double sa = 0.0, sg = 0.0, largest = 0.0;
       for (int c = 0; c < 3; ++c) {
-        sa += v_.var[c][i] / ref[c];
+        const double ratio = v_.var[c][i] / ref[c];
+        sa += ratio;
+        largest = std::max(largest, ratio);
         sg += v_.var[c + 3][i] / ref[c + 3];
       }
+      // An accelerometer's noise may rise on one axis in some orientations (2-3x in an ADXL355
+      // along gravity): its largest ratio counts over kAxisRise^2. Motion moves the specific
+      // force by orders of magnitude more than such noise.
+      sa -= largest * (1.0 - 1.0 / (kAxisRise * kAxisRise));
       is_static[i] = sa <= threshold && (!o_.use_gyro || sg <= threshold);
       count += is_static[i] ? 1 : 0;
     }
@@ -181,9 +188,17 @@ std::vector<std::pair<std::size_t, std::size_t>> static_runs(const std::vector<I
     for (std::size_t k = first; k <= last; ++k)
       for (int c = 0; c < kChannels; ++c) mean[c] += channel(r[k], c);
     for (auto& m : mean) m /= static_cast<double>(last - first + 1);
+    // Each channel's noise: the record's reference or the run's own, whichever is larger (a
+    // pose whose noise rose on one axis keeps its edges).
+    ChannelValues noise{};
+    for (std::size_t k = first; k <= last; ++k)
+      for (int c = 0; c < kChannels; ++c) noise[c] += std::pow(channel(r[k], c) - mean[c], 2);
+    for (int c = 0; c < kChannels; ++c)
+      noise[c] = std::max(rest.ref[c],
+                          noise[c] / static_cast<double>(std::max<std::size_t>(1, last - first)));
     auto quiet = [&](std::size_t k) {
       for (int c = 0; c < (o.use_gyro ? kChannels : 3); ++c)
-        if (std::abs(channel(r[k], c) - mean[c]) > o.edge_sigmas * std::sqrt(rest.ref[c]))
+        if (std::abs(channel(r[k], c) - mean[c]) > o.edge_sigmas * std::sqrt(noise[c]))
           return false;
       return true;
     };

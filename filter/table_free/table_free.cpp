@@ -3,6 +3,7 @@
 #include <ceres/ceres.h>
 #include <ceres/sphere_manifold.h>
 
+#include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
@@ -21,6 +22,7 @@ namespace {
 //   gyro linear (9): k_x k_y k_z, m_xy m_xz m_yx m_yz m_zx m_zy
 //   u_p (3): unit gravity-opposite direction (direction of the specific force) of pose p, body
 constexpr int kAccel = 9, kGyroBias = 3, kGyroLin = 9;
+constexpr int kVarianceRounds = 10;  // of the joint fit's part weights
 
 // The error model's linear part, I + diag(k) + M (models/imu_error_model.hpp), in the
 // parametrisation of the blocks above, for any scalar type (Ceres Jets).
@@ -519,12 +521,12 @@ class TableFreeSolver {
     }
   }
 
-  void add_turns(ceres::Problem& problem) {
+  void add_turns(ceres::Problem& problem, double factor = 1.0) {
     turn_ids_.clear();
     for (std::size_t p = 0; p + 1 < pd_.size(); ++p)
       turn_ids_.push_back(problem.AddResidualBlock(
-          new TurnCost(r_, turns_[p].k0, turns_[p].k1, turns_[p].E, turns_[p].inv_sigma), nullptr,
-          gb_, gl_, u_[p].data(), u_[p + 1].data()));
+          new TurnCost(r_, turns_[p].k0, turns_[p].k1, turns_[p].E, turns_[p].inv_sigma),
+          weight(factor), gb_, gl_, u_[p].data(), u_[p + 1].data()));
   }
 
   // Stage 2: gyro bias from the poses' mean rates, then the gyro matrix from the turns.
@@ -543,16 +545,51 @@ class TableFreeSolver {
     out_.gyro_stage = run(problem, o_.max_iterations, "gyro");
   }
 
-  // Stage 3: joint refinement, then the covariance of the coefficient blocks (scaled by the
-  // chi-square per degree of freedom) and the result in catalog order.
+  // Stage 3: joint refinement. Each part of the fit (accel poses, gyro poses, turns) is weighted
+  // by its own variance factor max(1, chi2/dof), re-estimated until the factors settle (variance
+  // components, docs/methods/table-free.md "Sigmas and the fit gate"): a part whose residuals
+  // exceed its noise model (hand turns' timing) no longer drags the parts that hold theirs (the
+  // poses' gravity directions). The covariance is then the weighted fit's own.
   void solve_joint() {
-    ceres::Problem problem;
+    std::array<double, 3> factor = {1.0, 1.0, 1.0};
+    for (int round = 0; round < kVarianceRounds; ++round) {
+      ceres::Problem problem;
+      build_joint(problem, factor);
+      solve_joint_once(problem);
+      const std::array<double, 3> next = {
+          out_.accel_fit.sigma_scale * out_.accel_fit.sigma_scale,
+          out_.gyro_rest_fit.sigma_scale * out_.gyro_rest_fit.sigma_scale,
+          out_.turn_fit.sigma_scale * out_.turn_fit.sigma_scale};
+      bool settled = true;
+      for (int i = 0; i < 3; ++i)
+        settled = settled &&
+                  std::abs(next[static_cast<std::size_t>(i)] / factor[static_cast<std::size_t>(i)] -
+                           1.0) < 0.01;
+      out_.variance_rounds = round + 1;
+      if (settled || round + 1 == kVarianceRounds) {
+        out_.variance_settled = settled;
+        step_over_sigma(problem);
+        store_coefficients(covariance_of_blocks(problem));
+        return;
+      }
+      factor = next;
+    }
+  }
+
+  static ceres::LossFunction* weight(double factor) {
+    return factor > 1.0 ? new ceres::ScaledLoss(nullptr, 1.0 / factor, ceres::TAKE_OWNERSHIP)
+                        : nullptr;
+  }
+
+  void build_joint(ceres::Problem& problem, const std::array<double, 3>& factor) {
+    accel_ids_.clear();
+    gyro_ids_.clear();
     for (std::size_t p = 0; p < pd_.size(); ++p) {
       const auto& d = pd_[p];
       accel_ids_.push_back(problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<AccelPoseCost, 3, kAccel, 3>(
               new AccelPoseCost{d.accel, (va_ / d.n).cwiseSqrt().cwiseInverse(), g_}),
-          nullptr, a_, u_[p].data()));
+          weight(factor[0]), a_, u_[p].data()));
       Eigen::Matrix3d cov = (vg_ / d.n).asDiagonal();
       cov += o_.site ? Eigen::Matrix3d(omega_h_ * omega_h_ / 2.0 *
                                        (Eigen::Matrix3d::Identity() - u_[p] * u_[p].transpose()))
@@ -561,10 +598,13 @@ class TableFreeSolver {
       gyro_ids_.push_back(problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<GyroPoseCost, 3, kGyroBias, kGyroLin, 3>(
               new GyroPoseCost{d.gyro, L.inverse(), omega_v_}),
-          nullptr, gb_, gl_, u_[p].data()));
+          weight(factor[1]), gb_, gl_, u_[p].data()));
     }
-    add_turns(problem);
+    add_turns(problem, factor[2]);
     for (auto& v : u_) problem.SetManifold(v.data(), new ceres::SphereManifold<3>());
+  }
+
+  void solve_joint_once(ceres::Problem& problem) {
     out_.joint_stage = run(problem, o_.max_iterations, "joint");
     if (!out_.joint_stage.converged)
       throw TableFreeError(Kind::SolveFailed,
@@ -574,17 +614,68 @@ class TableFreeSolver {
                                "a wrong gravity?)");
     out_.iterations =
         out_.accel_stage.iterations + out_.gyro_stage.iterations + out_.joint_stage.iterations;
-    out_.converged = true;
     out_.termination = out_.joint_stage.message;
-    out_.chi2 = out_.joint_stage.chi2;
     out_.dof = out_.joint_stage.residuals - out_.joint_stage.parameters;
     if (out_.dof <= 0)
       throw TableFreeError(Kind::TooFewPoses,
                            "table-free calibration: no degrees of freedom left with " +
                                std::to_string(pd_.size()) + " poses");
-    out_.chi2_per_dof = out_.chi2 / out_.dof;
+    out_.turns.clear();
     fit_parts(problem);
-    store_coefficients(covariance_of_blocks(problem));
+    // The chi2 against the noise model (the parts' unweighted sums), not the weighted cost.
+    out_.chi2 = out_.accel_fit.chi2 + out_.gyro_rest_fit.chi2 + out_.turn_fit.chi2;
+    out_.chi2_per_dof = out_.chi2 / out_.dof;
+  }
+
+  // The whitened, weighted Jacobian of the fit and its residuals at the solution.
+  static void jacobian_of(ceres::Problem& problem, Eigen::MatrixXd& J, Eigen::VectorXd* r) {
+    ceres::Problem::EvaluateOptions eo;
+    ceres::CRSMatrix crs;
+    std::vector<double> res;
+    problem.Evaluate(eo, nullptr, r ? &res : nullptr, nullptr, &crs);
+    J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+    for (int i = 0; i < crs.num_rows; ++i)
+      for (int k = crs.rows[static_cast<std::size_t>(i)];
+           k < crs.rows[static_cast<std::size_t>(i) + 1]; ++k)
+        J(i, crs.cols[static_cast<std::size_t>(k)]) = crs.values[static_cast<std::size_t>(k)];
+    if (r) *r = Eigen::Map<Eigen::VectorXd>(res.data(), static_cast<Eigen::Index>(res.size()));
+  }
+
+  // "Converged" from the estimate: the Gauss-Newton step still left at the solution, each
+  // coefficient's against its sigma (the same weighted normal equations give both). Beyond
+  // kConvergedStep of a sigma somewhere the estimate is still moving: not converged.
+  void step_over_sigma(ceres::Problem& problem) {
+    Eigen::MatrixXd J;
+    Eigen::VectorXd r;
+    jacobian_of(problem, J, &r);
+    const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(J);
+    const Eigen::VectorXd step = cod.solve(-r);
+    const Eigen::MatrixXd cov =
+        Eigen::MatrixXd(J.transpose() * J).completeOrthogonalDecomposition().pseudoInverse();
+    double worst = 0.0;
+    for (const double* block : {static_cast<const double*>(a_), static_cast<const double*>(gb_),
+                                static_cast<const double*>(gl_)}) {
+      const int offset = column_of(problem, block);
+      const int size = problem.ParameterBlockSize(block);
+      for (int i = offset; i < offset + size; ++i)
+        if (cov(i, i) > 0.0) worst = std::max(worst, std::abs(step(i)) / std::sqrt(cov(i, i)));
+    }
+    out_.step_over_sigma = worst;
+    out_.converged = std::isfinite(worst) && worst < TableFreeResult::kConvergedStep;
+  }
+
+  // The first column of a parameter block in the Jacobian of Problem::Evaluate (the problem's
+  // own block order, tangent sizes).
+  static int column_of(ceres::Problem& problem, const double* block) {
+    std::vector<double*> blocks;
+    problem.GetParameterBlocks(&blocks);
+    int col = 0;
+    for (double* b : blocks) {
+      if (b == block) return col;
+      col += problem.ParameterBlockTangentSize(b);
+    }
+    throw TableFreeError(Kind::SolveFailed,
+                         "table-free calibration: a coefficient block is not in the fit");
   }
 
   // The residuals of some blocks at the solution.
@@ -611,18 +702,8 @@ class TableFreeSolver {
   // The leverage of each part (the sum of the hat matrix's diagonal over its residuals): the
   // parameters it determines, the directions shared with the other parts counted by share.
   std::array<double, 3> leverages(ceres::Problem& problem) const {
-    std::vector<ceres::ResidualBlockId> all = accel_ids_;
-    all.insert(all.end(), gyro_ids_.begin(), gyro_ids_.end());
-    all.insert(all.end(), turn_ids_.begin(), turn_ids_.end());
-    ceres::Problem::EvaluateOptions eo;
-    eo.residual_blocks = all;
-    ceres::CRSMatrix crs;
-    problem.Evaluate(eo, nullptr, nullptr, nullptr, &crs);
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
-    for (int i = 0; i < crs.num_rows; ++i)
-      for (int k = crs.rows[static_cast<std::size_t>(i)];
-           k < crs.rows[static_cast<std::size_t>(i) + 1]; ++k)
-        J(i, crs.cols[static_cast<std::size_t>(k)]) = crs.values[static_cast<std::size_t>(k)];
+    Eigen::MatrixXd J;
+    jacobian_of(problem, J, nullptr);
     const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(J).householderQ() *
                               Eigen::MatrixXd::Identity(J.rows(), J.cols());
     const Eigen::VectorXd h = Q.rowwise().squaredNorm();  // hat matrix diagonal
@@ -670,13 +751,8 @@ class TableFreeSolver {
                            "poses do not turn the unit about enough different axes)");
     Eigen::Matrix<double, 21, 21, Eigen::RowMajor> C_blocks;
     covariance.GetCovarianceMatrix(blocks, C_blocks.data());
-    // Each block by its own part's excess (not one factor for all: a gyro-only excess must not
-    // inflate the accelerometers' sigmas).
-    Eigen::Matrix<double, 21, 1> scale;
-    scale.segment<9>(0).setConstant(out_.accel_fit.sigma_scale);
-    scale.segment<3>(9).setConstant(out_.gyro_rest_fit.sigma_scale);
-    scale.segment<9>(12).setConstant(out_.turn_fit.sigma_scale);
-    C_blocks = scale.asDiagonal() * C_blocks * scale.asDiagonal();
+    // The parts' variance factors are the fit's weights: the covariance is already scaled per
+    // part (triad and stage).
     return C_blocks;
   }
 
