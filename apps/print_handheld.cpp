@@ -36,11 +36,14 @@ void print_table_free(const TableFreeRun& run, const HandheldFitBounds& b,
               r.chi2_per_dof, r.dof, r.iterations, r.converged ? "converged" : "NOT converged",
               r.step_over_sigma);
   std::printf(
-      "Fit quality per stage (chi2/dof; its sigmas scaled by, the part's weight): accel poses "
-      "%.3g (x%.3g), gyro poses %.3g (x%.3g), turns %.3g (x%.3g)%s\n",
-      r.accel_fit.chi2_per_dof(), r.accel_fit.sigma_scale, r.gyro_rest_fit.chi2_per_dof(),
-      r.gyro_rest_fit.sigma_scale, r.turn_fit.chi2_per_dof(), r.turn_fit.sigma_scale,
-      r.variance_settled ? "" : " (the weights did not settle)");
+      "Fit quality per stage (chi2/dof against the white noise): accel poses %.3g, gyro poses "
+      "%.3g, turns %.3g\nNoise model completed from the residuals%s: bias wander accel %.3g mg "
+      "(pose sigmas x%.3g), gyro %.3g deg/s (x%.3g); the turns' variance x%.3g (sigmas x%.3g)\n",
+      r.accel_fit.chi2_per_dof(), r.gyro_rest_fit.chi2_per_dof(), r.turn_fit.chi2_per_dof(),
+      r.variance_settled ? "" : " (NOT settled)", r.accel_fit.wander / units::mg,
+      r.accel_fit.sigma_scale, r.gyro_rest_fit.wander / units::deg_per_s,
+      r.gyro_rest_fit.sigma_scale, r.turn_fit.sigma_scale * r.turn_fit.sigma_scale,
+      r.turn_fit.sigma_scale);
   std::printf(
       "Fit gate (bias wander from the %s: accel %.3g mg, gyro %.3g deg/s): accel poses chi2 "
       "%.4g <= %.4g, gyro poses %.4g <= %.4g, turns %.4g <= %.4g (the turns' expected excess "

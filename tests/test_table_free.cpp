@@ -427,6 +427,63 @@ TEST_CASE(
     CAPTURE(name, clean.at(name).sigma, stepped.at(name).sigma);
     CHECK(stepped.at(name).sigma < 2.0 * clean.at(name).sigma);
   }
-  CHECK(stepped.at("gyro.bias.x").sigma > 5.0 * clean.at("gyro.bias.x").sigma);
+  // The wander found is the steps' size (0.05 deg/s per axis; 108 values: +-7 % at 1 sigma).
+  CHECK(stepped.gyro_rest_fit.wander > 0.04 * units::deg_per_s);
+  CHECK(stepped.gyro_rest_fit.wander < 0.06 * units::deg_per_s);
+  CHECK(clean.gyro_rest_fit.wander < 0.01 * units::deg_per_s);
+  // The gyro biases' sigmas grow with it, less than the poses alone would give (0.05 deg/s over
+  // sqrt(36)): the turns, which see the true bias, hold it; the estimate stays within them.
+  CHECK(stepped.at("gyro.bias.x").sigma > 2.0 * clean.at("gyro.bias.x").sigma);
+  for (const char* name : {"gyro.bias.x", "gyro.bias.y", "gyro.bias.z"}) {
+    const double truth = s.truth.gyro.bias(name[10] - 'x');
+    CAPTURE(name, stepped.at(name).value, truth, stepped.at(name).sigma);
+    CHECK(std::abs(stepped.at(name).value - truth) < 4.0 * stepped.at(name).sigma);
+  }
   CHECK(stepped.converged);
+}
+
+TEST_CASE(
+    "Hand-held fit gate on a simulated session: a correct one passes at the profile's noise, "
+    "accelerometer poses off by another sensor's offsets are refused naming their stage",
+    "[table_free]") {
+  const Site site = site_at(45.0);
+  const SensorProfile prof = mems_profile();
+  const SimSession s = simulate_session(prof, fine_scaling(), 12, site);
+  TableFreeOptions o;
+  o.site = site;
+  const TableFreeResult clean = calibrate_table_free_counts(s.counts, fine_scaling(), o);
+  // The profile states white noise only: no bias wander, so the bounds are the white-noise
+  // quantiles (RestLimits without wander), and the generic MEMS unit's (2 mg, 0.1 deg/s) wider.
+  const RestLimits white = white_limits(), generic = RestLimits::from_profile(nullptr);
+  const PlausibilityCheck passed = check_handheld_fit(clean, white, "sim");
+  CAPTURE(passed.detail, clean.accel_fit.chi2_per_dof(), clean.gyro_rest_fit.chi2_per_dof(),
+          clean.turn_fit.chi2_per_dof());
+  CHECK(passed.passed);
+  CHECK(check_handheld_fit(clean, generic, "sim").passed);
+  // Converged from the estimate: the last step is a tiny fraction of a sigma.
+  CHECK(clean.converged);
+  CHECK(clean.step_over_sigma < TableFreeResult::kConvergedStep);
+  CHECK(clean.variance_settled);
+  // The accelerometer readings of each pose off by 50 mg per axis (another sensor's columns
+  // pose by pose, a wrong file spliced in): far beyond a consumer unit's 2 mg of drift.
+  std::vector<ImuReading> counts = s.counts;
+  std::mt19937_64 rng(derive_seed(12, 5));
+  std::normal_distribution<double> offset(0.0, 50.0 * units::mg);
+  for (const auto& p : clean.poses) {
+    const Eigen::Vector3d db(offset(rng), offset(rng), offset(rng));
+    for (std::size_t k = p.first; k <= p.last; ++k)
+      counts[k].accel += fine_scaling().accel_sensitivity.cwiseProduct(db);
+  }
+  const TableFreeResult spliced = calibrate_table_free_counts(counts, fine_scaling(), o);
+  const HandheldFitBounds b = handheld_fit_bounds(spliced, generic);
+  CAPTURE(b.accel.chi2, b.accel.bound, b.accel.expected, b.gyro.chi2, b.gyro.bound);
+  const PlausibilityCheck refused = check_handheld_fit(spliced, generic, "sim");
+  CHECK_FALSE(refused.passed);
+  CHECK(refused.detail.find("accelerometer poses") != std::string::npos);
+  CHECK(refused.detail.find("wrong file, column or unit") != std::string::npos);
+  CHECK(b.accel.chi2 > 10.0 * b.accel.bound);
+  // Its sigmas carry the accelerometer poses' own factor; the gyro biases' stay near theirs.
+  CHECK(spliced.accel_fit.sigma_scale > 10.0);
+  CHECK(spliced.at("accel.bias.x").sigma > 10.0 * clean.at("accel.bias.x").sigma);
+  CHECK(spliced.at("gyro.bias.x").sigma < 2.0 * clean.at("gyro.bias.x").sigma);
 }

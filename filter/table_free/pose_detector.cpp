@@ -48,7 +48,7 @@ void reading_statistics(const std::vector<ImuReading>& readings, std::size_t fir
 namespace {
 
 constexpr int kChannels = 6;
-constexpr double kAxisRise = 3.0;  // an accelerometer axis's noise over its reference, one axis
+constexpr double kAxisRise = 3.0;  // an accelerometer's noise over its reference it may rise to
 using ChannelValues = std::array<double, kChannels>;
 
 void check_options(const PoseDetectorOptions& o) {
@@ -149,11 +149,14 @@ class RestClassifier {
         largest = std::max(largest, ratio);
         sg += v_.var[c + 3][i] / ref[c + 3];
       }
-      // An accelerometer's noise may rise on one axis in some orientations (2-3x in an ADXL355
-      // along gravity): its largest ratio counts over kAxisRise^2. Motion moves the specific
-      // force by orders of magnitude more than such noise.
-      sa -= largest * (1.0 - 1.0 / (kAxisRise * kAxisRise));
-      is_static[i] = sa <= threshold && (!o_.use_gyro || sg <= threshold);
+      // An accelerometer's noise may rise 2-3x in some orientations (an ADXL355, on one axis
+      // or more). With the gyros watching (a hand turns the unit: they see the motion at
+      // thousands of noise sigmas) the accelerometers only need to catch shocks and
+      // translations, orders of magnitude above: their sum may reach kAxisRise^2 times the
+      // threshold. Alone, only their largest axis counts over kAxisRise^2.
+      is_static[i] = o_.use_gyro
+                         ? sg <= threshold && sa <= kAxisRise * kAxisRise * threshold
+                         : sa - largest * (1.0 - 1.0 / (kAxisRise * kAxisRise)) <= threshold;
       count += is_static[i] ? 1 : 0;
     }
     if (count == 0)

@@ -476,6 +476,8 @@ class TableFreeSolver {
     out_.accel_noise = va_.cwiseSqrt();
     out_.gyro_noise = vg_.cwiseSqrt();
     const double dt_mean = t_sum / dof_sum;
+    mean_count_ = 0.0;
+    for (const auto& d : pd_) mean_count_ += d.n / static_cast<double>(pd_.size());
     rate_psd_ = vg_.mean() * dt_mean;  // rad^2/s: per-axis angle variance per second
   }
 
@@ -545,35 +547,100 @@ class TableFreeSolver {
     out_.gyro_stage = run(problem, o_.max_iterations, "gyro");
   }
 
-  // Stage 3: joint refinement. Each part of the fit (accel poses, gyro poses, turns) is weighted
-  // by its own variance factor max(1, chi2/dof), re-estimated until the factors settle (variance
-  // components, docs/methods/table-free.md "Sigmas and the fit gate"): a part whose residuals
-  // exceed its noise model (hand turns' timing) no longer drags the parts that hold theirs (the
-  // poses' gravity directions). The covariance is then the weighted fit's own.
+  // Stage 3: joint refinement. The noise model of each part is completed from its own
+  // residuals (variance components, docs/methods/table-free.md "Sigmas and the fit gate"): the
+  // static poses' means by an additive bias wander per triad (the fit takes one constant bias;
+  // a drifting bias moves every pose's mean alike, long or short), the turns by a variance factor
+  // (timing errors grow with the turn); re-estimated and the fit repeated until they settle.
+  // A part beyond its noise model then no longer drags the parts that hold theirs (the poses'
+  // gravity directions), and the covariance is the completed model's. The gate judges the parts'
+  // chi2 against the data's white noise alone.
   void solve_joint() {
-    std::array<double, 3> factor = {1.0, 1.0, 1.0};
+    Weights w;
     for (int round = 0; round < kVarianceRounds; ++round) {
       ceres::Problem problem;
-      build_joint(problem, factor);
+      build_joint(problem, w);
       solve_joint_once(problem);
-      const std::array<double, 3> next = {
-          out_.accel_fit.sigma_scale * out_.accel_fit.sigma_scale,
-          out_.gyro_rest_fit.sigma_scale * out_.gyro_rest_fit.sigma_scale,
-          out_.turn_fit.sigma_scale * out_.turn_fit.sigma_scale};
-      bool settled = true;
-      for (int i = 0; i < 3; ++i)
-        settled = settled &&
-                  std::abs(next[static_cast<std::size_t>(i)] / factor[static_cast<std::size_t>(i)] -
-                           1.0) < 0.01;
+      const Weights next = next_weights();
+      const bool settled = w.settled(next, va_.mean() / mean_count_, vg_.mean() / mean_count_);
       out_.variance_rounds = round + 1;
       if (settled || round + 1 == kVarianceRounds) {
         out_.variance_settled = settled;
         step_over_sigma(problem);
         store_coefficients(covariance_of_blocks(problem));
+        white_parts(w);
         return;
       }
-      factor = next;
+      w = next;
     }
+  }
+
+  struct Weights {
+    double accel = 0.0, gyro = 0.0;  // bias wander variances added to each pose mean's
+    double turns = 1.0;              // variance factor of the turns
+    bool settled(const Weights& n, double accel_white, double gyro_white) const {
+      return std::abs(n.accel - accel) < 0.02 * (accel + accel_white) &&
+             std::abs(n.gyro - gyro) < 0.02 * (gyro + gyro_white) &&
+             std::abs(n.turns / turns - 1.0) < 0.01;
+    }
+  };
+
+  // tau^2 >= 0 with sum e^2 / (s^2 + tau^2) = dof (0 when the white noise explains them).
+  static double additive_variance(const std::vector<double>& e2, const std::vector<double>& s2,
+                                  double dof) {
+    auto excess = [&](double tau2) {
+      double sum = 0.0;
+      for (std::size_t i = 0; i < e2.size(); ++i) sum += e2[i] / (s2[i] + tau2);
+      return sum - dof;
+    };
+    if (!(dof > 0.0) || excess(0.0) <= 0.0) return 0.0;
+    double lo = 0.0, hi = 0.0;
+    for (double x : e2) hi += x;
+    for (int k = 0; k < 100; ++k) {
+      const double mid = 0.5 * (lo + hi);
+      (excess(mid) > 0.0 ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+  }
+
+  // The next round's weights from this solution's residuals.
+  Weights next_weights() {
+    Weights n;
+    std::vector<double> ea, sa, eg, sg;
+    for (std::size_t p = 0; p < pd_.size(); ++p) {
+      const auto& d = pd_[p];
+      double ra[3], rg[3];
+      AccelPoseCost{d.accel, Eigen::Vector3d::Ones(), g_}(a_, u_[p].data(), ra);
+      GyroPoseCost{d.gyro, Eigen::Matrix3d::Identity(), omega_v_}(gb_, gl_, u_[p].data(), rg);
+      const Eigen::Matrix3d cov = gyro_pose_covariance(p, 0.0);
+      for (int i = 0; i < 3; ++i) {
+        ea.push_back(ra[i] * ra[i]);
+        sa.push_back(va_(i) / d.n);
+        eg.push_back(rg[i] * rg[i]);
+        sg.push_back(cov(i, i));
+      }
+    }
+    n.accel = additive_variance(ea, sa, out_.accel_fit.dof);
+    n.gyro = additive_variance(eg, sg, out_.gyro_rest_fit.dof);
+    n.turns = std::max(1.0, out_.turn_fit.chi2_per_dof());
+    return n;
+  }
+
+  // The parts' chi2 against the white noise alone (the gate's), at the solution; the weights
+  // found (bias wander, the turns' factor) recorded with them.
+  void white_parts(const Weights& w) {
+    ceres::Problem white;
+    build_joint(white, Weights{});
+    out_.turns.clear();
+    fit_parts(white);
+    out_.chi2 = out_.accel_fit.chi2 + out_.gyro_rest_fit.chi2 + out_.turn_fit.chi2;
+    out_.chi2_per_dof = out_.chi2 / out_.dof;
+    out_.accel_fit.wander = std::sqrt(w.accel);
+    out_.gyro_rest_fit.wander = std::sqrt(w.gyro);
+    // A typical pose mean's sigma over its white noise's; the turns' factor's root.
+    out_.accel_fit.sigma_scale = std::sqrt(1.0 + w.accel * mean_count_ / va_.mean());
+    out_.gyro_rest_fit.sigma_scale = std::sqrt(1.0 + w.gyro * mean_count_ / vg_.mean());
+    out_.turn_fit.sigma_scale = std::sqrt(w.turns);
   }
 
   static ceres::LossFunction* weight(double factor) {
@@ -581,26 +648,32 @@ class TableFreeSolver {
                         : nullptr;
   }
 
-  void build_joint(ceres::Problem& problem, const std::array<double, 3>& factor) {
+  // A pose mean's rate covariance: white noise, the Earth rate's unknown part, a bias wander.
+  Eigen::Matrix3d gyro_pose_covariance(std::size_t p, double wander) const {
+    Eigen::Matrix3d cov = (vg_ / pd_[p].n).asDiagonal();
+    cov += o_.site ? Eigen::Matrix3d(omega_h_ * omega_h_ / 2.0 *
+                                     (Eigen::Matrix3d::Identity() - u_[p] * u_[p].transpose()))
+                   : Eigen::Matrix3d(Omega_ * Omega_ / 3.0 * Eigen::Matrix3d::Identity());
+    return cov + wander * Eigen::Matrix3d::Identity();
+  }
+
+  void build_joint(ceres::Problem& problem, const Weights& w) {
     accel_ids_.clear();
     gyro_ids_.clear();
     for (std::size_t p = 0; p < pd_.size(); ++p) {
       const auto& d = pd_[p];
+      const Eigen::Vector3d sigma2 = va_ / d.n + Eigen::Vector3d::Constant(w.accel);
       accel_ids_.push_back(problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<AccelPoseCost, 3, kAccel, 3>(
-              new AccelPoseCost{d.accel, (va_ / d.n).cwiseSqrt().cwiseInverse(), g_}),
-          weight(factor[0]), a_, u_[p].data()));
-      Eigen::Matrix3d cov = (vg_ / d.n).asDiagonal();
-      cov += o_.site ? Eigen::Matrix3d(omega_h_ * omega_h_ / 2.0 *
-                                       (Eigen::Matrix3d::Identity() - u_[p] * u_[p].transpose()))
-                     : Eigen::Matrix3d(Omega_ * Omega_ / 3.0 * Eigen::Matrix3d::Identity());
-      const Eigen::Matrix3d L = cov.llt().matrixL();
+              new AccelPoseCost{d.accel, sigma2.cwiseSqrt().cwiseInverse(), g_}),
+          nullptr, a_, u_[p].data()));
+      const Eigen::Matrix3d L = gyro_pose_covariance(p, w.gyro).llt().matrixL();
       gyro_ids_.push_back(problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<GyroPoseCost, 3, kGyroBias, kGyroLin, 3>(
               new GyroPoseCost{d.gyro, L.inverse(), omega_v_}),
-          weight(factor[1]), gb_, gl_, u_[p].data()));
+          nullptr, gb_, gl_, u_[p].data()));
     }
-    add_turns(problem, factor[2]);
+    add_turns(problem, w.turns);
     for (auto& v : u_) problem.SetManifold(v.data(), new ceres::SphereManifold<3>());
   }
 
@@ -610,8 +683,9 @@ class TableFreeSolver {
       throw TableFreeError(Kind::SolveFailed,
                            "table-free calibration: the joint solution did not converge in " +
                                std::to_string(o_.max_iterations) +
-                               " iterations (inconsistent data: poses that are not at rest, or "
-                               "a wrong gravity?)");
+                               " iterations (inconsistent data: poses that are not at rest, a "
+                               "wrong gravity, or gyro columns, unit or sample rate that do not "
+                               "turn the poses into each other)");
     out_.iterations =
         out_.accel_stage.iterations + out_.gyro_stage.iterations + out_.joint_stage.iterations;
     out_.termination = out_.joint_stage.message;
@@ -823,6 +897,7 @@ class TableFreeSolver {
   double g_ = 0.0, Omega_ = 0.0, omega_v_ = 0.0, omega_h_ = 0.0;
   Eigen::Vector3d va_, vg_;
   double rate_psd_ = 0.0;
+  double mean_count_ = 1.0;  // readings per pose mean, on average
   double a_[kAccel] = {0.0};
   double gb_[kGyroBias] = {0.0};
   double gl_[kGyroLin] = {0.0};

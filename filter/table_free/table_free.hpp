@@ -105,10 +105,15 @@ struct TableFreeFitPart {
   double chi2 = 0.0;
   int residuals = 0;
   double dof = 0.0;
-  /// sqrt(chi2/dof) when above 1, else 1: the part's variance factor's root, its weight in the
-  /// joint fit (re-estimated until it settles), so the sigmas of the coefficients it determines
-  /// (docs/methods/table-free.md, "Sigmas and the fit gate").
+  /// How much the part's noise model was completed from its residuals (re-estimated until it
+  /// settles; docs/methods/table-free.md, "Sigmas and the fit gate"): the turns, the root of
+  /// their variance factor max(1, chi2/dof); the static parts, a typical pose mean's sigma with
+  /// the bias wander over its white noise's. The sigmas of the coefficients it determines grow
+  /// with it.
   double sigma_scale = 1.0;
+  /// Static parts: the bias wander found (1-sigma, SI: m/s^2, rad/s) added to every pose mean's
+  /// white noise in the fit's weights (0 when the white noise explains the residuals).
+  double wander = 0.0;
   double chi2_per_dof() const { return dof > 0.0 ? chi2 / dof : 0.0; }
 };
 
