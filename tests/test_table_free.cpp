@@ -381,6 +381,13 @@ TEST_CASE("Hand-held fit gate: the turns' bound tracks their rate and duration",
   CHECK_FALSE(static_refused.passed);
   CHECK(static_refused.detail.find("accelerometer poses") != std::string::npos);
   CHECK(static_refused.detail.find("gyro poses") == std::string::npos);
+  // An estimate still moving (its last step a tenth of a sigma) fails whatever its chi2.
+  TableFreeResult moving = fast;
+  moving.converged = false;
+  moving.step_over_sigma = 0.1;
+  const PlausibilityCheck unconverged = check_handheld_fit(moving, white, "sim");
+  CHECK_FALSE(unconverged.passed);
+  CHECK(unconverged.detail.find("has not converged") != std::string::npos);
 }
 
 TEST_CASE(

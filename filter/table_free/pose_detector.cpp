@@ -75,6 +75,9 @@ double median_interval(const std::vector<ImuReading>& r) {
 // their differences); `floor` is the rounding level of those variances.
 struct WindowedVariances {
   std::array<std::vector<double>, kChannels> var;
+  /// Half the mean square of consecutive differences over the window: the white noise's
+  /// variance, which a smooth motion barely moves (the window's own noise estimate).
+  std::array<std::vector<double>, kChannels> white;
   ChannelValues floor{};
 };
 
@@ -82,19 +85,23 @@ WindowedVariances windowed_variances(const std::vector<ImuReading>& r, std::size
   const std::size_t n = r.size(), h = w / 2;
   const double wd = static_cast<double>(w);
   WindowedVariances out;
-  std::vector<double> s(n + 1), s2(n + 1);
+  std::vector<double> s(n + 1), s2(n + 1), d2(n + 1);
   for (int c = 0; c < kChannels; ++c) {
     const double x0 = channel(r[0], c);
-    s[0] = s2[0] = 0.0;
+    s[0] = s2[0] = d2[0] = d2[1] = 0.0;
     for (std::size_t k = 0; k < n; ++k) {
       const double x = channel(r[k], c) - x0;
       s[k + 1] = s[k] + x;
       s2[k + 1] = s2[k] + x * x;
+      if (k > 0) d2[k + 1] = d2[k] + std::pow(channel(r[k], c) - channel(r[k - 1], c), 2);
     }
     out.var[c].resize(n - 2 * h);
+    out.white[c].resize(n - 2 * h);
     for (std::size_t i = h; i + h < n; ++i) {
       const double sum = s[i + h + 1] - s[i - h], sum2 = s2[i + h + 1] - s2[i - h];
       out.var[c][i - h] = std::max(0.0, (sum2 - sum * sum / wd) / (wd - 1.0));
+      // Differences of readings i-h .. i+h: d2 terms i-h+1 .. i+h.
+      out.white[c][i - h] = (d2[i + h + 1] - d2[i - h + 1]) / (2.0 * (wd - 1.0));
     }
     out.floor[c] = 100.0 * std::numeric_limits<double>::epsilon() * s2[n] / (wd - 1.0);
   }
@@ -142,21 +149,17 @@ class RestClassifier {
   void classify() {
     std::size_t count = 0;
     for (std::size_t i = 0; i < is_static.size(); ++i) {
-      double sa = 0.0, sg = 0.0, largest = 0.0;
+      double sa = 0.0, sg = 0.0;
       for (int c = 0; c < 3; ++c) {
-        const double ratio = v_.var[c][i] / ref[c];
-        sa += ratio;
-        largest = std::max(largest, ratio);
+        // An accelerometer's noise may rise 2-3x in some orientations (an ADXL355, on one axis
+        // or all three): each axis against its reference or, up to kAxisRise^2 times it, the
+        // window's own white noise (consecutive differences), which a hand's smooth motion
+        // hardly raises while it raises the variance by orders of magnitude.
+        const double own = std::clamp(v_.white[c][i], ref[c], kAxisRise * kAxisRise * ref[c]);
+        sa += v_.var[c][i] / own;
         sg += v_.var[c + 3][i] / ref[c + 3];
       }
-      // An accelerometer's noise may rise 2-3x in some orientations (an ADXL355, on one axis
-      // or more). With the gyros watching (a hand turns the unit: they see the motion at
-      // thousands of noise sigmas) the accelerometers only need to catch shocks and
-      // translations, orders of magnitude above: their sum may reach kAxisRise^2 times the
-      // threshold. Alone, only their largest axis counts over kAxisRise^2.
-      is_static[i] = o_.use_gyro
-                         ? sg <= threshold && sa <= kAxisRise * kAxisRise * threshold
-                         : sa - largest * (1.0 - 1.0 / (kAxisRise * kAxisRise)) <= threshold;
+      is_static[i] = sa <= threshold && (!o_.use_gyro || sg <= threshold);
       count += is_static[i] ? 1 : 0;
     }
     if (count == 0)
