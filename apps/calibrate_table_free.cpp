@@ -15,7 +15,7 @@
 namespace sinscal::cli {
 
 TableFreeRun gated_table_free_run(const Session& session, TableFreeRunOptions ro, bool force,
-                                  PlausibilityReport& gate) {
+                                  PlausibilityReport& gate, HandheldFitBounds* bounds) {
   // The rests before the fit, then the fit's parts: a failure stops (exit 2) unless force,
   // which records it.
   std::optional<SensorProfile> profile;
@@ -29,7 +29,8 @@ TableFreeRun gated_table_free_run(const Session& session, TableFreeRunOptions ro
     enforce(gate, force);
   };
   TableFreeRun run = run_table_free(session, ro);
-  gate.checks.push_back(check_handheld_fit(run.result, run.log));
+  if (bounds) *bounds = handheld_fit_bounds(run.result, limits);
+  gate.checks.push_back(check_handheld_fit(run.result, limits, run.log));
   enforce(gate, force);
   return run;
 }
@@ -117,7 +118,8 @@ SessionSummary calibrate_table_free_session(const CalibrateOptions& o,
   ro.calibration.edge_trim = pick("edge-trim", st.edge_trim, o.edge_trim);
   PlausibilityReport gate;
   const auto t0 = std::chrono::steady_clock::now();
-  TableFreeRun run = gated_table_free_run(session, ro, o.force, gate);
+  HandheldFitBounds bounds;
+  TableFreeRun run = gated_table_free_run(session, ro, o.force, gate, &bounds);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   // A validation record that cannot be used still leaves the calibration written.
@@ -142,7 +144,7 @@ SessionSummary calibrate_table_free_session(const CalibrateOptions& o,
                      std::nullopt, max_error_over_sigma(coefficients, truth),
                      coefficients};
   if (!verbose) return row;
-  print_table_free(run, coefficients, truth);
+  print_table_free(run, bounds, coefficients, truth);
   std::printf("\nResult written to %s (%.2f s: reading, pose detection and calibration)\n",
               out_path.c_str(), seconds);
   return row;

@@ -11,8 +11,9 @@
 namespace sinscal::cli {
 
 /// Runs the table-free calibration of `session` through the gate: a failed check throws
-/// PlausibilityError (exit 2) unless `force`; the checks, passed or forced, are in `gate`.
+/// PlausibilityError (exit 2) unless `force`; the checks, passed or forced, are in `gate`, the
+/// fit's bounds per stage in `bounds` (when given).
 TableFreeRun gated_table_free_run(const Session& session, TableFreeRunOptions options, bool force,
-                                  PlausibilityReport& gate);
+                                  PlausibilityReport& gate, HandheldFitBounds* bounds = nullptr);
 
 }  // namespace sinscal::cli

@@ -6,6 +6,7 @@
 
 #include "filter/closed_form/closed_form.hpp"
 #include "filter/kalman/kalman_run.hpp"
+#include "filter/plausibility/rest_plausibility.hpp"
 #include "filter/table_free/handheld_run.hpp"
 #include "models/sensor_profile.hpp"
 #include "report/result.hpp"
@@ -31,8 +32,8 @@ void print_closed_form(const ClosedFormReport& report, const ResultCoefficients&
 
 /// A table-free calibration: the data and the poses found, the fit (chi2/dof), the coefficients
 /// with sigmas (and truth), the raw-count view, the validation records.
-void print_table_free(const TableFreeRun& run, const ResultCoefficients& coefficients,
-                      const ResultCoefficients& truth);
+void print_table_free(const TableFreeRun& run, const HandheldFitBounds& bounds,
+                      const ResultCoefficients& coefficients, const ResultCoefficients& truth);
 /// An Allan analysis: the stretch analysed and the fitted noise terms per axis.
 void print_allan(const AllanRun& run);
 

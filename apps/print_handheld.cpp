@@ -12,8 +12,8 @@
 
 namespace sinscal::cli {
 
-void print_table_free(const TableFreeRun& run, const ResultCoefficients& coefficients,
-                      const ResultCoefficients& truth) {
+void print_table_free(const TableFreeRun& run, const HandheldFitBounds& b,
+                      const ResultCoefficients& coefficients, const ResultCoefficients& truth) {
   const TableFreeResult& r = run.result;
   std::printf("Table-free calibration of '%s': %zu samples, %.1f s of data\n", run.name.c_str(),
               run.samples, run.duration);
@@ -32,19 +32,25 @@ void print_table_free(const TableFreeRun& run, const ResultCoefficients& coeffic
   if (run.poses.size() > 1) std::printf(", then %.1f-%.1f s each", shortest, longest);
   std::printf("\nGravity %.5f m/s^2 (%s); body frame: the accelerometer triad\n", r.gravity,
               run.gravity_from.c_str());
-  std::printf("Fit: chi2/dof %.3f (dof %d), %d iterations, %s\n", r.chi2_per_dof, r.dof,
-              r.iterations,
-              r.converged ? "converged (the solver's convergence test: cost change, gradient or "
-                            "parameter step below tolerance; not a chi2 threshold)"
-                          : "NOT converged");
-  const HandheldFitBounds b = handheld_fit_bounds(r);
+  std::printf("Fit: chi2/dof %.3f (dof %d), %d iterations, %s (the last step %.2g of a sigma)\n",
+              r.chi2_per_dof, r.dof, r.iterations, r.converged ? "converged" : "NOT converged",
+              r.step_over_sigma);
   std::printf(
-      "Fit parts (chi2/dof, sigma scale): accel poses %.3g (x%.3g), gyro poses %.3g (x%.3g), "
-      "turns %.3g (x%.3g)\nFit gate: static poses chi2 %.4g <= %.4g, turns chi2 %.4g <= %.4g "
-      "(the turns' expected excess %.3g: timing and dynamics, docs/methods/table-free.md)\n",
-      r.accel_fit.chi2_per_dof(), r.accel_fit.sigma_scale, r.gyro_rest_fit.chi2_per_dof(),
-      r.gyro_rest_fit.sigma_scale, r.turn_fit.chi2_per_dof(), r.turn_fit.sigma_scale, b.static_chi2,
-      b.static_bound, b.turn_chi2, b.turn_bound, b.turn_excess);
+      "Fit quality per stage (chi2/dof against the white noise): accel poses %.3g, gyro poses "
+      "%.3g, turns %.3g\nNoise model completed from the residuals%s: bias wander accel %.3g mg "
+      "(pose sigmas x%.3g), gyro %.3g deg/s (x%.3g); the turns' variance x%.3g (sigmas x%.3g)\n",
+      r.accel_fit.chi2_per_dof(), r.gyro_rest_fit.chi2_per_dof(), r.turn_fit.chi2_per_dof(),
+      r.variance_settled ? "" : " (NOT settled)", r.accel_fit.wander / units::mg,
+      r.accel_fit.sigma_scale, r.gyro_rest_fit.wander / units::deg_per_s,
+      r.gyro_rest_fit.sigma_scale, r.turn_fit.sigma_scale * r.turn_fit.sigma_scale,
+      r.turn_fit.sigma_scale);
+  std::printf(
+      "Fit gate (bias wander from the %s: accel %.3g mg, gyro %.3g deg/s): accel poses chi2 "
+      "%.4g <= %.4g, gyro poses %.4g <= %.4g, turns %.4g <= %.4g (the turns' expected excess "
+      "%.3g: timing and dynamics, docs/methods/table-free.md)\n",
+      b.wander_source.c_str(), b.accel.wander / units::mg, b.gyro.wander / units::deg_per_s,
+      b.accel.chi2, b.accel.bound, b.gyro.chi2, b.gyro.bound, b.turns.chi2, b.turns.bound,
+      b.turn_excess);
   std::printf("Noise per reading at rest: accel %.3g %.3g %.3g m/s^2, gyro %.3g %.3g %.3g deg/s\n",
               r.accel_noise(0), r.accel_noise(1), r.accel_noise(2),
               r.gyro_noise(0) / units::deg_per_s, r.gyro_noise(1) / units::deg_per_s,

@@ -17,7 +17,8 @@ nlohmann::ordered_json fit_part_json(const TableFreeFitPart& f) {
           {"residuals", f.residuals},
           {"dof", f.dof},
           {"chi2_per_dof", f.chi2_per_dof()},
-          {"sigma_scale", f.sigma_scale}};
+          {"sigma_scale", f.sigma_scale},
+          {"wander", f.wander}};
 }
 
 nlohmann::ordered_json stage(const TableFreeStage& s) {
@@ -90,9 +91,14 @@ nlohmann::ordered_json result_sections(const TableFreeRun& run) {
       {"body_frame", "accelerometer triad"},
       {"fixed_by_convention", fixed},
       {"solver",
-       "Ceres (Levenberg-Marquardt), covariance scaled per part (accelerometers, gyro biases, "
-       "gyro matrix) by sqrt(chi2/dof) of its part when above 1"},
+       "Ceres (Levenberg-Marquardt); the noise model completed per part from its residuals, "
+       "re-estimated until it settles: the static poses' means with a bias wander per triad "
+       "(fit_parts wander, SI), the turns by a variance factor (sigma_scale^2); the covariance "
+       "is the completed model's, the parts' chi2 against the white noise alone"},
       {"converged", r.converged},
+      {"step_over_sigma", r.step_over_sigma},
+      {"variance_rounds", r.variance_rounds},
+      {"variance_settled", r.variance_settled},
       {"termination", r.termination},
       {"iterations", r.iterations},
       {"chi2", r.chi2},

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <string>
 
@@ -224,4 +225,46 @@ TEST_CASE("Pose detector on the real MPU-6050 session", "[pose][real]") {
     CHECK(p.t_start >= q.t_start - 0.01);
     CHECK(p.t_end <= q.t_end + 0.01);
   }
+}
+
+TEST_CASE("Pose detector keeps poses whose accelerometer noise rises 2.5-3x in some orientations",
+          "[pose]") {
+  // The OpenAXES ADXL355's noise rises 2-3x in some orientations (on the axis near gravity, or
+  // on all three): such a pose is still at rest, and the gyros see no motion.
+  const SensorProfile mems = SensorProfile::load(test::source_path("config/sensors/mems.ini"));
+  Site site;
+  site.lat_rad = 45.0 * units::deg;
+  HandheldOptions ho;
+  ho.first_rest = 20.0;
+  ho.poses = 15;
+  const Motion m = handheld_motion(site, ho, 3);
+  const auto samples = test::simulate(m, mems.draw(3), 100.0, &mems.noise, 13);
+  const auto clean = counts_from_readings(readings_from_samples(samples), mpu6050_like());
+  const PoseDetection reference = detect_poses(clean);
+  REQUIRE(reference.poses.size() == m.dwells().size());
+  // Poses 1, 4, 7, ...: one axis 3x; poses 2, 5, 8, ...: all three 2.5x (extra white noise).
+  auto raised = [&](bool all_axes) {
+    std::vector<ImuReading> counts = clean;
+    std::mt19937_64 rng(derive_seed(3, 7));
+    std::normal_distribution<double> unit(0.0, 1.0);
+    for (std::size_t k = 1; k < reference.poses.size(); ++k) {
+      const Pose& p = reference.poses[k];
+      const bool one = k % 3 == 1, every = all_axes && k % 3 == 2;
+      if (!one && !every) continue;
+      for (std::size_t i = p.first; i <= p.last; ++i)
+        for (int c = 0; c < 3; ++c) {
+          const double rise = one ? (c == static_cast<int>((k / 3) % 3) ? 3.0 : 1.0) : 2.5;
+          const double extra = std::sqrt((rise * rise - 1.0) * reference.accel_noise_variance(c));
+          counts[i].accel(c) += extra * unit(rng);
+        }
+    }
+    return counts;
+  };
+  const PoseDetection found = detect_poses(raised(true));
+  CAPTURE(found.threshold);
+  CHECK(found.poses.size() == m.dwells().size());
+  // The accelerometers alone: one axis's rise is still a pose.
+  PoseDetectorOptions alone;
+  alone.use_gyro = false;
+  CHECK(detect_poses(raised(false), alone).poses.size() == detect_poses(clean, alone).poses.size());
 }

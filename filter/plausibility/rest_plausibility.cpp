@@ -27,6 +27,10 @@ constexpr double kGenericGyroNoiseLo = 1e-4 * units::deg_per_sqrt_h;
 constexpr double kGenericGyroNoiseHi = 20.0 * units::deg_per_sqrt_h;
 constexpr double kGenericAccelNoiseLo = 0.5 * units::ug_per_sqrt_hz;
 constexpr double kGenericAccelNoiseHi = 5000.0 * units::ug_per_sqrt_hz;
+// A consumer MEMS unit's bias drift over a hand-held session without a profile: the data sheets'
+// offset temperature drift (about 1 mg/K, 0.05 deg/s/K) over 2 K of warm-up or a hand's heat.
+constexpr double kGenericAccelWander = 2.0 * units::mg;
+constexpr double kGenericGyroWander = 0.1 * units::deg_per_s;
 // A profile's noise: a unit half as noisy as its data sheet's typical density is not credible;
 // ten times noisier is a hand's tremor or a vibrating bench, not yet a wrong unit.
 constexpr double kProfileNoiseBelow = 2.0;
@@ -191,6 +195,8 @@ RestLimits RestLimits::from_profile(const SensorProfile* p) {
     l.gyro_noise_hi = kGenericGyroNoiseHi;
     l.accel_noise_lo = kGenericAccelNoiseLo;
     l.accel_noise_hi = kGenericAccelNoiseHi;
+    l.accel_wander.instability = kGenericAccelWander;
+    l.gyro_wander.instability = kGenericGyroWander;
     return l;
   }
   // The table's gate's bounds (a rest is a dwell of unknown attitude).
@@ -203,6 +209,24 @@ RestLimits RestLimits::from_profile(const SensorProfile* p) {
   l.gyro_noise_hi = gw > 0.0 ? gw * kProfileNoiseAbove : kGenericGyroNoiseHi;
   l.accel_noise_lo = aw > 0.0 ? aw / kProfileNoiseBelow : kGenericAccelNoiseLo;
   l.accel_noise_hi = aw > 0.0 ? aw * kProfileNoiseAbove : kGenericAccelNoiseHi;
+  // The profile's bias wander; a profile that states none (white noise only) gets the generic
+  // thermal drift, said in the source.
+  const auto wander = [](const TriadNoise& n, double generic) {
+    if (!(n.bias_instability > 0.0) && !(n.random_walk > 0.0)) return Wander{generic, 0.0, 0.0};
+    return Wander{n.bias_instability, n.bias_instability > 0.0 ? n.correlation_time : 0.0,
+                  n.random_walk};
+  };
+  l.accel_wander = wander(p->noise.accel, kGenericAccelWander);
+  l.gyro_wander = wander(p->noise.gyro, kGenericGyroWander);
+  const auto stated = [](const TriadNoise& n) {
+    return n.bias_instability > 0.0 || n.random_walk > 0.0;
+  };
+  if (!stated(p->noise.accel) || !stated(p->noise.gyro))
+    l.wander_source = l.source + " (no bias wander stated for " +
+                      (stated(p->noise.accel)  ? "the gyros"
+                       : stated(p->noise.gyro) ? "the accelerometers"
+                                               : "either triad") +
+                      ": a consumer MEMS unit's thermal drift)";
   return l;
 }
 
@@ -324,38 +348,91 @@ double turn_excess(const TableFreeTurn& t) {
 
 }  // namespace
 
-HandheldFitBounds handheld_fit_bounds(const TableFreeResult& r) {
+namespace {
+
+// Mean-square deviation of the bias from its session mean over `span` s, and the number of its
+// independent values: a Gauss-Markov process of variance B^2 and correlation time tau keeps
+// B^2 (1 - g(span/tau)), g(x) = 2/x - 2 (1 - e^-x)/x^2 the variance of its time average, with
+// about 1 + span/tau independent values; a random walk K keeps K^2 span/6, one value.
+std::pair<double, double> wander_variance(const RestLimits::Wander& w, double span) {
+  double var = w.random_walk * w.random_walk * span / 6.0;
+  double values = 1.0;
+  if (w.instability > 0.0 && w.correlation_time > 0.0 && span > 0.0) {
+    const double x = span / w.correlation_time;
+    const double g = x < 1e-6 ? 1.0 - x / 3.0 : 2.0 / x - 2.0 * (1.0 - std::exp(-x)) / (x * x);
+    var += w.instability * w.instability * (1.0 - g);
+    values = 1.0 + x;
+  } else {
+    var += w.instability * w.instability;  // one value over the session
+  }
+  return {var, values};
+}
+
+// A static part: its white-noise quantile plus the wander's expected chi2 (each residual's
+// wander variance over its noise variance n_p / N_i^2, the fit's share removed by dof/residuals)
+// at the quantile of its independent values.
+HandheldFitBounds::Part static_part(const TableFreeFitPart& f, const TableFreeResult& r,
+                                    const Eigen::Vector3d& noise, const RestLimits::Wander& w) {
+  HandheldFitBounds::Part p{f.chi2, f.dof, 0.0, 0.0, 0.0};
+  const double span = r.poses.empty() ? 0.0 : r.poses.back().t_end - r.poses.front().t_start;
+  const auto [var, values] = wander_variance(w, span);
+  p.wander = std::sqrt(var);
+  double per_var = 0.0;  // sum over the residuals of n_p / N_i^2
+  for (const auto& pose : r.poses)
+    for (int i = 0; i < 3; ++i)
+      if (noise(i) > 0.0) per_var += static_cast<double>(pose.count) / (noise(i) * noise(i));
+  const double share = f.residuals > 0 ? f.dof / f.residuals : 0.0;
+  const double wander_chi2 = var * per_var * share;
+  const double n_values =
+      std::min(values, static_cast<double>(std::max<std::size_t>(1, r.poses.size())));
+  p.expected = f.dof + wander_chi2;
+  p.bound = chi2_quantile(f.dof, HandheldFitBounds::kFalseAlarm) +
+            wander_chi2 * chi2_quantile(n_values, HandheldFitBounds::kFalseAlarm) / n_values;
+  return p;
+}
+
+}  // namespace
+
+HandheldFitBounds handheld_fit_bounds(const TableFreeResult& r, const RestLimits& l) {
   HandheldFitBounds b;
-  b.static_chi2 = r.accel_fit.chi2 + r.gyro_rest_fit.chi2;
-  b.static_dof = r.accel_fit.dof + r.gyro_rest_fit.dof;
-  b.static_bound = HandheldFitBounds::kStaticExcess *
-                   chi2_quantile(b.static_dof, HandheldFitBounds::kFalseAlarm);
-  b.turn_chi2 = r.turn_fit.chi2;
-  b.turn_dof = r.turn_fit.dof;
+  b.wander_source = l.wander_source.empty() ? l.source : l.wander_source;
+  b.accel = static_part(r.accel_fit, r, r.accel_noise, l.accel_wander);
+  b.gyro = static_part(r.gyro_rest_fit, r, r.gyro_noise, l.gyro_wander);
+  b.turns = {r.turn_fit.chi2, r.turn_fit.dof, 0.0, 0.0, 0.0};
   double sum = 0.0;
   for (const auto& t : r.turns) sum += turn_excess(t);
   b.turn_excess = r.turns.empty() ? 1.0 : sum / static_cast<double>(r.turns.size());
-  b.turn_bound = b.turn_excess * chi2_quantile(b.turn_dof, HandheldFitBounds::kFalseAlarm);
+  b.turns.expected = b.turn_excess * r.turn_fit.dof;
+  b.turns.bound = b.turn_excess * chi2_quantile(b.turns.dof, HandheldFitBounds::kFalseAlarm);
   return b;
 }
 
-PlausibilityCheck check_handheld_fit(const TableFreeResult& r, const std::string& input) {
-  const HandheldFitBounds b = handheld_fit_bounds(r);
+PlausibilityCheck check_handheld_fit(const TableFreeResult& r, const RestLimits& l,
+                                     const std::string& input) {
+  const HandheldFitBounds b = handheld_fit_bounds(r, l);
   PlausibilityCheck c{"fit", true, ""};
-  auto part = [&](const char* what, double chi2, double dof, double bound) {
-    if (chi2 <= bound) return;
+  auto part = [&](const char* what, const HandheldFitBounds::Part& p) {
+    if (p.chi2 <= p.bound) return;
     c.passed = false;
     c.detail +=
         std::string(c.detail.empty() ? input + ": the table-free fit's residuals: " : "; ") + what +
-        " chi2 " + number(chi2) + " (dof " + number(dof) + ", chi2/dof " +
-        number(chi2 / std::max(dof, 1.0)) + ") beyond its bound " + number(bound);
+        " chi2 " + number(p.chi2) + " (dof " + number(p.dof) + ", chi2/dof " +
+        number(p.chi2 / std::max(p.dof, 1.0)) + ") beyond its bound " + number(p.bound) + " (" +
+        number(p.chi2 / std::max(p.bound, 1e-300), 3) + " times)";
   };
-  part("static poses", b.static_chi2, b.static_dof, b.static_bound);
-  part("turns", b.turn_chi2, b.turn_dof, b.turn_bound);
+  part("accelerometer poses", b.accel);
+  part("gyro poses", b.gyro);
+  part("turns", b.turns);
   if (!c.passed)
-    c.detail +=
-        " (docs/methods/table-free.md): not the data's model; the data are not what the session "
-        "says (a wrong file, column or unit)";
+    c.detail += " (the noise model: the data's noise, the bias wander of the " + b.wander_source +
+                ", the turns' timing; docs/methods/table-free.md): not the data's model; the "
+                "data are not what the session says (a wrong file, column or unit)";
+  if (!r.converged) {
+    c.passed = false;
+    c.detail += std::string(c.detail.empty() ? input + ": " : "; ") +
+                "the estimate has not converged (its last step is " + number(r.step_over_sigma, 3) +
+                " of a sigma)";
+  }
   return c;
 }
 

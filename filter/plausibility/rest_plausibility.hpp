@@ -35,6 +35,18 @@ struct RestLimits {
   double max_fit_chi2_per_dof = 1000.0;
   /// |correlation| of a gyro and an accelerometer column at or above this: one signal.
   double same_signal = 0.999;
+  /// How far each triad's bias wanders between the poses of a hand-held session (the fit takes
+  /// one constant bias): the profile's bias instability (Gauss-Markov: 1-sigma, correlation
+  /// time) and random walk; without a profile, a consumer MEMS unit's thermal drift over a
+  /// session (the data sheets' offset drift over 2 K: 2 mg and 0.1 deg/s, one value), also for
+  /// a profile that states no bias instability or random walk for the triad.
+  struct Wander {
+    double instability = 0.0;       // rad/s | m/s^2, 1-sigma
+    double correlation_time = 0.0;  // s (0: one value over the session, no decorrelation)
+    double random_walk = 0.0;       // rad/s/sqrt(s) | m/s^2/sqrt(s)
+  };
+  Wander accel_wander, gyro_wander;
+  std::string wander_source;  // where the wander comes from when not `source` alone
 
   /// From the profile's error ranges and noise (3 times the largest error they allow; noise
   /// within 1/2 and 10 times its density), or the generic MEMS bounds (nullptr).
@@ -74,23 +86,32 @@ PlausibilityCheck check_same_signal(const std::vector<ImuReading>& readings,
 /// "same signal" for a log split over two files: the same file given as accel_file and gyro_file.
 PlausibilityCheck check_same_files(const LogFormat& log);
 
-/// The hand-held fit gate's bounds, per part of the fit (docs/methods/table-free.md, "Sigmas and
-/// the fit gate"): the static poses' chi2 (both triads) against its chi-square quantile times
-/// kStaticExcess; the turns' against their quantile times the mean over the turns of the
-/// variance they are expected to have (noise, a timing error of one sample interval at the
-/// turn's peak rate, kTurnDynamics of its angle) over the noise the fit gives them.
+/// The hand-held fit gate's bounds, per stage of the fit (docs/methods/table-free.md, "Sigmas
+/// and the fit gate"): each part's chi2 against what a correct session gives under the noise
+/// model. Static poses (accelerometers; gyros): the chi-square quantile of their dof (white
+/// noise) plus the expected chi2 of the bias wander (RestLimits::Wander over the session's span)
+/// times the quantile of its effective number of independent values over that number. Turns:
+/// their quantile times the mean over the turns of the variance they are expected to have (noise,
+/// a timing error of one sample interval at the turn's peak rate, kTurnDynamics of its angle)
+/// over the noise the fit gives them.
 struct HandheldFitBounds {
-  static constexpr double kFalseAlarm = 1e-3;    // of each part's quantile
-  static constexpr double kStaticExcess = 30.0;  // bias instability over a pose
+  static constexpr double kFalseAlarm = 1e-3;    // of each part's quantiles
   static constexpr double kTurnDynamics = 5e-3;  // unmodelled share of a turn's angle
-  double static_chi2 = 0.0, static_bound = 0.0, static_dof = 0.0;
-  double turn_chi2 = 0.0, turn_bound = 0.0, turn_dof = 0.0;
-  double turn_excess = 1.0;  // mean expected variance over the fit's, over the turns
+  struct Part {
+    double chi2 = 0.0, dof = 0.0, bound = 0.0;
+    double expected = 0.0;  // the chi2 a correct session gives on average (noise and wander)
+    double wander = 0.0;    // 1-sigma bias wander over the session assumed (SI), static parts
+  };
+  Part accel, gyro, turns;
+  double turn_excess = 1.0;   // mean expected variance over the fit's, over the turns
+  std::string wander_source;  // "sensor profile 'x'" or "generic MEMS bounds"
 };
-HandheldFitBounds handheld_fit_bounds(const TableFreeResult& result);
+HandheldFitBounds handheld_fit_bounds(const TableFreeResult& result, const RestLimits& limits);
 
-/// "fit" of a hand-held session: each part within its bound (handheld_fit_bounds).
-PlausibilityCheck check_handheld_fit(const TableFreeResult& result, const std::string& input);
+/// "fit" of a hand-held session: each part within its bound (handheld_fit_bounds); a fit whose
+/// estimate has not converged (TableFreeResult::converged) fails too.
+PlausibilityCheck check_handheld_fit(const TableFreeResult& result, const RestLimits& limits,
+                                     const std::string& input);
 
 /// "fit": a solution's chi2 per dof against the limit; `what` names the fit.
 PlausibilityCheck check_fit(double chi2_per_dof, const RestLimits& limits, const std::string& input,

@@ -48,6 +48,7 @@ void reading_statistics(const std::vector<ImuReading>& readings, std::size_t fir
 namespace {
 
 constexpr int kChannels = 6;
+constexpr double kAxisRise = 3.0;  // an accelerometer's noise over its reference it may rise to
 using ChannelValues = std::array<double, kChannels>;
 
 void check_options(const PoseDetectorOptions& o) {
@@ -74,6 +75,9 @@ double median_interval(const std::vector<ImuReading>& r) {
 // their differences); `floor` is the rounding level of those variances.
 struct WindowedVariances {
   std::array<std::vector<double>, kChannels> var;
+  /// Half the mean square of consecutive differences over the window: the white noise's
+  /// variance, which a smooth motion barely moves (the window's own noise estimate).
+  std::array<std::vector<double>, kChannels> white;
   ChannelValues floor{};
 };
 
@@ -81,19 +85,23 @@ WindowedVariances windowed_variances(const std::vector<ImuReading>& r, std::size
   const std::size_t n = r.size(), h = w / 2;
   const double wd = static_cast<double>(w);
   WindowedVariances out;
-  std::vector<double> s(n + 1), s2(n + 1);
+  std::vector<double> s(n + 1), s2(n + 1), d2(n + 1);
   for (int c = 0; c < kChannels; ++c) {
     const double x0 = channel(r[0], c);
-    s[0] = s2[0] = 0.0;
+    s[0] = s2[0] = d2[0] = d2[1] = 0.0;
     for (std::size_t k = 0; k < n; ++k) {
       const double x = channel(r[k], c) - x0;
       s[k + 1] = s[k] + x;
       s2[k + 1] = s2[k] + x * x;
+      if (k > 0) d2[k + 1] = d2[k] + std::pow(channel(r[k], c) - channel(r[k - 1], c), 2);
     }
     out.var[c].resize(n - 2 * h);
+    out.white[c].resize(n - 2 * h);
     for (std::size_t i = h; i + h < n; ++i) {
       const double sum = s[i + h + 1] - s[i - h], sum2 = s2[i + h + 1] - s2[i - h];
       out.var[c][i - h] = std::max(0.0, (sum2 - sum * sum / wd) / (wd - 1.0));
+      // Differences of readings i-h .. i+h: d2 terms i-h+1 .. i+h.
+      out.white[c][i - h] = (d2[i + h + 1] - d2[i - h + 1]) / (2.0 * (wd - 1.0));
     }
     out.floor[c] = 100.0 * std::numeric_limits<double>::epsilon() * s2[n] / (wd - 1.0);
   }
@@ -143,7 +151,12 @@ class RestClassifier {
     for (std::size_t i = 0; i < is_static.size(); ++i) {
       double sa = 0.0, sg = 0.0;
       for (int c = 0; c < 3; ++c) {
-        sa += v_.var[c][i] / ref[c];
+        // An accelerometer's noise may rise 2-3x in some orientations (an ADXL355, on one axis
+        // or all three): each axis against its reference or, up to kAxisRise^2 times it, the
+        // window's own white noise (consecutive differences), which a hand's smooth motion
+        // hardly raises while it raises the variance by orders of magnitude.
+        const double own = std::clamp(v_.white[c][i], ref[c], kAxisRise * kAxisRise * ref[c]);
+        sa += v_.var[c][i] / own;
         sg += v_.var[c + 3][i] / ref[c + 3];
       }
       is_static[i] = sa <= threshold && (!o_.use_gyro || sg <= threshold);
@@ -181,9 +194,17 @@ std::vector<std::pair<std::size_t, std::size_t>> static_runs(const std::vector<I
     for (std::size_t k = first; k <= last; ++k)
       for (int c = 0; c < kChannels; ++c) mean[c] += channel(r[k], c);
     for (auto& m : mean) m /= static_cast<double>(last - first + 1);
+    // Each channel's noise: the record's reference or the run's own, whichever is larger (a
+    // pose whose noise rose on one axis keeps its edges).
+    ChannelValues noise{};
+    for (std::size_t k = first; k <= last; ++k)
+      for (int c = 0; c < kChannels; ++c) noise[c] += std::pow(channel(r[k], c) - mean[c], 2);
+    for (int c = 0; c < kChannels; ++c)
+      noise[c] = std::max(rest.ref[c],
+                          noise[c] / static_cast<double>(std::max<std::size_t>(1, last - first)));
     auto quiet = [&](std::size_t k) {
       for (int c = 0; c < (o.use_gyro ? kChannels : 3); ++c)
-        if (std::abs(channel(r[k], c) - mean[c]) > o.edge_sigmas * std::sqrt(rest.ref[c]))
+        if (std::abs(channel(r[k], c) - mean[c]) > o.edge_sigmas * std::sqrt(noise[c]))
           return false;
       return true;
     };

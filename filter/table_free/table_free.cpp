@@ -3,6 +3,7 @@
 #include <ceres/ceres.h>
 #include <ceres/sphere_manifold.h>
 
+#include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
@@ -21,6 +22,7 @@ namespace {
 //   gyro linear (9): k_x k_y k_z, m_xy m_xz m_yx m_yz m_zx m_zy
 //   u_p (3): unit gravity-opposite direction (direction of the specific force) of pose p, body
 constexpr int kAccel = 9, kGyroBias = 3, kGyroLin = 9;
+constexpr int kVarianceRounds = 10;  // of the joint fit's part weights
 
 // The error model's linear part, I + diag(k) + M (models/imu_error_model.hpp), in the
 // parametrisation of the blocks above, for any scalar type (Ceres Jets).
@@ -474,6 +476,8 @@ class TableFreeSolver {
     out_.accel_noise = va_.cwiseSqrt();
     out_.gyro_noise = vg_.cwiseSqrt();
     const double dt_mean = t_sum / dof_sum;
+    mean_count_ = 0.0;
+    for (const auto& d : pd_) mean_count_ += d.n / static_cast<double>(pd_.size());
     rate_psd_ = vg_.mean() * dt_mean;  // rad^2/s: per-axis angle variance per second
   }
 
@@ -519,12 +523,12 @@ class TableFreeSolver {
     }
   }
 
-  void add_turns(ceres::Problem& problem) {
+  void add_turns(ceres::Problem& problem, double factor = 1.0) {
     turn_ids_.clear();
     for (std::size_t p = 0; p + 1 < pd_.size(); ++p)
       turn_ids_.push_back(problem.AddResidualBlock(
-          new TurnCost(r_, turns_[p].k0, turns_[p].k1, turns_[p].E, turns_[p].inv_sigma), nullptr,
-          gb_, gl_, u_[p].data(), u_[p + 1].data()));
+          new TurnCost(r_, turns_[p].k0, turns_[p].k1, turns_[p].E, turns_[p].inv_sigma),
+          weight(factor), gb_, gl_, u_[p].data(), u_[p + 1].data()));
   }
 
   // Stage 2: gyro bias from the poses' mean rates, then the gyro matrix from the turns.
@@ -543,48 +547,209 @@ class TableFreeSolver {
     out_.gyro_stage = run(problem, o_.max_iterations, "gyro");
   }
 
-  // Stage 3: joint refinement, then the covariance of the coefficient blocks (scaled by the
-  // chi-square per degree of freedom) and the result in catalog order.
+  // Stage 3: joint refinement. The noise model of each part is completed from its own
+  // residuals (variance components, docs/methods/table-free.md "Sigmas and the fit gate"): the
+  // static poses' means by an additive bias wander per triad (the fit takes one constant bias;
+  // a drifting bias moves every pose's mean alike, long or short), the turns by a variance factor
+  // (timing errors grow with the turn); re-estimated and the fit repeated until they settle.
+  // A part beyond its noise model then no longer drags the parts that hold theirs (the poses'
+  // gravity directions), and the covariance is the completed model's. The gate judges the parts'
+  // chi2 against the data's white noise alone.
   void solve_joint() {
-    ceres::Problem problem;
+    Weights w;
+    for (int round = 0; round < kVarianceRounds; ++round) {
+      ceres::Problem problem;
+      build_joint(problem, w);
+      solve_joint_once(problem);
+      const Weights next = next_weights();
+      const bool settled = w.settled(next, va_.mean() / mean_count_, vg_.mean() / mean_count_);
+      out_.variance_rounds = round + 1;
+      if (settled || round + 1 == kVarianceRounds) {
+        out_.variance_settled = settled;
+        step_over_sigma(problem);
+        store_coefficients(covariance_of_blocks(problem));
+        white_parts(w);
+        return;
+      }
+      w = next;
+    }
+  }
+
+  struct Weights {
+    double accel = 0.0, gyro = 0.0;  // bias wander variances added to each pose mean's
+    double turns = 1.0;              // variance factor of the turns
+    bool settled(const Weights& n, double accel_white, double gyro_white) const {
+      return std::abs(n.accel - accel) < 0.02 * (accel + accel_white) &&
+             std::abs(n.gyro - gyro) < 0.02 * (gyro + gyro_white) &&
+             std::abs(n.turns / turns - 1.0) < 0.01;
+    }
+  };
+
+  // tau^2 >= 0 with sum e^2 / (s^2 + tau^2) = dof (0 when the white noise explains them).
+  static double additive_variance(const std::vector<double>& e2, const std::vector<double>& s2,
+                                  double dof) {
+    auto excess = [&](double tau2) {
+      double sum = 0.0;
+      for (std::size_t i = 0; i < e2.size(); ++i) sum += e2[i] / (s2[i] + tau2);
+      return sum - dof;
+    };
+    if (!(dof > 0.0) || excess(0.0) <= 0.0) return 0.0;
+    double lo = 0.0, hi = 0.0;
+    for (double x : e2) hi += x;
+    for (int k = 0; k < 100; ++k) {
+      const double mid = 0.5 * (lo + hi);
+      (excess(mid) > 0.0 ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+  }
+
+  // The next round's weights from this solution's residuals.
+  Weights next_weights() {
+    Weights n;
+    std::vector<double> ea, sa, eg, sg;
     for (std::size_t p = 0; p < pd_.size(); ++p) {
       const auto& d = pd_[p];
+      double ra[3], rg[3];
+      AccelPoseCost{d.accel, Eigen::Vector3d::Ones(), g_}(a_, u_[p].data(), ra);
+      GyroPoseCost{d.gyro, Eigen::Matrix3d::Identity(), omega_v_}(gb_, gl_, u_[p].data(), rg);
+      const Eigen::Matrix3d cov = gyro_pose_covariance(p, 0.0);
+      for (int i = 0; i < 3; ++i) {
+        ea.push_back(ra[i] * ra[i]);
+        sa.push_back(va_(i) / d.n);
+        eg.push_back(rg[i] * rg[i]);
+        sg.push_back(cov(i, i));
+      }
+    }
+    n.accel = additive_variance(ea, sa, out_.accel_fit.dof);
+    n.gyro = additive_variance(eg, sg, out_.gyro_rest_fit.dof);
+    n.turns = std::max(1.0, out_.turn_fit.chi2_per_dof());
+    return n;
+  }
+
+  // The parts' chi2 against the white noise alone (the gate's), at the solution; the weights
+  // found (bias wander, the turns' factor) recorded with them.
+  void white_parts(const Weights& w) {
+    ceres::Problem white;
+    build_joint(white, Weights{});
+    out_.turns.clear();
+    fit_parts(white);
+    out_.chi2 = out_.accel_fit.chi2 + out_.gyro_rest_fit.chi2 + out_.turn_fit.chi2;
+    out_.chi2_per_dof = out_.chi2 / out_.dof;
+    out_.accel_fit.wander = std::sqrt(w.accel);
+    out_.gyro_rest_fit.wander = std::sqrt(w.gyro);
+    // A typical pose mean's sigma over its white noise's; the turns' factor's root.
+    out_.accel_fit.sigma_scale = std::sqrt(1.0 + w.accel * mean_count_ / va_.mean());
+    out_.gyro_rest_fit.sigma_scale = std::sqrt(1.0 + w.gyro * mean_count_ / vg_.mean());
+    out_.turn_fit.sigma_scale = std::sqrt(w.turns);
+  }
+
+  static ceres::LossFunction* weight(double factor) {
+    return factor > 1.0 ? new ceres::ScaledLoss(nullptr, 1.0 / factor, ceres::TAKE_OWNERSHIP)
+                        : nullptr;
+  }
+
+  // A pose mean's rate covariance: white noise, the Earth rate's unknown part, a bias wander.
+  Eigen::Matrix3d gyro_pose_covariance(std::size_t p, double wander) const {
+    Eigen::Matrix3d cov = (vg_ / pd_[p].n).asDiagonal();
+    cov += o_.site ? Eigen::Matrix3d(omega_h_ * omega_h_ / 2.0 *
+                                     (Eigen::Matrix3d::Identity() - u_[p] * u_[p].transpose()))
+                   : Eigen::Matrix3d(Omega_ * Omega_ / 3.0 * Eigen::Matrix3d::Identity());
+    return cov + wander * Eigen::Matrix3d::Identity();
+  }
+
+  void build_joint(ceres::Problem& problem, const Weights& w) {
+    accel_ids_.clear();
+    gyro_ids_.clear();
+    for (std::size_t p = 0; p < pd_.size(); ++p) {
+      const auto& d = pd_[p];
+      const Eigen::Vector3d sigma2 = va_ / d.n + Eigen::Vector3d::Constant(w.accel);
       accel_ids_.push_back(problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<AccelPoseCost, 3, kAccel, 3>(
-              new AccelPoseCost{d.accel, (va_ / d.n).cwiseSqrt().cwiseInverse(), g_}),
+              new AccelPoseCost{d.accel, sigma2.cwiseSqrt().cwiseInverse(), g_}),
           nullptr, a_, u_[p].data()));
-      Eigen::Matrix3d cov = (vg_ / d.n).asDiagonal();
-      cov += o_.site ? Eigen::Matrix3d(omega_h_ * omega_h_ / 2.0 *
-                                       (Eigen::Matrix3d::Identity() - u_[p] * u_[p].transpose()))
-                     : Eigen::Matrix3d(Omega_ * Omega_ / 3.0 * Eigen::Matrix3d::Identity());
-      const Eigen::Matrix3d L = cov.llt().matrixL();
+      const Eigen::Matrix3d L = gyro_pose_covariance(p, w.gyro).llt().matrixL();
       gyro_ids_.push_back(problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<GyroPoseCost, 3, kGyroBias, kGyroLin, 3>(
               new GyroPoseCost{d.gyro, L.inverse(), omega_v_}),
           nullptr, gb_, gl_, u_[p].data()));
     }
-    add_turns(problem);
+    add_turns(problem, w.turns);
     for (auto& v : u_) problem.SetManifold(v.data(), new ceres::SphereManifold<3>());
+  }
+
+  void solve_joint_once(ceres::Problem& problem) {
     out_.joint_stage = run(problem, o_.max_iterations, "joint");
     if (!out_.joint_stage.converged)
       throw TableFreeError(Kind::SolveFailed,
                            "table-free calibration: the joint solution did not converge in " +
                                std::to_string(o_.max_iterations) +
-                               " iterations (inconsistent data: poses that are not at rest, or "
-                               "a wrong gravity?)");
+                               " iterations (inconsistent data: poses that are not at rest, a "
+                               "wrong gravity, or gyro columns, unit or sample rate that do not "
+                               "turn the poses into each other)");
     out_.iterations =
         out_.accel_stage.iterations + out_.gyro_stage.iterations + out_.joint_stage.iterations;
-    out_.converged = true;
     out_.termination = out_.joint_stage.message;
-    out_.chi2 = out_.joint_stage.chi2;
     out_.dof = out_.joint_stage.residuals - out_.joint_stage.parameters;
     if (out_.dof <= 0)
       throw TableFreeError(Kind::TooFewPoses,
                            "table-free calibration: no degrees of freedom left with " +
                                std::to_string(pd_.size()) + " poses");
-    out_.chi2_per_dof = out_.chi2 / out_.dof;
+    out_.turns.clear();
     fit_parts(problem);
-    store_coefficients(covariance_of_blocks(problem));
+    // The chi2 against the noise model (the parts' unweighted sums), not the weighted cost.
+    out_.chi2 = out_.accel_fit.chi2 + out_.gyro_rest_fit.chi2 + out_.turn_fit.chi2;
+    out_.chi2_per_dof = out_.chi2 / out_.dof;
+  }
+
+  // The whitened, weighted Jacobian of the fit and its residuals at the solution.
+  static void jacobian_of(ceres::Problem& problem, Eigen::MatrixXd& J, Eigen::VectorXd* r) {
+    ceres::Problem::EvaluateOptions eo;
+    ceres::CRSMatrix crs;
+    std::vector<double> res;
+    problem.Evaluate(eo, nullptr, r ? &res : nullptr, nullptr, &crs);
+    J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+    for (int i = 0; i < crs.num_rows; ++i)
+      for (int k = crs.rows[static_cast<std::size_t>(i)];
+           k < crs.rows[static_cast<std::size_t>(i) + 1]; ++k)
+        J(i, crs.cols[static_cast<std::size_t>(k)]) = crs.values[static_cast<std::size_t>(k)];
+    if (r) *r = Eigen::Map<Eigen::VectorXd>(res.data(), static_cast<Eigen::Index>(res.size()));
+  }
+
+  // "Converged" from the estimate: the Gauss-Newton step still left at the solution, each
+  // coefficient's against its sigma (the same weighted normal equations give both). Beyond
+  // kConvergedStep of a sigma somewhere the estimate is still moving: not converged.
+  void step_over_sigma(ceres::Problem& problem) {
+    Eigen::MatrixXd J;
+    Eigen::VectorXd r;
+    jacobian_of(problem, J, &r);
+    const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(J);
+    const Eigen::VectorXd step = cod.solve(-r);
+    const Eigen::MatrixXd cov =
+        Eigen::MatrixXd(J.transpose() * J).completeOrthogonalDecomposition().pseudoInverse();
+    double worst = 0.0;
+    for (const double* block : {static_cast<const double*>(a_), static_cast<const double*>(gb_),
+                                static_cast<const double*>(gl_)}) {
+      const int offset = column_of(problem, block);
+      const int size = problem.ParameterBlockSize(block);
+      for (int i = offset; i < offset + size; ++i)
+        if (cov(i, i) > 0.0) worst = std::max(worst, std::abs(step(i)) / std::sqrt(cov(i, i)));
+    }
+    out_.step_over_sigma = worst;
+    out_.converged = std::isfinite(worst) && worst < TableFreeResult::kConvergedStep;
+  }
+
+  // The first column of a parameter block in the Jacobian of Problem::Evaluate (the problem's
+  // own block order, tangent sizes).
+  static int column_of(ceres::Problem& problem, const double* block) {
+    std::vector<double*> blocks;
+    problem.GetParameterBlocks(&blocks);
+    int col = 0;
+    for (double* b : blocks) {
+      if (b == block) return col;
+      col += problem.ParameterBlockTangentSize(b);
+    }
+    throw TableFreeError(Kind::SolveFailed,
+                         "table-free calibration: a coefficient block is not in the fit");
   }
 
   // The residuals of some blocks at the solution.
@@ -611,18 +776,8 @@ class TableFreeSolver {
   // The leverage of each part (the sum of the hat matrix's diagonal over its residuals): the
   // parameters it determines, the directions shared with the other parts counted by share.
   std::array<double, 3> leverages(ceres::Problem& problem) const {
-    std::vector<ceres::ResidualBlockId> all = accel_ids_;
-    all.insert(all.end(), gyro_ids_.begin(), gyro_ids_.end());
-    all.insert(all.end(), turn_ids_.begin(), turn_ids_.end());
-    ceres::Problem::EvaluateOptions eo;
-    eo.residual_blocks = all;
-    ceres::CRSMatrix crs;
-    problem.Evaluate(eo, nullptr, nullptr, nullptr, &crs);
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
-    for (int i = 0; i < crs.num_rows; ++i)
-      for (int k = crs.rows[static_cast<std::size_t>(i)];
-           k < crs.rows[static_cast<std::size_t>(i) + 1]; ++k)
-        J(i, crs.cols[static_cast<std::size_t>(k)]) = crs.values[static_cast<std::size_t>(k)];
+    Eigen::MatrixXd J;
+    jacobian_of(problem, J, nullptr);
     const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(J).householderQ() *
                               Eigen::MatrixXd::Identity(J.rows(), J.cols());
     const Eigen::VectorXd h = Q.rowwise().squaredNorm();  // hat matrix diagonal
@@ -670,13 +825,8 @@ class TableFreeSolver {
                            "poses do not turn the unit about enough different axes)");
     Eigen::Matrix<double, 21, 21, Eigen::RowMajor> C_blocks;
     covariance.GetCovarianceMatrix(blocks, C_blocks.data());
-    // Each block by its own part's excess (not one factor for all: a gyro-only excess must not
-    // inflate the accelerometers' sigmas).
-    Eigen::Matrix<double, 21, 1> scale;
-    scale.segment<9>(0).setConstant(out_.accel_fit.sigma_scale);
-    scale.segment<3>(9).setConstant(out_.gyro_rest_fit.sigma_scale);
-    scale.segment<9>(12).setConstant(out_.turn_fit.sigma_scale);
-    C_blocks = scale.asDiagonal() * C_blocks * scale.asDiagonal();
+    // The parts' variance factors are the fit's weights: the covariance is already scaled per
+    // part (triad and stage).
     return C_blocks;
   }
 
@@ -747,6 +897,7 @@ class TableFreeSolver {
   double g_ = 0.0, Omega_ = 0.0, omega_v_ = 0.0, omega_h_ = 0.0;
   Eigen::Vector3d va_, vg_;
   double rate_psd_ = 0.0;
+  double mean_count_ = 1.0;  // readings per pose mean, on average
   double a_[kAccel] = {0.0};
   double gb_[kGyroBias] = {0.0};
   double gl_[kGyroLin] = {0.0};

@@ -105,9 +105,15 @@ struct TableFreeFitPart {
   double chi2 = 0.0;
   int residuals = 0;
   double dof = 0.0;
-  /// sqrt(chi2/dof) when above 1, else 1: the factor the sigmas of this part's coefficients
-  /// are scaled by (docs/methods/table-free.md, "Sigmas and the fit gate").
+  /// How much the part's noise model was completed from its residuals (re-estimated until it
+  /// settles; docs/methods/table-free.md, "Sigmas and the fit gate"): the turns, the root of
+  /// their variance factor max(1, chi2/dof); the static parts, a typical pose mean's sigma with
+  /// the bias wander over its white noise's. The sigmas of the coefficients it determines grow
+  /// with it.
   double sigma_scale = 1.0;
+  /// Static parts: the bias wander found (1-sigma, SI: m/s^2, rad/s) added to every pose mean's
+  /// white noise in the fit's weights (0 when the white noise explains the residuals).
+  double wander = 0.0;
   double chi2_per_dof() const { return dof > 0.0 ? chi2 / dof : 0.0; }
 };
 
@@ -127,8 +133,8 @@ struct TableFreeResult {
   /// The 24 base coefficients in coefficient_catalog() order, value and sigma (SI).
   std::vector<TableFreeCoefficient> coefficients;
   /// Covariance (SI) of the 21 estimated coefficients, in the order of `covariance_names`
-  /// (the coefficients above without the three fixed by convention); each block scaled by its
-  /// part's sigma_scale (accel_fit, gyro_rest_fit, turn_fit) squared.
+  /// (the coefficients above without the three fixed by convention), of the fit weighted by its
+  /// parts' variance factors (accel_fit, gyro_rest_fit, turn_fit sigma_scale squared).
   Eigen::MatrixXd covariance;
   std::vector<std::string> covariance_names;
   bool has_raw = false;  // raw views filled (the readings were counts with a nominal scaling)
@@ -139,10 +145,16 @@ struct TableFreeResult {
   int dof = 0;
   double chi2_per_dof = 0.0;
   int iterations = 0;  // all stages
-  /// The joint solver stopped on its convergence test (relative change of the cost, the
-  /// gradient or the parameter step below its tolerance; `termination` says which), not on
-  /// the iteration limit. Says nothing of the chi2: the fit gate judges that.
+  /// "Converged" from the estimate: the Gauss-Newton step still left at the solution is below
+  /// kConvergedStep of every coefficient's sigma (step_over_sigma: the largest ratio), the
+  /// covariance finite. Says nothing of the chi2: the fit gate judges that.
+  static constexpr double kConvergedStep = 0.01;
   bool converged = false;
+  double step_over_sigma = 0.0;
+  /// Rounds of the parts' variance factors (accel_fit, gyro_rest_fit, turn_fit sigma_scale^2,
+  /// the joint fit's weights) and whether they settled within 1 %.
+  int variance_rounds = 0;
+  bool variance_settled = false;
   std::string termination;  // the solver's message
   /// The joint fit's chi2 in parts (their sigma scales applied to the covariance per block:
   /// accelerometer terms, gyro biases, gyro matrix) and the turns one by one.
