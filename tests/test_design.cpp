@@ -523,6 +523,12 @@ TEST_CASE("Design bound: below the best of every plan of three turns, and the be
   CalibratorOptions ko = calibrator_options_from_profile(prof);
   const double every = check_bound_against_enumeration(ko, "attitude every dwell");
   ko.attitude = CalibratorOptions::AttitudeUpdates::None;
+  // Converted to the triad frame after attitude updates: the bound's oracle has the triad-frame
+  // coefficients (the triad's attitude told), and is below the enumerated plans in that frame.
+  ko.misalignment_frame = MisalignmentFrame::Triad;
+  check_bound_against_enumeration(ko, "attitude every dwell, triad frame");
+  ko.misalignment_frame = MisalignmentFrame::ByMode;
+  ko.attitude = CalibratorOptions::AttitudeUpdates::None;
   const double none = check_bound_against_enumeration(ko, "attitude none");
   CHECK(none < every);
 }
