@@ -533,6 +533,33 @@ TEST_CASE("Design bound: below the best of every plan of three turns, and the be
   CHECK(none < every);
 }
 
+TEST_CASE("Design bound: below the exact value of the found plans, in the toolbox's mode",
+          "[design][bound]") {
+  // The relaxation's certified bound at a plan's duration never exceeds that plan's predicted
+  // worst sigma / target (the covariance pass of the calibration itself): the plans found for the
+  // goal of 491 s and the toolbox's own 982 s plan, --attitude none, the toolbox's targets.
+  const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
+  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
+  CalibratorOptions ko = calibrator_options_from_profile(prof);
+  ko.attitude = CalibratorOptions::AttitudeUpdates::None;
+  ko.zero_velocity_in_motion = table.reference_on_axes;
+  const SearchOptions so = lab_targets();
+  const Plan rot19 = test::load_plan("rot19.ini");
+  const InformationLibrary lib = information_library(ko, table, rot19.site, so.targets, 10.0);
+  DesignOptions d;
+  d.rate_hz = 10.0;
+  d.history_interval = 1e9;
+  for (const char* name : {"searched-491.ini", "diagonal-491.ini", "toolbox19.ini"}) {
+    const Plan plan = test::load_plan(name);
+    const PlanPrediction p = predict_plan(plan, ko, so.targets, d);
+    const Excess e = excess(p.run.estimates, so.targets);
+    const DesignBound b = relaxed_bound(lib, p.duration);
+    CAPTURE(name, p.duration, b.lower, b.upper, b.family, e.worst_ratio, e.worst_family);
+    CHECK(b.lower > 0.0);
+    CHECK(b.lower <= e.worst_ratio);
+  }
+}
+
 TEST_CASE("Plan search: at least as good as every dwell-scaled hand plan, budgets 200-1000 s",
           "[design][search][long]") {
   // The toolbox's mode and targets. At each budget the search's worst sigma / target is at most
