@@ -1,6 +1,7 @@
 // Plan design (filter/design/prediction.hpp): the covariance pass over a plan's truth motion
 // predicts the sigmas a calibration of that plan reports and the spread of its errors; table
 // descriptions and the plan's limits against them.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
@@ -13,6 +14,8 @@
 #include "filter/design/robustness.hpp"
 #include "filter/design/rounding.hpp"
 #include "filter/design/search.hpp"
+#include "filter/kalman/kalman_run.hpp"
+#include "filter/kalman/misalignment_frame.hpp"
 #include "helpers.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/config.hpp"
@@ -491,6 +494,13 @@ double check_bound_against_enumeration(const CalibratorOptions& ko, const std::s
   const InformationLibrary lib = information_library(ko, table, rot19.site, so.targets, 10.0);
   CHECK(lib.orientations == 24);
   CHECK(lib.segments.size() == 24 * 12 + 24);
+  // The bound's coefficients are those of the frame the calibration reports: in the triad frame
+  // the three misalignments its convention fixes are not among them, in the table frame they are.
+  const auto& fixed = triad_fixed_coefficients();
+  const bool has_fixed = std::any_of(lib.catalog.begin(), lib.catalog.end(), [&](int c) {
+    return std::find(fixed.begin(), fixed.end(), c) != fixed.end();
+  });
+  CHECK(has_fixed == (reported_frame(ko) == MisalignmentFrame::Table));
   const DesignBound b = relaxed_bound(lib, duration);
   CAPTURE(mode, duration, b.lower, b.upper, b.family, b.iterations, best.second.worst_ratio,
           found.second.worst_ratio, lib.cpu_s);

@@ -58,19 +58,19 @@ Scaling scaling_of(const Grower& g, const std::map<std::string, double>& targets
   const std::size_t n = s.catalog.size();
   s.scale.resize(Eigen::Index(n + 3));
   s.prior_sigma.resize(s.scale.size());
-  for (int a = 0; a < 3; ++a) {  // the shared rotation, last: in units of its prior
-    s.catalog.push_back(-1);
-    s.targeted.push_back(false);
-    s.scale(Eigen::Index(n) + a) = s.prior_sigma(Eigen::Index(n) + a) = shared_sigma(a);
-  }
   const auto& cat = coefficient_catalog();
   for (std::size_t i = 0; i < n; ++i) {
     const auto c = std::size_t(s.catalog[i]);
     const auto t = targets.find(cat[c].family);
     const bool has = t != targets.end() && t->second > 0.0;
-    s.targeted.insert(s.targeted.begin() + std::ptrdiff_t(i), has);
+    s.targeted.push_back(has);
     s.prior_sigma(Eigen::Index(i)) = estimates[c].prior_sigma;
     s.scale(Eigen::Index(i)) = has ? t->second : estimates[c].prior_sigma;
+  }
+  for (int a = 0; a < 3; ++a) {  // the shared rotation, last: in units of its prior, untargeted
+    s.catalog.push_back(-1);
+    s.targeted.push_back(false);
+    s.scale(Eigen::Index(n) + a) = s.prior_sigma(Eigen::Index(n) + a) = shared_sigma(a);
   }
   return s;
 }
