@@ -50,7 +50,9 @@ double bench_design_bound(const std::string& src, CalibratorOptions o, const Tab
   so.targets = read_sigma_targets(IniFile(src + "/config/targets/reference-toolbox.ini"));
   so.budget_s = 491.0;
   so.seeds = {rot, Plan::load(src + "/config/plans/seed8.ini"),
-              Plan::load(src + "/config/plans/toolbox19.ini")};
+              Plan::load(src + "/config/plans/toolbox19.ini"),
+              Plan::load(src + "/config/plans/diagonal-491.ini"),
+              Plan::load(src + "/config/plans/searched-491.ini")};
   std::clock_t c0 = std::clock();
   const InformationLibrary lib = information_library(o, table, rot.site, so.targets, so.rate_hz);
   const DesignBound b = relaxed_bound(lib, so.budget_s);

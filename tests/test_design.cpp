@@ -1,6 +1,7 @@
 // Plan design (filter/design/prediction.hpp): the covariance pass over a plan's truth motion
 // predicts the sigmas a calibration of that plan reports and the spread of its errors; table
 // descriptions and the plan's limits against them.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
@@ -13,6 +14,8 @@
 #include "filter/design/robustness.hpp"
 #include "filter/design/rounding.hpp"
 #include "filter/design/search.hpp"
+#include "filter/kalman/kalman_run.hpp"
+#include "filter/kalman/misalignment_frame.hpp"
 #include "helpers.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/config.hpp"
@@ -491,6 +494,13 @@ double check_bound_against_enumeration(const CalibratorOptions& ko, const std::s
   const InformationLibrary lib = information_library(ko, table, rot19.site, so.targets, 10.0);
   CHECK(lib.orientations == 24);
   CHECK(lib.segments.size() == 24 * 12 + 24);
+  // The bound's coefficients are those of the frame the calibration reports: in the triad frame
+  // the three misalignments its convention fixes are not among them, in the table frame they are.
+  const auto& fixed = triad_fixed_coefficients();
+  const bool has_fixed = std::any_of(lib.catalog.begin(), lib.catalog.end(), [&](int c) {
+    return std::find(fixed.begin(), fixed.end(), c) != fixed.end();
+  });
+  CHECK(has_fixed == (reported_frame(ko) == MisalignmentFrame::Table));
   const DesignBound b = relaxed_bound(lib, duration);
   CAPTURE(mode, duration, b.lower, b.upper, b.family, b.iterations, best.second.worst_ratio,
           found.second.worst_ratio, lib.cpu_s);
@@ -523,8 +533,41 @@ TEST_CASE("Design bound: below the best of every plan of three turns, and the be
   CalibratorOptions ko = calibrator_options_from_profile(prof);
   const double every = check_bound_against_enumeration(ko, "attitude every dwell");
   ko.attitude = CalibratorOptions::AttitudeUpdates::None;
+  // Converted to the triad frame after attitude updates: the bound's oracle has the triad-frame
+  // coefficients (the triad's attitude told), and is below the enumerated plans in that frame.
+  ko.misalignment_frame = MisalignmentFrame::Triad;
+  check_bound_against_enumeration(ko, "attitude every dwell, triad frame");
+  ko.misalignment_frame = MisalignmentFrame::ByMode;
+  ko.attitude = CalibratorOptions::AttitudeUpdates::None;
   const double none = check_bound_against_enumeration(ko, "attitude none");
   CHECK(none < every);
+}
+
+TEST_CASE("Design bound: below the exact value of the found plans, in the toolbox's mode",
+          "[design][bound]") {
+  // The relaxation's certified bound at a plan's duration never exceeds that plan's predicted
+  // worst sigma / target (the covariance pass of the calibration itself): the plans found for the
+  // goal of 491 s and the toolbox's own 982 s plan, --attitude none, the toolbox's targets.
+  const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
+  const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
+  CalibratorOptions ko = calibrator_options_from_profile(prof);
+  ko.attitude = CalibratorOptions::AttitudeUpdates::None;
+  ko.zero_velocity_in_motion = table.reference_on_axes;
+  const SearchOptions so = lab_targets();
+  const Plan rot19 = test::load_plan("rot19.ini");
+  const InformationLibrary lib = information_library(ko, table, rot19.site, so.targets, 10.0);
+  DesignOptions d;
+  d.rate_hz = 10.0;
+  d.history_interval = 1e9;
+  for (const char* name : {"searched-491.ini", "diagonal-491.ini", "toolbox19.ini"}) {
+    const Plan plan = test::load_plan(name);
+    const PlanPrediction p = predict_plan(plan, ko, so.targets, d);
+    const Excess e = excess(p.run.estimates, so.targets);
+    const DesignBound b = relaxed_bound(lib, p.duration);
+    CAPTURE(name, p.duration, b.lower, b.upper, b.family, e.worst_ratio, e.worst_family);
+    CHECK(b.lower > 0.0);
+    CHECK(b.lower <= e.worst_ratio);
+  }
 }
 
 TEST_CASE("Plan search: at least as good as every dwell-scaled hand plan, budgets 200-1000 s",

@@ -2,6 +2,7 @@
 // to the table converted into the accelerometer-triad frame with its full covariance. The
 // conversion's Jacobian is its derivative; the converted misalignment sigmas do not carry the
 // table's attitude accuracy; design predicts the frame the calibration reports.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 
@@ -209,4 +210,49 @@ TEST_CASE("Misalignment frame: design predicts the triad-frame sigmas the calibr
   for (int f : triad_fixed_coefficients())
     CHECK(c.estimates[static_cast<std::size_t>(f)].status ==
           CoefficientEstimate::Status::FixedByConvention);
+}
+
+TEST_CASE("Misalignment frame: the unobservable combinations are named in the reported frame",
+          "[frame][design]") {
+  // rot19 on a table of 3000 arcsec per dwell: relative to the table the triads' common rotation
+  // is barely determined (combinations of the misalignments keep most of their prior variance);
+  // within the triads it drops out, and what is named is the converted coefficients' (none of
+  // the three the triad convention fixes, and every converted misalignment observed).
+  const Plan plan = test::load_plan("rot19.ini");
+  const SensorProfile prof =
+      SensorProfile::load(test::source_path("config/sensors/nav-fog-extended.ini"));
+  CalibratorOptions ko = calibrator_options_from_profile(prof);
+  ko.attitude_sigma = 3000.0 * units::arcsec;
+  DesignOptions d;
+  d.rate_hz = 10.0;
+  ko.misalignment_frame = MisalignmentFrame::Table;
+  const PlanPrediction table = predict_plan(plan, ko, {}, d);
+  ko.misalignment_frame = MisalignmentFrame::Triad;
+  const PlanPrediction triad = predict_plan(plan, ko, {}, d);
+  REQUIRE(triad.run.converted_to_triad_frame);
+  CHECK_FALSE(table.run.unobservable_directions.empty());
+  const auto& fixed = triad_fixed_coefficients();
+  const auto& cat = coefficient_catalog();
+  auto is_fixed = [&](const std::string& name) {
+    return std::any_of(fixed.begin(), fixed.end(),
+                       [&](int c) { return cat[static_cast<std::size_t>(c)].name == name; });
+  };
+  bool table_names_fixed = false;
+  for (const auto& u : table.run.unobservable_directions)
+    for (const auto& [name, weight] : u.components) table_names_fixed |= is_fixed(name);
+  CHECK(table_names_fixed);  // the table frame's directions hold what the triads' drop
+  for (const auto& u : triad.run.unobservable_directions)
+    for (const auto& [name, weight] : u.components) {
+      CAPTURE(u.text());
+      CHECK_FALSE(is_fixed(name));
+    }
+  CHECK(triad.run.unobservable_directions.size() < table.run.unobservable_directions.size());
+  for (std::size_t c = 0; c < cat.size(); ++c)
+    if (cat[c].family == "accel.misalignment" &&
+        triad.run.estimates[c].status == CoefficientEstimate::Status::Estimated) {
+      CAPTURE(cat[c].name, triad.run.estimates[c].sigma, triad.run.estimates[c].prior_sigma);
+      CHECK(triad.run.estimates[c].observed());
+      CHECK(std::find(triad.run.unobservable.begin(), triad.run.unobservable.end(), cat[c].name) ==
+            triad.run.unobservable.end());
+    }
 }

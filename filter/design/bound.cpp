@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "filter/design/grower.hpp"
+#include "filter/kalman/kalman_run.hpp"
 #include "models/coefficient_families.hpp"
 
 namespace sinscal {
@@ -37,15 +38,28 @@ struct Scaling {
   Eigen::VectorXd prior_sigma;  // SI
 };
 
+// The prior sigma (rad, North East Down) of the rotation shared by every dwell's attitude (the
+// oracle's table base): the smaller of the calibration's prior on its base and on its start
+// attitude, so that the oracle knows at least what the calibration does at the start.
+Eigen::Vector3d shared_rotation_sigma(const CalibratorOptions& options) {
+  const double heading =
+      gyros_find_north(options) ? kBaseHeadingPriorSigma : std::max(options.attitude_sigma, 0.0);
+  const double start = initial_attitude_sigma(options);
+  return {std::min(kBaseLevelPriorSigma, start), std::min(kBaseLevelPriorSigma, start),
+          std::min(heading > 0.0 ? heading : start, start)};
+}
+
 Scaling scaling_of(const Grower& g, const std::map<std::string, double>& targets,
-                   const std::vector<CoefficientEstimate>& estimates) {
+                   const std::vector<CoefficientEstimate>& estimates,
+                   const Eigen::Vector3d& shared_sigma) {
   Scaling s;
   for (const auto& cb : g.layout().coefficients)
     for (int k = 0; k < cb.block.size; ++k) s.catalog.push_back(cb.catalog[std::size_t(k)]);
-  s.scale.resize(Eigen::Index(s.catalog.size()));
+  const std::size_t n = s.catalog.size();
+  s.scale.resize(Eigen::Index(n + 3));
   s.prior_sigma.resize(s.scale.size());
   const auto& cat = coefficient_catalog();
-  for (std::size_t i = 0; i < s.catalog.size(); ++i) {
+  for (std::size_t i = 0; i < n; ++i) {
     const auto c = std::size_t(s.catalog[i]);
     const auto t = targets.find(cat[c].family);
     const bool has = t != targets.end() && t->second > 0.0;
@@ -53,12 +67,18 @@ Scaling scaling_of(const Grower& g, const std::map<std::string, double>& targets
     s.prior_sigma(Eigen::Index(i)) = estimates[c].prior_sigma;
     s.scale(Eigen::Index(i)) = has ? t->second : estimates[c].prior_sigma;
   }
+  for (int a = 0; a < 3; ++a) {  // the shared rotation, last: in units of its prior, untargeted
+    s.catalog.push_back(-1);
+    s.targeted.push_back(false);
+    s.scale(Eigen::Index(n) + a) = s.prior_sigma(Eigen::Index(n) + a) = shared_sigma(a);
+  }
   return s;
 }
 
 // The scaled information of a grown plan's coefficients.
 Eigen::MatrixXd information(const Grower& g, const Scaling& s) {
-  const Eigen::MatrixXd P = s.scale.cwiseInverse().asDiagonal() * g.coefficient_covariance() *
+  const Eigen::MatrixXd P = s.scale.cwiseInverse().asDiagonal() *
+                            g.coefficient_and_base_covariance() *
                             s.scale.cwiseInverse().asDiagonal();
   const Eigen::MatrixXd sym = 0.5 * (P + P.transpose());
   return sym.ldlt().solve(Eigen::MatrixXd::Identity(sym.rows(), sym.cols()));
@@ -107,14 +127,19 @@ std::vector<Node> orientation_nodes(const Context& c, double pause) {
 
 CalibratorOptions oracle_options(const CalibratorOptions& options) {
   CalibratorOptions o = options;
-  if (options.attitude == CalibratorOptions::AttitudeUpdates::None)
-    o.layout.accel_triad_frame = true;  // the same coefficients as the calibration's
+  // The same coefficients as the calibration reports: in the triad frame (without attitude
+  // updates, or converted after them) the oracle's body frame is the accelerometer triad, whose
+  // attitude it is told (the table's mounting of the triads then no longer matters).
+  if (reported_frame(options) == MisalignmentFrame::Triad) {
+    o.layout.accel_triad_frame = true;
+    o.misalignment_frame = MisalignmentFrame::ByMode;
+  }
   o.attitude = CalibratorOptions::AttitudeUpdates::Every;
   o.attitude_hold = true;
   o.attitude_sigma = kOracleAttitudeSigma;
   o.hold_sigma = kOracleAttitudeSigma;
   o.initial_attitude_sigma = kOracleAttitudeSigma;
-  o.base_attitude = false;
+  o.base_attitude = true;  // the rotation shared by every dwell's attitude: a nuisance
   o.bias_wander_states = false;
   return o;
 }
@@ -141,7 +166,8 @@ InformationLibrary information_library(const CalibratorOptions& options, const T
       scaling_of(nodes.front().grower, targets,
                  predict_plan(plan_of(nodes.front().grower.genome(), table, site, "prior"), oracle,
                               {}, DesignOptions{rate_hz, 1e9})
-                     .run.estimates);
+                     .run.estimates,
+                 shared_rotation_sigma(options));
   lib.catalog = s.catalog;
   lib.targeted = s.targeted;
   lib.prior = s.scale.cwiseQuotient(s.prior_sigma).array().square().matrix().asDiagonal();

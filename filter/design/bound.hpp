@@ -27,18 +27,22 @@ struct InformationLibrary {
     int quarters = 0;             // the turn's angle in quarter turns (1 or 2)
   };
   std::vector<Segment> segments;
-  Eigen::MatrixXd prior;       // the prior's information, scaled
-  std::vector<int> catalog;    // coefficient_catalog() index of each state
+  Eigen::MatrixXd prior;  // the prior's information, scaled
+  // coefficient_catalog() index of each state; -1 for the three of the rotation shared by every
+  // dwell's attitude (a nuisance, last, in units of its prior sigma, never targeted)
+  std::vector<int> catalog;
   std::vector<bool> targeted;  // the state's family has a target
   int orientations = 0;        // distinct static orientations in the library
   int start = 0;               // the orientation of the search's first start (body x up)
   double cpu_s = 0.0;          // CPU it took to build
 };
 
-/// The filter whose information bounds the calibration's: the same coefficients, the attitude
-/// known at every update of every dwell (`kOracleAttitudeSigma`), no table base or bias wander
-/// states. Every measurement of `options` is one of it and it knows the navigation errors at
-/// each dwell, so its information is at least the calibration's and adds up over segments.
+/// The filter whose information bounds the calibration's: the same coefficients (in the frame
+/// the calibration reports: the accelerometer triad's in the triad frame), the attitude known at
+/// every update of every dwell (`kOracleAttitudeSigma`) relative to a rotation shared by all
+/// dwells (the table base's states, a nuisance), no bias wander states. Every measurement of
+/// `options` is one of it and it knows the navigation errors at each dwell up to that rotation,
+/// so its information is at least the calibration's and adds up over segments.
 constexpr double kOracleAttitudeSigma = 1e-3 * units::arcsec;
 CalibratorOptions oracle_options(const CalibratorOptions& options);
 

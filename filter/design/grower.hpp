@@ -29,6 +29,8 @@ class Grower {
   Excess score(const Context& c) const;
   /// The covariance of the coefficient states after the plan (finished), in the layout's order.
   Eigen::MatrixXd coefficient_covariance() const;
+  /// The same with the table base's states after the coefficients' (with a base).
+  Eigen::MatrixXd coefficient_and_base_covariance() const;
   const StateLayout& layout() const { return kf_->layout(); }
   const PlanGenome& genome() const { return g_; }
   double duration() const { return duration_; }

@@ -249,7 +249,18 @@ Grower Grower::extended(const TurnChoice& turn, const Context& c) const {
 Excess Grower::score(const Context& c) const {
   Calibrator done = *kf_;
   done.finish();
-  return excess(done.estimate(), c.search.targets);
+  return excess(estimates_in_reported_frame(done, c.options), c.search.targets);
+}
+
+Eigen::MatrixXd Grower::coefficient_and_base_covariance() const {
+  Calibrator done = *kf_;
+  done.finish();
+  const StateLayout& l = done.layout();
+  const int first = l.nav_size, n = l.coefficient_states();
+  if (l.base.size != 3 || l.base.index != first + n)
+    throw std::logic_error("design bound: the table base's states do not follow the coefficients");
+  const int m = n + l.base.size;
+  return done.covariance().block(first, first, m, m);
 }
 
 Eigen::MatrixXd Grower::coefficient_covariance() const {

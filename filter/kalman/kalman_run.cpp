@@ -257,18 +257,16 @@ void check_against_plan(const Calibrator& kf, const PlanTimeline& timeline,
 
 // Combinations of coefficient states whose variance the data did not bring below half the
 // prior's: eigen-decomposition of the coefficient covariance normalized by the prior sigmas.
-std::vector<UnobservableDirection> unobservable_directions(const Calibrator& kf,
+// `P`: the covariance of the coefficient states, `catalog` the catalog index of each row (the
+// filter's own frame, or the triad frame after the conversion: the names are the frame's).
+std::vector<UnobservableDirection> unobservable_directions(const Eigen::MatrixXd& P,
+                                                           const std::vector<int>& catalog,
                                                            std::vector<CoefficientEstimate>& est) {
-  const StateLayout& l = kf.layout();
-  const int m = l.coefficient_states();
-  std::vector<int> catalog;
-  for (const auto& cb : l.coefficients)
-    catalog.insert(catalog.end(), cb.catalog.begin(), cb.catalog.end());
+  const auto m = static_cast<int>(catalog.size());
   Eigen::VectorXd d(m);
   for (int k = 0; k < m; ++k)
     d(k) = 1.0 / est[static_cast<std::size_t>(catalog[static_cast<std::size_t>(k)])].prior_sigma;
-  const Eigen::MatrixXd M =
-      d.asDiagonal() * kf.covariance().block(l.nav_size, l.nav_size, m, m) * d.asDiagonal();
+  const Eigen::MatrixXd M = d.asDiagonal() * P * d.asDiagonal();
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(M);
   std::vector<UnobservableDirection> out;
   const auto& cat = coefficient_catalog();
@@ -299,7 +297,8 @@ void summarize(const Calibrator& kf, const PlanTimeline& timeline, const KalmanR
   r.log_likelihood = kf.log_likelihood();
   std::tie(r.coefficient_covariance, r.covariance_catalog) = coefficient_covariance(kf);
   r.estimates = kf.estimate();
-  r.unobservable_directions = unobservable_directions(kf, r.estimates);
+  r.unobservable_directions =
+      unobservable_directions(r.coefficient_covariance, r.covariance_catalog, r.estimates);
   const auto& cat = coefficient_catalog();
   for (std::size_t i = 0; i < r.estimates.size(); ++i)
     if (r.estimates[i].status == CoefficientEstimate::Status::Estimated &&
@@ -552,6 +551,11 @@ void report_in_frame(KalmanRun& r, const KalmanRunOptions& run) {
   estimates_to_triad_frame(r.estimates, r.coefficient_covariance, r.covariance_catalog);
   r.model = in_accel_triad_frame(r.model);
   r.accel_triad_frame = r.converted_to_triad_frame = true;
+  // The combinations the data do not observe, of the converted coefficients (the table frame's
+  // common rotation has dropped out of them).
+  for (auto& e : r.estimates) e.in_unobservable_direction = false;
+  r.unobservable_directions =
+      unobservable_directions(r.coefficient_covariance, r.covariance_catalog, r.estimates);
   const auto& cat = coefficient_catalog();
   r.unobservable.clear();
   for (std::size_t i = 0; i < r.estimates.size(); ++i)
@@ -562,6 +566,11 @@ void report_in_frame(KalmanRun& r, const KalmanRunOptions& run) {
 }
 
 }  // namespace
+
+std::vector<CoefficientEstimate> estimates_in_reported_frame(const Calibrator& kf,
+                                                             const CalibratorOptions& options) {
+  return reported_estimates(kf, options);
+}
 
 MisalignmentFrame reported_frame(const CalibratorOptions& o) {
   const bool own_triad = effective_layout(o).accel_triad_frame;

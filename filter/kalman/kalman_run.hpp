@@ -144,6 +144,11 @@ struct KalmanRun {
 /// resolved by its attitude updates); throws std::invalid_argument for the table frame without
 /// attitude updates.
 MisalignmentFrame reported_frame(const CalibratorOptions& options);
+/// The filter's estimates (sigmas from its covariance) in the frame `options` reports: converted
+/// to the triad frame when the filter estimates relative to the table (design's search scores
+/// these, as the calibration reports them).
+std::vector<CoefficientEstimate> estimates_in_reported_frame(const Calibrator& kf,
+                                                             const CalibratorOptions& options);
 
 /// Runs the filter over `source` (the session's log when null; several passes need the log).
 /// A bad sample (LogError) stops the run: the result keeps the estimates so far and says where
