@@ -99,7 +99,7 @@ TableDiagnosis diagnose_table_session(const std::string& session_path,
   enforce(gate, t.force);
   Stage2Options s2 = calibration.stage2_options;
   if (profile) s2.reference_temperature_c = profile->reference_temperature_c;
-  const TableDiagnosis diagnosis =
+  TableDiagnosis diagnosis =
       diagnose_table(calibration.stage1, session.site, s2, to, turns ? &*turns : nullptr);
   print_diagnosis(diagnosis);
   std::filesystem::create_directories(t.out_dir);
