@@ -58,6 +58,58 @@ void add_handheld_options(po::options_description& d, HandheldDiagnoseOptions& h
 
 }  // namespace
 
+TableDiagnosis diagnose_table_session(const std::string& session_path,
+                                      const TableDiagnoseOptions& t) {
+  const Session session = Session::load(session_path);
+  const DiagnosisFiles files = diagnosis_files(t.out_dir);
+  refuse_overwrite(session_inputs(session), {{"diagnosis.json", files.json},
+                                             {"report.md", files.markdown},
+                                             {"residuals.png", files.png},
+                                             {"gnuplot script", files.script}});
+  std::optional<SensorProfile> profile;
+  if (!session.sensor_file.empty()) profile = SensorProfile::load(session.sensor_file);
+  Stage1Options s1 = default_stage1(profile ? &*profile : nullptr);
+  s1.min_dwell = t.min_dwell;
+  const PlausibilityLimits limits = PlausibilityLimits::from_profile(profile ? &*profile : nullptr);
+  TableDiagnosisOptions to;
+  to.dwells = t.dwells;
+  to.dwells.thermal = log_temperature_varies(session);
+  PlausibilityReport gate = check_plausibility(session, limits);
+  enforce(gate, t.force);
+  const TableAttitudeError table{t.table_sigma * units::arcsec};
+  std::optional<TurnModel> turns;
+  std::optional<ImuErrorModel> about;
+  if (profile) {
+    turns = turn_model_of(session, *profile, table.sigma);
+    turns->run_filter = t.kalman;
+    std::string failed;
+    about = linearize(*turns, t.passes, &failed);
+    if (!failed.empty())
+      std::printf("The filter's passes to linearize about failed (%s): diagnosed about zero\n",
+                  failed.c_str());
+    if (about)
+      std::printf(
+          "Linearized about the filter's calibration (%d passes): the session's errors "
+          "are beyond one linearization about zero\n",
+          t.passes == 0 ? 3 : t.passes);
+  }
+  const ClosedFormReport calibration =
+      run_closed_form(session, s1, table, !about, about ? &*about : nullptr);
+  gate.checks.push_back(check_stage1_fit(calibration.stage1, limits, session.log.file));
+  enforce(gate, t.force);
+  Stage2Options s2 = calibration.stage2_options;
+  if (profile) s2.reference_temperature_c = profile->reference_temperature_c;
+  TableDiagnosis diagnosis =
+      diagnose_table(calibration.stage1, session.site, s2, to, turns ? &*turns : nullptr);
+  print_diagnosis(diagnosis);
+  std::filesystem::create_directories(t.out_dir);
+  const DiagnosisFiles written =
+      write_diagnosis(diagnosis, session.path, t.out_dir, t.plot ? "gnuplot" : "");
+  std::printf("Written: %s, %s%s%s\n", written.json.c_str(), written.markdown.c_str(),
+              written.png.empty() ? "" : ", ", written.png.c_str());
+  return diagnosis;
+}
+
 int cmd_diagnose(const std::vector<std::string>& args) {
   po::options_description d("sinscal diagnose options");
   std::string session_path, out_dir, sensor;
@@ -156,54 +208,16 @@ int cmd_diagnose(const std::vector<std::string>& args) {
       throw UsageError("--prefer " + f + ": not an extended family of the family table (" +
                        extended_terms_help() + ")");
   }
-  const Session session = Session::load(session_path);
-  const DiagnosisFiles files = diagnosis_files(out_dir);
-  refuse_overwrite(session_inputs(session), {{"diagnosis.json", files.json},
-                                             {"report.md", files.markdown},
-                                             {"residuals.png", files.png},
-                                             {"gnuplot script", files.script}});
-  std::optional<SensorProfile> profile;
-  if (!session.sensor_file.empty()) profile = SensorProfile::load(session.sensor_file);
-  Stage1Options s1 = default_stage1(profile ? &*profile : nullptr);
-  s1.min_dwell = min_dwell;
-  const PlausibilityLimits limits = PlausibilityLimits::from_profile(profile ? &*profile : nullptr);
-  const bool force = vm->count("force") > 0;
-  o.thermal = log_temperature_varies(session);
-  PlausibilityReport gate = check_plausibility(session, limits);
-  enforce(gate, force);
-  const TableAttitudeError table{table_sigma * units::arcsec};
-  std::optional<TurnModel> turns;
-  std::optional<ImuErrorModel> about;
-  if (profile) {
-    turns = turn_model_of(session, *profile, table.sigma);
-    turns->run_filter = vm->count("no-kalman") == 0;
-    std::string failed;
-    about = linearize(*turns, passes, &failed);
-    if (!failed.empty())
-      std::printf("The filter's passes to linearize about failed (%s): diagnosed about zero\n",
-                  failed.c_str());
-    if (about)
-      std::printf(
-          "Linearized about the filter's calibration (%d passes): the session's errors "
-          "are beyond one linearization about zero\n",
-          passes == 0 ? 3 : passes);
-  }
-  const ClosedFormReport calibration =
-      run_closed_form(session, s1, table, !about, about ? &*about : nullptr);
-  gate.checks.push_back(check_stage1_fit(calibration.stage1, limits, session.log.file));
-  enforce(gate, force);
-  TableDiagnosisOptions to;
-  to.dwells = o;
-  Stage2Options s2 = calibration.stage2_options;
-  if (profile) s2.reference_temperature_c = profile->reference_temperature_c;
-  const TableDiagnosis diagnosis =
-      diagnose_table(calibration.stage1, session.site, s2, to, turns ? &*turns : nullptr);
-  print_diagnosis(diagnosis);
-  std::filesystem::create_directories(out_dir);
-  const DiagnosisFiles written =
-      write_diagnosis(diagnosis, session.path, out_dir, vm->count("no-plot") ? "" : "gnuplot");
-  std::printf("Written: %s, %s%s%s\n", written.json.c_str(), written.markdown.c_str(),
-              written.png.empty() ? "" : ", ", written.png.c_str());
+  TableDiagnoseOptions t;
+  t.out_dir = out_dir;
+  t.dwells = o;
+  t.table_sigma = table_sigma;
+  t.min_dwell = min_dwell;
+  t.passes = passes;
+  t.kalman = vm->count("no-kalman") == 0;
+  t.plot = vm->count("no-plot") == 0;
+  t.force = vm->count("force") > 0;
+  diagnose_table_session(session_path, t);
   return 0;
 }
 

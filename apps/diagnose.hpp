@@ -26,6 +26,23 @@ struct HandheldDiagnoseOptions {
 /// poses are too few for, throws (exit 2) after the files are written.
 int diagnose_handheld_session(const Session& session, const HandheldDiagnoseOptions& o);
 
+/// A table session's diagnosis as `sinscal diagnose --session S` runs it (apps/cmd_diagnose.cpp).
+struct TableDiagnoseOptions {
+  std::string out_dir;
+  DiagnosisOptions dwells;   // alpha, prefer (thermal: set from the log's temperatures)
+  double table_sigma = 2.5;  // arcsec
+  double min_dwell = 20.0;   // s
+  int passes = 0;            // 0: automatic
+  bool kalman = true;        // the filter's test of the effects of the turns
+  bool plot = true;
+  bool force = false;  // run when the plausibility gate fails
+};
+
+/// Calibrates and diagnoses a table session, prints the findings and writes DIR/diagnosis.json,
+/// report.md (and residuals.png with `plot`); returns the diagnosis.
+TableDiagnosis diagnose_table_session(const std::string& session_path,
+                                      const TableDiagnoseOptions& o);
+
 /// A chamber session (`[thermal] soaks`): the thermal families the model lacks, tested on the
 /// soaks (apps/diagnose_chamber.cpp); DIR/diagnosis.json.
 struct ChamberDiagnoseOptions {

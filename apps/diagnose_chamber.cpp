@@ -1,6 +1,7 @@
 // sinscal diagnose on a chamber session (apps/cmd_diagnose.cpp): each soak calibrated by the
 // Kalman filter, then the thermal families the model lacks tested against the soaks
 // (filter/diagnosis/thermal_diagnosis.hpp).
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -76,6 +77,42 @@ void print_thermal_findings(const ThermalDiagnosis& d) {
   for (const auto& s : d.stops) std::printf("Stop: %s\n", s.c_str());
 }
 
+// The non-thermal families (K2, g-sensitivity, lever arms, ...) act at every temperature: they
+// are tested on the soak nearest the reference temperature, where the thermal terms vanish (a
+// thermal family the model lacks cannot pose as one of them), as a table session; its diagnosis
+// goes to DIR/soak-K. Returns the statement of what was tested and found.
+std::string diagnose_non_thermal(const std::vector<std::string>& sessions,
+                                 const std::vector<SoakRecord>& records, double t0,
+                                 const ChamberDiagnoseOptions& o) {
+  std::size_t k = 0;
+  for (std::size_t j = 1; j < records.size(); ++j)
+    if (std::abs(records[j].gyro_temperature_c - t0) < std::abs(records[k].gyro_temperature_c - t0))
+      k = j;
+  char b[120];
+  std::snprintf(b, sizeof b, "soak %zu (%.2f C, the nearest to T0 = %g C)", k + 1,
+                records[k].gyro_temperature_c, t0);
+  const std::string where = b;
+  std::printf("\nNon-thermal families, tested on %s as a table session:\n", where.c_str());
+  TableDiagnoseOptions t;
+  t.out_dir = o.out_dir + "/soak-" + std::to_string(k + 1);
+  t.dwells.alpha = o.alpha;
+  t.table_sigma = o.table_sigma;
+  t.plot = false;
+  std::string found;
+  try {
+    const TableDiagnosis d = diagnose_table_session(sessions[k], t);
+    for (const auto& f : d.findings) found += (found.empty() ? "" : ", ") + f.family;
+  } catch (const std::exception& e) {
+    return "the non-thermal families not tested: the table diagnosis of " + where + " stopped (" +
+           e.what() + ")";
+  }
+  return "the non-thermal families (K2, g-sensitivity, scale asymmetry, lever arms, time delay, "
+         "...) tested on " +
+         where + " only, as a table session (" + t.out_dir +
+         "): " + (found.empty() ? "none named" : "named " + found) +
+         "; on the other soaks they are fitted soak by soak, not tested";
+}
+
 // A table log's temperature span below which it is one temperature for the diagnosis.
 constexpr double kConstantTemperatureSpan = 2.0;  // deg C
 
@@ -135,8 +172,12 @@ int diagnose_chamber(const std::string& chamber_path, const ChamberDiagnoseOptio
   for (const auto& m : to.model) model += (model.empty() ? "" : ", ") + m;
   std::printf("\nThermal model of %s (T0 = %g C): %s\n", profile_path.c_str(),
               profile.reference_temperature_c, model.empty() ? "none" : model.c_str());
-  const ThermalDiagnosis d = diagnose_soaks(estimates, profile.reference_temperature_c, to);
+  to.non_thermal_elsewhere = true;
+  ThermalDiagnosis d = diagnose_soaks(estimates, profile.reference_temperature_c, to);
   print_thermal_findings(d);
+  d.stops.push_back(
+      diagnose_non_thermal(chamber.sessions, records, profile.reference_temperature_c, o));
+  std::printf("Stop: %s\n", d.stops.back().c_str());
   std::filesystem::create_directories(o.out_dir);
   std::printf("Written: %s\n",
               write_thermal_diagnosis(d, chamber_path, records, o.out_dir).c_str());

@@ -407,6 +407,17 @@ check "... as a diverging filter" contains "$work/room.err" "filter diverging"
 check "diagnose on a chamber exits 0" test $? -eq 0
 check "... the profile's thermal model: no finding" contains "$work/tdiag.txt" "Findings: none"
 check "... the dT/dt term is not fitted on soaks" contains "$work/tdiag.txt" "In the model, not fitted on soaks: gyro.bias_temp_rate"
+check "... the non-thermal families tested on the soak nearest T0, as a table session" contains "$work/tdiag.txt" "the nearest to T0 = 20 C) only, as a table session"
+check "... its table diagnosis written" test -s "$work/tdiag/soak-4/diagnosis.json"
+# A chamber whose unit has a K2 the profile lacks (issue 33: such chambers were quiet, without
+# saying that only thermal families were tested): the soak nearest T0 names it.
+awk '{print} /^misalignment = 10 30 arcsec/{print "k2 = 15 15 ug/g^2"}' "$src/config/sensors/nav-fog-thermal.ini" > "$work/thermal-k2.ini"
+"$bin" simulate --plan "$src/config/plans/rot19.ini" --sensor "$work/thermal-k2.ini" \
+  --chamber "$src/config/chambers/soaks6.ini" --rate 20 --seed 1 --out "$work/soaks-k2" > /dev/null
+for s in "$work"/soaks-k2/soak-*; do cp "$src/config/sensors/nav-fog-thermal.ini" "$s/sensor.ini"; done
+"$bin" diagnose --session "$work/soaks-k2/chamber.ini" --out "$work/tdiag-k2" > "$work/tdiag-k2.txt"
+check "a chamber with a hidden K2: no thermal finding" contains "$work/tdiag-k2.txt" "Findings: none (no thermal family"
+check "... K2 named on the soak nearest T0" grep -qE "^Stop: the non-thermal families .* tested on soak 4 .*: named accel.k2" "$work/tdiag-k2.txt"
 awk '/^\[accel\]/{a=1} /^\[gyro\]/{a=0} !(a && /^scale_temp1/)' "$src/config/sensors/nav-fog-thermal.ini" > "$work/hidden-thermal.ini"
 "$bin" diagnose --session "$work/soaks/chamber.ini" --sensor "$work/hidden-thermal.ini" --out "$work/tdiag-hidden" > "$work/tdiag-hidden.txt"
 check "... accel.scale_temp1 hidden from the profile: named first" grep -qE '^1\. accel\.scale_temp1: chi2\(3\)' "$work/tdiag-hidden.txt"

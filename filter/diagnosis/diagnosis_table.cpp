@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "filter/thermal/soak_fit.hpp"
 #include "models/coefficient_families.hpp"
 #include "rig/timeline.hpp"
 
@@ -26,8 +27,33 @@ std::vector<std::string> candidate_families(const DiagnosisOptions& o) {
   return out;
 }
 
+// A thermal family that acts during the turns: the gyros' scale factor or misalignment against
+// the temperature (a turn's angle times T - T0). At rest the dwells see it only through the
+// earth's rate (15 deg/h times 100 ppm: far below their noise), so the components the dwells
+// "separate" carry no power there; the turns' test takes it whatever the dwells say (issue 33).
+bool thermal_acts_in_turns(const std::string& family) {
+  if (!coefficient_family_info(family).thermal()) return false;
+  const std::string base = thermal_family_parts(family).first;
+  return base == "gyro.scale" || base == "gyro.misalignment";
+}
+
+// The library's model columns: the dwells' model `confirmed` and the components of the turns'
+// findings of thermal families that act during the turns (thermal_acts_in_turns: the dwells have
+// their columns, through the earth's rate), so that the library's turns' test sees the model
+// with them.
+std::vector<int> with_thermal_turn_findings(std::vector<int> confirmed,
+                                            const std::vector<TableFinding>& findings) {
+  for (const auto& f : findings)
+    if (f.source == TableFinding::Source::Turns && thermal_acts_in_turns(f.family))
+      for (int c : f.components)
+        if (std::find(confirmed.begin(), confirmed.end(), c) == confirmed.end())
+          confirmed.push_back(c);
+  return confirmed;
+}
+
 // The families the turns' test takes this round: candidates with no component the dwells
-// separate, not yet in the filter's model.
+// separate, and the thermal families that act during the turns (thermal_acts_in_turns), not yet
+// in the filter's model.
 std::vector<std::string> turn_families(const std::vector<std::string>& candidates,
                                        const std::vector<CandidateTest>& dwell_round,
                                        const CalibratorOptions& model) {
@@ -37,7 +63,7 @@ std::vector<std::string> turn_families(const std::vector<std::string>& candidate
     const bool seen = std::any_of(dwell_round.begin(), dwell_round.end(), [&](const auto& c) {
       return c.family == f && !c.separable.empty();
     });
-    if (!seen) out.push_back(f);
+    if (!seen || thermal_acts_in_turns(f)) out.push_back(f);
   }
   return out;
 }
@@ -473,9 +499,12 @@ class TableRounds {
       lt.attitude_sigma = tm_->base.attitude_sigma;
       lt.noise = tm_->base.noise;
       lt.about = tm_->base.initial_model ? &*tm_->base.initial_model : nullptr;
+      lt.thermal = o_.dwells.thermal;  // the temperature terms of the turns (a ramp)
+      lt.reference_temperature_c = tm_->base.reference_temperature_c;
     }
-    LibraryFit fit = fit_term_library(dwells_, confirmed, o_.dwells.alpha, turns ? &lt : nullptr,
-                                      d_.unexplained.present);
+    LibraryFit fit =
+        fit_term_library(dwells_, with_thermal_turn_findings(confirmed, d_.findings),
+                         o_.dwells.alpha, turns ? &lt : nullptr, d_.unexplained.present);
     if (fit.turns_reject) {
       d_.unexplained.present = true;
       d_.unexplained.signature.push_back(fit.turns_signature);

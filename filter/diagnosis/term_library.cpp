@@ -13,6 +13,7 @@
 #include "models/earth.hpp"
 #include "models/units.hpp"
 #include "rig/io/log_io.hpp"
+#include "rig/thermal.hpp"
 
 namespace sinscal {
 
@@ -26,7 +27,7 @@ constexpr double kThresholdSigma = 3.0;
 const char* const kAxis[3] = {"x", "y", "z"};
 
 // What a column's function is of.
-enum class Kind { Product, Step, Time, Time2, Sin, Cos, RateAbs, RateSq, RateCube };
+enum class Kind { Product, Step, Time, Time2, Sin, Cos, RateAbs, RateSq, RateCube, RateTemp };
 
 // One library column: which sensor axis, its function of the body's specific force (m/s^2), rate
 // (rad/s) and plan time (s), per unit of `unit` (times si_per_unit: SI).
@@ -38,7 +39,8 @@ struct Column {
   double param = 0.0;                  // Step: 1 after this time (s); Sin, Cos: the period (s)
   // Acts only while the table turns (none of it at rest).
   bool rate() const {
-    return kind == Kind::RateAbs || kind == Kind::RateSq || kind == Kind::RateCube;
+    return kind == Kind::RateAbs || kind == Kind::RateSq || kind == Kind::RateCube ||
+           kind == Kind::RateTemp;
   }
   double value(const Eigen::Vector3d& f_b, const Eigen::Vector3d& w_b, double t) const {
     const double w = w_b(term.axis) / units::deg_per_s;  // deg/s
@@ -61,6 +63,8 @@ struct Column {
         return w * w * units::deg_per_s;
       case Kind::RateCube:
         return w * w * w * units::deg_per_s;
+      case Kind::RateTemp:
+        return 0.0;  // a function of the temperature too: rate_temperature_value
     }
     return 0.0;
   }
@@ -151,6 +155,32 @@ void add_rate_terms(std::vector<Column>& out, int axis) {
   out.push_back(column(true, axis, Kind::RateAbs, w + " |" + w + "|", "ppm/(deg/s)", 1e-6));
   out.push_back(column(true, axis, Kind::RateSq, w + "^2", "ppm/(deg/s)", 1e-6));
   out.push_back(column(true, axis, Kind::RateCube, w + "^3", "ppm/(deg/s)^2", 1e-6));
+}
+
+// The gyro's rates times the temperature on one gyro axis (RateTemp; the turns only: at rest the
+// earth's rate times T - T0 is far below the dwells' noise): omega_a (T - T0) on axis a is the
+// scale factor linear in the temperature (ppm/C), omega_b (T - T0) on axis a != b a misalignment
+// linear in it (arcsec/C), the catalog's gyro.scale_temp1 and gyro.misalignment_temp1.
+void add_rate_temperature_terms(std::vector<Column>& out, int axis) {
+  for (int b = 0; b < 3; ++b) {
+    const std::string w = std::string("omega_") + kAxis[b] + " (T - T0)";
+    Column c = b == axis ? column(true, axis, Kind::RateTemp, w, "ppm/C", 1e-6)
+                         : column(true, axis, Kind::RateTemp, w, "arcsec/C", units::arcsec);
+    c.product_a = b;  // the rate's axis
+    out.push_back(c);
+  }
+}
+
+// The library with the temperature terms of the turns appended (`thermal`: a ramp's log).
+std::vector<Column> with_rate_temperature_terms(std::vector<Column> lib, bool thermal) {
+  if (thermal)
+    for (int axis = 0; axis < 3; ++axis) add_rate_temperature_terms(lib, axis);
+  return lib;
+}
+
+// A RateTemp column's value (SI per unit): the rate about its axis times the gyros' T - T0.
+double rate_temperature_value(const Column& c, const Eigen::Vector3d& w_b, double gyro_dtemp) {
+  return w_b(c.product_a) * gyro_dtemp;
 }
 
 // The library on each axis of both triads; the rate terms only with the turns.
@@ -249,13 +279,33 @@ struct TurnsContext {
   Eigen::Vector3d omega_ie_n = Eigen::Vector3d::Zero();
 };
 
-void accumulate(Segment& g, const ImuSample& smp, double t, const TurnsContext& x) {
+// A sample's temperatures against the model's reference (deg C) and the gyros' rate of change
+// of temperature (deg C/s, from every sample's reading): 0 when the log has none.
+struct SampleTemperature {
+  double accel_dtemp = 0.0, gyro_dtemp = 0.0, gyro_dtemp_rate = 0.0;
+};
+
+SampleTemperature sample_temperature(const ImuSample& smp, double reference_c,
+                                     TemperatureRate& rate) {
+  SampleTemperature out;
+  if (!smp.has_temperature) return out;
+  out.accel_dtemp = smp.accel_temperature_c - reference_c;
+  out.gyro_dtemp = smp.gyro_temperature_c - reference_c;
+  out.gyro_dtemp_rate = rate.add(smp.t, smp.gyro_temperature_c);
+  return out;
+}
+
+void accumulate(Segment& g, const ImuSample& smp, double t, const TurnsContext& x,
+                const SampleTemperature& temp) {
   const double dt = smp.dt;
   if (!(dt > 0.0)) return;
   KinematicSample ks;
   ks.omega_ib_b = smp.dtheta_b / dt;
   ks.f_ib_b = smp.dv_b / dt;
   ks.t = t - 0.5 * dt;
+  ks.accel_dtemp = temp.accel_dtemp;
+  ks.gyro_dtemp = temp.gyro_dtemp;
+  ks.gyro_dtemp_rate = temp.gyro_dtemp_rate;
   ImuErrorModel::JacobianColumns J;
   x.model.jacobian(ks, Eigen::Vector3d::Zero(), x.columns, J);
   const auto p = static_cast<Eigen::Index>(x.columns.size());
@@ -263,8 +313,10 @@ void accumulate(Segment& g, const ImuSample& smp, double t, const TurnsContext& 
   for (std::size_t j = 0; j < x.lib->size(); ++j) {
     const Column& c = (*x.lib)[j];
     if (!c.gyro) continue;
-    g.B.col(static_cast<Eigen::Index>(j)) +=
-        g.C.col(c.term.axis) * (c.value(ks.f_ib_b, ks.omega_ib_b, ks.t) * c.term.si_per_unit * dt);
+    const double v = c.kind == Kind::RateTemp
+                         ? rate_temperature_value(c, ks.omega_ib_b, ks.gyro_dtemp)
+                         : c.value(ks.f_ib_b, ks.omega_ib_b, ks.t);
+    g.B.col(static_cast<Eigen::Index>(j)) += g.C.col(c.term.axis) * (v * c.term.si_per_unit * dt);
   }
   if (x.about) g.about += g.C * (x.about->gyro_output(ks) - ks.omega_ib_b) * dt;
   g.C = dcm_from_rotvec(-x.omega_ie_n * dt) * g.C * dcm_from_rotvec(smp.dtheta_b);
@@ -297,12 +349,14 @@ TurnRaw integrate_turns(const LibraryTurns& lt, const DwellTests& dwells, const 
   LogReader reader(lt.session->log);
   ImuSample smp;
   std::size_t k = 0;
+  TemperatureRate rate;
   while (reader.next(smp)) {
     const double t = smp.t - lt.session->time_offset;  // plan time
+    const SampleTemperature temp = sample_temperature(smp, lt.reference_temperature_c, rate);
     if (t <= mids.front()) continue;
     while (k < segs.size() && t > mids[k + 1]) ++k;
     if (k >= segs.size()) break;
-    accumulate(segs[k], smp, t, x);
+    accumulate(segs[k], smp, t, x, temp);
   }
   const auto n = static_cast<Eigen::Index>(3 * segs.size());
   r.A = Eigen::MatrixXd::Zero(n, p);
@@ -477,12 +531,19 @@ std::vector<LibraryTerm> aliases_of(const Stacked& s, const std::vector<Column>&
   return out;
 }
 
+// The catalog family of a RateTemp term (add_rate_temperature_terms), or "".
+std::string rate_temperature_family(const LibraryTerm& t) {
+  if (t.sensor != "gyro" || t.formula.find(" (T - T0)") == std::string::npos) return "";
+  return t.formula.rfind(std::string("omega_") + kAxis[t.axis], 0) == 0 ? "gyro.scale_temp1"
+                                                                        : "gyro.misalignment_temp1";
+}
+
 // A catalog family the term is (the catalog tested it: it was not named, or refused), or "".
 std::string catalog_family_of(const LibraryTerm& t) {
   const std::string a = kAxis[t.axis];
   if (t.formula == "t") return t.sensor + ".bias_drift";
   if (t.sensor == "accel" && t.formula == "f_" + a + "^2") return "accel.k2";
-  return "";
+  return rate_temperature_family(t);
 }
 
 // How to add one term as a family.
@@ -559,7 +620,8 @@ LibraryFit fit_term_library(const DwellTests& dwells, const std::vector<int>& pa
                             double alpha, const LibraryTurns* turns, bool select) {
   LibraryFit out;
   const bool with_turns = turns && turns->session;
-  const std::vector<Column> lib = library(dwells.dwell_inputs(), with_turns);
+  const std::vector<Column> lib = with_rate_temperature_terms(
+      library(dwells.dwell_inputs(), with_turns), with_turns && turns->thermal);
   out.candidates = static_cast<int>(lib.size());
   Stacked s = stack(dwells, parameters, lib);
   TurnRaw raw;

@@ -70,6 +70,11 @@ struct LibraryTurns {
   double attitude_sigma = 0.0;
   NoiseModel noise;
   const ImuErrorModel* about = nullptr;
+  /// The log's temperatures (a ramp): the model's thermal columns take each sample's temperature
+  /// against reference_temperature_c (deg C); with `thermal` the library adds the gyros' rates
+  /// times the temperature (scale factor and misalignment linear in it, acting in the turns).
+  bool thermal = false;
+  double reference_temperature_c = 25.0;
 };
 
 /// Fits the residual of the model `parameters` on the dwells (and with `turns`, on the turns)

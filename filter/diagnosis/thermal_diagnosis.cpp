@@ -97,6 +97,19 @@ HeldoutSoaks heldout(const std::vector<SoakEstimate>& soaks,
   return out;
 }
 
+// The family of the same coefficient one degree lower in the temperature ("accel.bias_temp2" for
+// "accel.bias_temp3"), or "" for degree 1 and the rate's. Without the hierarchy a degree-3 term
+// alone fits the linear part of an all-hidden chamber about as well as degree 1 (T - T0 and its
+// cube are nearly collinear over the soaks' span) and can be named first with a zero truth.
+std::string lower_degree(const std::string& candidate) {
+  const auto [family, degree] = thermal_family_parts(candidate);
+  if (degree < 2) return "";
+  for (const auto& f : coefficient_families())
+    if (f.thermal() && thermal_family_parts(f.name) == std::make_pair(family, degree - 1))
+      return f.name;
+  return "";
+}
+
 // Why the soaks cannot test `candidate` against `model` (empty: they can).
 std::string not_testable(const std::string& candidate, const std::vector<std::string>& model,
                          const std::set<std::string>& estimated, std::size_t soaks) {
@@ -106,6 +119,10 @@ std::string not_testable(const std::string& candidate, const std::vector<std::st
            "a ramp";
   if (estimated.count(family) == 0)
     return "the soaks do not estimate " + family + " (its coefficient at T0)";
+  const std::string lower = lower_degree(candidate);
+  if (!lower.empty() && !contains(model, lower))
+    return "a polynomial in the temperature is extended degree by degree: " + lower +
+           " is not in the model";
   int terms = 2;  // the coefficient at T0 and the candidate
   for (const auto& m : model)
     if (thermal_family_parts(m).first == family) ++terms;
@@ -251,10 +268,11 @@ ThermalDiagnosis diagnose_soaks(const std::vector<SoakEstimate>& soaks, double t
   d.final_heldout = current;
   d.unexplained = now.dof > 0 && now.p_value < options.alpha;
   if (d.unexplained) d.sigma_scale = std::sqrt(now.chi2 / now.dof);
-  d.stops.emplace_back(
-      "only thermal families tested: the non-thermal families (K2, g-sensitivity, scale "
-      "asymmetry, lever arms, time delay, ...) are fitted soak by soak, not tested; diagnose a "
-      "soak's session (soak-K/session.ini) as a table session to test them");
+  if (!options.non_thermal_elsewhere)
+    d.stops.emplace_back(
+        "only thermal families tested: the non-thermal families (K2, g-sensitivity, scale "
+        "asymmetry, lever arms, time delay, ...) are fitted soak by soak, not tested; diagnose a "
+        "soak's session (soak-K/session.ini) as a table session to test them");
   for (auto& f : d.findings)
     for (std::size_t i = 0; i < now.catalog.size(); ++i)
       if (coefficient_catalog()[static_cast<std::size_t>(now.catalog[i])].family == f.test.family)

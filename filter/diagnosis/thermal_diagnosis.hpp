@@ -18,6 +18,9 @@ struct ThermalDiagnosisOptions : DiagnosisSearch {
   ThermalDiagnosisOptions() : DiagnosisSearch(4) {}
   /// The thermal families of the model (the sensor profile's).
   std::vector<std::string> model;
+  /// The caller tests the non-thermal families elsewhere (a soak's session as a table session)
+  /// and states it: no "only thermal families tested" stop.
+  bool non_thermal_elsewhere = false;
 };
 
 /// Held-out soaks: each left out of the fit in turn and its coefficients predicted.
