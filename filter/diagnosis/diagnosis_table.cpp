@@ -518,8 +518,14 @@ class TableRounds {
     char b[200];
     for (auto& f : d_.findings) {
       const bool dwells = f.source == TableFinding::Source::Dwells;
+      // The held-out dwells' rejection stands unless the held-out turns, which a dwell effect
+      // acts in too, confirm the finding (as refusal_of: few dwells cannot predict a left-out
+      // dwell's share of a large family held by a weak prior).
+      const double q = boost::math::quantile(boost::math::chi_squared(std::max(1, f.dof)),
+                                             1.0 - o_.dwells.alpha);
       const bool holds =
-          dwells ? d_.check.dwells_hold && d_.check.heldout_hold : d_.check.filter_holds;
+          dwells ? d_.check.dwells_hold && (d_.check.heldout_hold || turns_confirm(f, q))
+                 : d_.check.filter_holds;
       if (holds) {
         if (dwells) confirmed.insert(confirmed.end(), f.components.begin(), f.components.end());
         kept.push_back(std::move(f));
