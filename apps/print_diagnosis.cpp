@@ -16,6 +16,9 @@ void print_verdict(const TableDiagnosis& d) {
   std::printf("Residual with the findings: dwells chi2 %.4g on %d dof (99 %% quantile %.4g)%s",
               c.dwells_chi2, c.dwells_dof, c.dwells_quantile,
               c.dwells_hold ? "" : " REJECTS the noise model");
+  if (c.heldout_inputs > 0)
+    std::printf("; held-out dwells chi2 %.4g on %d inputs (%.4g)%s", c.heldout_chi2,
+                c.heldout_inputs, c.heldout_quantile, c.heldout_hold ? "" : " REJECTS");
   if (c.filter)
     std::printf("; filter NIS per dof %.3f%s", c.nis_per_dof,
                 c.filter_holds ? "" : " REJECTS the noise model");

@@ -74,6 +74,10 @@ void add_verdict(json& j, const TableDiagnosis& d) {
                          {"dwells_dof", c.dwells_dof},
                          {"dwells_quantile_99", c.dwells_quantile},
                          {"dwells_hold", c.dwells_hold},
+                         {"heldout_chi2", c.heldout_chi2},
+                         {"heldout_inputs", c.heldout_inputs},
+                         {"heldout_quantile_99", c.heldout_quantile},
+                         {"heldout_hold", c.heldout_hold},
                          {"filter", c.filter},
                          {"nis_per_dof", c.nis_per_dof},
                          {"filter_holds", c.filter_holds},
@@ -168,6 +172,7 @@ void add_story_fields(json& j, const TableFinding& f) {
     j["heldout_turns_before"] = heldout_turns_json(f.turns_before);
     j["heldout_turns_after"] = heldout_turns_json(f.turns_after);
   }
+  if (!f.library_alternative.empty()) j["library_alternative"] = f.library_alternative;
 }
 
 }  // namespace
@@ -199,6 +204,8 @@ std::string finding_summary(const TableFinding& f) {
     m << "; held-out turns " << fixed(f.turns_before->sigmas, 2) << " -> "
       << fixed(f.turns_after->sigmas, 2) << " sigma, " << fixed(f.turns_before->velocity / 1e-3, 3)
       << " -> " << fixed(f.turns_after->velocity / 1e-3, 3) << " mm/s";
+  if (!f.library_alternative.empty())
+    m << "; or, not separable on this plan: " << f.library_alternative;
   return m.str();
 }
 

@@ -22,8 +22,10 @@ constexpr double kOpenWorldRate = 20.0;  // Hz, as the diagnosis matrix
 
 struct OpenWorldScore {
   int seeds = 0, wrong_first = 0, unexplained = 0, quiet = 0, errors = 0;
-  int right_term = 0;  // the effect's library term reported, within 3 sigma of the truth
-  int wrong_term = 0;  // a library term reported, but not the effect's within 3 sigma
+  int right_term = 0;   // the effect's library term reported, within 3 sigma of the truth
+  int wrong_term = 0;   // a library term reported, but not the effect's within 3 sigma
+  int alternative = 0;  // a catalog name first, stating the effect's library term as its
+                        // alternative (the plan cannot tell them apart)
   std::string first_miss, first_terms;
 };
 
@@ -67,6 +69,9 @@ OpenWorldScore run_effect(const std::string& plan, std::size_t effect, int seeds
     if (term != 0 && s.first_terms.empty())
       for (const auto& t : o.result.unexplained.library->terms) s.first_terms += t.text() + "; ";
     const bool wrong = !o.result.findings.empty();
+    if (wrong && !e.formula.empty() &&
+        o.result.findings.front().library_alternative.find(e.formula) != std::string::npos)
+      ++s.alternative;
     s.wrong_first += wrong ? 1 : 0;
     s.unexplained += o.result.unexplained.present ? 1 : 0;
     s.quiet += !wrong && !o.result.unexplained.present ? 1 : 0;
@@ -94,40 +99,46 @@ TEST_CASE("Open world: out-of-catalog effects on rot19 and seed8, measured",
   std::stringstream parts(env_plans ? env_plans : "rot19.ini,seed8.ini");
   for (std::string p; std::getline(parts, p, ',');) plans.push_back(p);
   std::printf(
-      "| plan | effect | seeds | catalog name first | unexplained | right library term | other "
-      "library term | quiet | errors |\n"
-      "|---|---|---|---|---|---|---|---|---|\n");
+      "| plan | effect | seeds | catalog name first | of which with the term as its alternative | "
+      "unexplained | right library term | other library term | quiet | errors |\n"
+      "|---|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& plan : plans)
     for (std::size_t k = 0; k < open_world_effects(0.0).size(); ++k) {
       const OpenWorldEffect e = open_world_effects(0.0)[k];
       if (env_filter && e.name.find(env_filter) == std::string::npos) continue;
       const OpenWorldScore s = run_effect(plan, k, seeds, 9000, scale);
-      std::printf("| %s | %s | %d | %d | %d | %d | %d | %d | %d |\n", plan.c_str(), e.name.c_str(),
-                  s.seeds, s.wrong_first, s.unexplained, s.right_term, s.wrong_term, s.quiet,
-                  s.errors);
+      std::printf("| %s | %s | %d | %d | %d | %d | %d | %d | %d | %d |\n", plan.c_str(),
+                  e.name.c_str(), s.seeds, s.wrong_first, s.alternative, s.unexplained,
+                  s.right_term, s.wrong_term, s.quiet, s.errors);
       if (!s.first_miss.empty()) std::printf("    first miss: %s\n", s.first_miss.c_str());
       if (!s.first_terms.empty()) std::printf("    library: %s\n", s.first_terms.c_str());
       std::fflush(stdout);
     }
 }
 
-// CI: one seed of four cells of the matrix (seeds outside the measured ones). An anisoelastic
+// CI: one seed of six cells of the matrix (seeds outside the measured ones). An anisoelastic
 // gyro term on seed8 and a gyro g^2 term on rot19 are found by the library within 3 sigma (a
 // sign or a column wrong turns them red); a cross-axis accelerometer product on seed8 (named
-// time_delay before issue 33) names no catalog family and is reported unexplained. A gyro rate
-// nonlinearity omega_y^2 on rot19 acts only in the turns: the turns' attitude residual finds it
-// (its regressor's sign or the gyro integration's frame wrong turns it red); the catalog's
-// gyro.scale_asym, which it nearly equals on turns at one rate, may be named first.
+// time_delay before issue 33) names no catalog family and is reported unexplained. The seed8 g^2
+// term (named gyro.bias_drift before the held-out test) and a gyro bias step half-way on rot19
+// (named gyro.bias_drift on 22 of 30) name no family: the held-out dwells and the library's
+// contest refuse the drift, and the library reports the term within 3 sigma (measured 10 of 10
+// and 30 of 30, docs/accuracy.md; a sign of the held-out statistic flipped turns them red). A gyro
+// rate nonlinearity omega_y^2 on rot19 acts only in the turns: the turns' attitude residual finds
+// it (its regressor's sign or the gyro integration's frame wrong turns it red); the catalog's
+// gyro.scale_asym, which predicts the held-out turns as well on a plan whose turns share one rate
+// profile, may be named first, but then with the library term as its stated alternative.
 TEST_CASE("Open world: out-of-catalog effects are unexplained, or their library term",
           "[diagnosis][open_world][long]") {
   struct Case {
     std::string plan;
     std::size_t effect;
     bool term;     // the library must find the effect's term
-    bool catalog;  // a catalog family may be named too
+    bool catalog;  // a catalog family may be named, with the effect's term as its alternative
   };
   for (const Case& k : {Case{"seed8.ini", 5, true, false}, Case{"rot19.ini", 1, true, false},
-                        Case{"seed8.ini", 0, false, false}, Case{"rot19.ini", 6, true, true}}) {
+                        Case{"seed8.ini", 0, false, false}, Case{"rot19.ini", 6, true, true},
+                        Case{"seed8.ini", 1, true, false}, Case{"rot19.ini", 4, true, false}}) {
     const OpenWorldEffect e = open_world_effects(0.0)[k.effect];
     const HiddenCase c = open_world_case(k.plan, "nav-fog.ini", k.effect, 77, kOpenWorldRate);
     const DiagnosisOutcome o = diagnose_hidden(c, {});
@@ -136,13 +147,17 @@ TEST_CASE("Open world: out-of-catalog effects are unexplained, or their library 
       for (const auto& t : o.result.unexplained.library->terms) terms += t.text() + "; ";
     INFO(k.plan << " " << e.name << ": " << o.story << " | library: " << terms);
     if (!k.catalog) CHECK(o.result.findings.empty());
+    for (const auto& f : o.result.findings)
+      CHECK(f.library_alternative.find(e.formula) != std::string::npos);
     CHECK(o.result.unexplained.present);
     if (!k.term) continue;
     CHECK(score_terms(o.result, e) == 1);
-    // How to add the term as one family-table entry, for each kind of term.
+    // How to add the term as one family-table entry, for each kind of term (the term reported:
+    // the effect's, or a term the plan cannot tell from it with the effect's as its alias).
     REQUIRE(o.result.unexplained.library);
+    REQUIRE_FALSE(o.result.unexplained.library->terms.empty());
     const std::string& how = o.result.unexplained.library->how_to_add;
-    CHECK(how.find(e.formula) != std::string::npos);
+    CHECK(how.find(o.result.unexplained.library->terms.front().formula) != std::string::npos);
     CHECK(how.find("family table") != std::string::npos);
   }
 }

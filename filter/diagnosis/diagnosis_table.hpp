@@ -101,6 +101,9 @@ struct TableFinding : TestVerdict {
   bool filter = false;
   double nis_before = 0.0, nis_after = 0.0, log_likelihood_before = 0.0, log_likelihood_after = 0.0;
   std::optional<HeldoutTurns> turns_before, turns_after;
+  /// A library term that predicts the held-out dwells and turns as well as the family (the plan
+  /// cannot tell them apart, term_library.hpp HeldoutContest): the contest's statement, else "".
+  std::string library_alternative;
 };
 
 /// The final model's residual against its noise model: whether the findings leave the dwells and
@@ -111,15 +114,19 @@ struct ResidualCheck {
   int dwells_dof = 0;
   double dwells_quantile = 0.0;  // the chi-square quantile of dwells_dof at kResidualLevel
   bool dwells_hold = true;       // the in-sample chi2 within its quantile
-  double heldout_chi2 = 0.0;     // the held-out dwells' predictive chi-square (reported only)
+  /// The held-out dwells' predictive chi-square (each dwell predicted by the others, whitened by
+  /// its predictive covariance) against its quantile at kResidualLevel: the dwell findings must
+  /// leave it consistent with the noise (few dwells fit a model closely in sample).
+  double heldout_chi2 = 0.0;
   int heldout_inputs = 0;
   double heldout_quantile = 0.0;
+  bool heldout_hold = true;
   bool filter = false;  // the filter ran
   double nis_per_dof = 0.0;
   bool filter_holds = true;         // NIS per dof within kNisPerDofLimit
   double dwells_sigma_scale = 1.0;  // sqrt(chi2 / dof) where the dwells do not hold, else 1
   double filter_sigma_scale = 1.0;  // sqrt(NIS per dof) where the filter does not hold, else 1
-  bool holds() const { return dwells_hold && filter_holds; }
+  bool holds() const { return dwells_hold && heldout_hold && filter_holds; }
 };
 
 /// The level of the residual's chi-square test (the final model against its noise model).

@@ -518,7 +518,7 @@ std::vector<LibraryTerm> aliases_of(const Stacked& s, const std::vector<Column>&
                                     Eigen::Index j, double value, double sigma) {
   std::vector<LibraryTerm> out;
   const double nj = s.B.col(j).norm();
-  for (Eigen::Index k = 0; k < s.B.cols(); ++k) {
+  for (Eigen::Index k = 0; k < static_cast<Eigen::Index>(lib.size()); ++k) {
     const double nk = s.B.col(k).norm();
     if (k == j || !(nk > 0.0) || !(nj > 0.0)) continue;
     const double r = s.B.col(j).dot(s.B.col(k)) / (nj * nk);
@@ -603,6 +603,74 @@ void turns_test(const Stacked& s, const TurnRaw& r, LibraryFit& out) {
   }
 }
 
+// Leave-one-block-out chi-square of the fit on `cols` (each block's coefficients from the other
+// blocks' normal equations): as heldout_chi2, one pass over the rows.
+double heldout_fast(const Stacked& s, const std::vector<Eigen::Index>& cols) {
+  const auto k = static_cast<Eigen::Index>(cols.size());
+  if (k == 0) return s.y.squaredNorm();
+  Eigen::MatrixXd X(s.B.rows(), k);
+  // Unit columns: the regularization below must not depend on the columns' units.
+  for (Eigen::Index j = 0; j < k; ++j) {
+    X.col(j) = s.B.col(cols[static_cast<std::size_t>(j)]);
+    const double n = X.col(j).norm();
+    if (n > 0.0) X.col(j) /= n;
+  }
+  const Eigen::MatrixXd N = X.transpose() * X;
+  const Eigen::VectorXd b = X.transpose() * s.y;
+  double sum = 0.0;
+  for (std::size_t d = 0; d + 1 < s.first.size(); ++d) {
+    const Eigen::Index r0 = s.first[d], rows = s.first[d + 1] - r0;
+    const auto Xd = X.middleRows(r0, rows);
+    const auto yd = s.y.segment(r0, rows);
+    Eigen::MatrixXd Nd = N - Xd.transpose() * Xd;
+    Nd.diagonal().array() += 1e-9 * (1.0 + Nd.diagonal().maxCoeff());
+    const Eigen::VectorXd c = Nd.ldlt().solve(b - Xd.transpose() * yd);
+    sum += (yd - Xd * c).squaredNorm();
+  }
+  return sum;
+}
+
+// The stacked dwells and turns of the model `current` with the family's columns moved behind the
+// library's (indices lib.size() ...), every column with `current` projected out.
+Stacked contest_system(const DwellTests& dwells, const std::vector<int>& current,
+                       const std::vector<int>& family, const std::vector<Column>& lib,
+                       const LibraryTurns* turns) {
+  std::vector<int> all = current;
+  all.insert(all.end(), family.begin(), family.end());
+  Stacked s = stack(dwells, all, lib);
+  if (turns && turns->session) append_turns(s, *turns, dwells, all, lib);
+  const auto n0 = static_cast<Eigen::Index>(current.size());
+  const auto k = static_cast<Eigen::Index>(family.size());
+  const Eigen::Index rest = s.A.cols() - n0 - k;  // the table base's columns
+  const Eigen::MatrixXd F = s.A.middleCols(n0, k);
+  Eigen::MatrixXd A0(s.A.rows(), n0 + rest);
+  A0 << s.A.leftCols(n0), s.A.rightCols(rest);
+  Eigen::VectorXd p0(n0 + rest);
+  p0 << s.prior.head(n0), s.prior.tail(rest);
+  s.A = A0;
+  s.prior = p0;
+  const Eigen::Index m = s.B.cols();
+  s.B.conservativeResize(Eigen::NoChange, m + k);
+  s.B.rightCols(k) = F;
+  project_out_model(s);
+  return s;
+}
+
+// The library term of column j fitted alone with the model: value and sigma (scaled by the
+// residual where it exceeds the noise), and the terms the plan cannot tell from it.
+LibraryTerm fitted_term(const Stacked& s, const std::vector<Column>& lib, Eigen::Index j) {
+  const std::vector<Eigen::Index> cols = {j};
+  const Eigen::VectorXd c = solve_on(s, cols, -1);
+  const Eigen::MatrixXd P = covariance_on(s, cols);
+  const double chi2 = chi2_of(s, cols, c, 0, s.y.size());
+  const double dof = std::max(1.0, static_cast<double>(s.y.size() - s.A.cols() - 1));
+  LibraryTerm t = lib[static_cast<std::size_t>(j)].term;
+  t.value = c(0);
+  t.sigma = std::sqrt(P(0, 0)) * std::sqrt(std::max(1.0, chi2 / dof));
+  t.aliases = aliases_of(s, lib, j, t.value, t.sigma);
+  return t;
+}
+
 }  // namespace
 
 std::string LibraryTerm::text() const {
@@ -663,6 +731,89 @@ LibraryFit fit_term_library(const DwellTests& dwells, const std::vector<int>& pa
     out.terms.push_back(t);
   }
   out.how_to_add = how_to_add(out.terms);
+  return out;
+}
+
+}  // namespace sinscal
+
+namespace sinscal {
+
+std::string HeldoutContest::reason() const {
+  if (!replaced && !alternative) return "";
+  char b[700];
+  std::snprintf(b, sizeof b,
+                "the library term %s predicts the held-out dwells and turns %s (held-out chi2 over "
+                "%d blocks %.4g; %.4g with the family, %.4g with the term instead, %.4g with both: "
+                "the family gains %.3g once the term is in, %.3g needed; the term %.3g once the "
+                "family is in, %.3g needed)%s",
+                term.text().c_str(), replaced ? "better" : "as well", blocks, before, family,
+                term_alone, both, family_gain, family_needed, term_gain, term_needed,
+                replaced ? "" : ": the plan cannot tell them apart");
+  return b;
+}
+
+namespace {
+
+// The contest's verdict on one library term j (HeldoutContest): true when it replaces the family
+// or is its alternative, ahead of the term found so far (`out` then holds it).
+bool contest_term(const Stacked& s, const std::vector<Eigen::Index>& fcols, Eigen::Index j,
+                  HeldoutContest& out) {
+  std::vector<Eigen::Index> both = fcols;
+  both.push_back(j);
+  const double h_both = heldout_fast(s, both), h_term = heldout_fast(s, {j});
+  const double scale = std::max(1.0, h_both / static_cast<double>(s.y.size()));
+  const double term_gain = (out.family - h_both) / scale;
+  const double family_gain = (h_term - h_both) / scale;
+  const bool family_seen = (out.before - out.family) / scale >= out.family_needed;
+  const bool term_seen = (out.before - h_term) / scale >= out.term_needed;
+  if (!family_seen || !term_seen || family_gain >= out.family_needed) return false;
+  const bool better = term_gain >= out.term_needed;
+  // A term that explains better beats one that explains as well; among equals the lower
+  // held-out chi-square.
+  if (out.replaced && !better) return false;
+  if ((out.replaced || out.alternative) && better == out.replaced && h_term >= out.term_alone)
+    return false;
+  out.replaced = better;
+  out.alternative = !better;
+  out.term_alone = h_term;
+  out.both = h_both;
+  out.term_gain = term_gain;
+  out.family_gain = family_gain;
+  return true;
+}
+
+}  // namespace
+
+HeldoutContest contest_family(const DwellTests& dwells, const std::vector<int>& current,
+                              const std::vector<int>& family, double alpha,
+                              const LibraryTurns* turns) {
+  HeldoutContest out;
+  std::vector<int> fam;
+  for (int k : family)
+    if (std::find(current.begin(), current.end(), k) == current.end()) fam.push_back(k);
+  if (fam.empty()) return out;
+  const bool with_turns = turns && turns->session;
+  const std::vector<Column> lib = library(dwells.dwell_inputs(), with_turns);
+  const Stacked s = contest_system(dwells, current, fam, lib, with_turns ? turns : nullptr);
+  const auto m = static_cast<Eigen::Index>(lib.size());
+  std::vector<Eigen::Index> fcols;
+  for (Eigen::Index j = m; j < s.B.cols(); ++j) fcols.push_back(j);
+  out.blocks = static_cast<int>(s.first.size()) - 1;
+  out.before = heldout_fast(s, {});
+  out.family = heldout_fast(s, fcols);
+  out.family_dof = static_cast<int>(fcols.size());
+  std::vector<Eigen::Index> tried;
+  for (Eigen::Index j = 0; j < m; ++j)
+    if (catalog_family_of(lib[static_cast<std::size_t>(j)].term).empty() &&
+        s.B.col(j).squaredNorm() >= 1e-12 * s.y.squaredNorm())
+      tried.push_back(j);
+  out.terms = static_cast<int>(tried.size());
+  if (tried.empty()) return out;
+  out.term_needed = boost::math::quantile(boost::math::chi_squared(1),
+                                          1.0 - alpha / static_cast<double>(tried.size()));
+  out.family_needed = boost::math::quantile(boost::math::chi_squared(out.family_dof), 1.0 - alpha);
+  for (const Eigen::Index j : tried)
+    if (contest_term(s, fcols, j, out)) out.term = fitted_term(s, lib, j);
   return out;
 }
 

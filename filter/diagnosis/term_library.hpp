@@ -77,6 +77,42 @@ struct LibraryTurns {
   double reference_temperature_c = 25.0;
 };
 
+/// A catalog family against the library on the same held-out blocks (each dwell and each turn
+/// segment left out in turn, its coefficients predicted from the others; the model `current`
+/// projected out). The statistic is a fall of the held-out chi-square, in the residual's scale
+/// (chi-square per row of the model with both, where above 1); a library term's gains are tested
+/// against the chi-square quantile of 1 dof at 1 - alpha / (terms tried) (Bonferroni), the
+/// family's against that of its dof at 1 - alpha. When both gain alone (the library sees the
+/// family) and the family gains nothing once a term T is in, T explains the family's share of
+/// the held-out data: better when T still gains with the family in (the family is replaced: not
+/// named), else as well (the plan cannot tell them apart: T is the family's alternative, stated
+/// with it).
+struct HeldoutContest {
+  int blocks = 0;            // dwells and turn segments
+  int terms = 0;             // library terms tried (the catalog's own terms excluded)
+  double before = 0.0;       // held-out chi-square of the model `current`
+  double family = 0.0;       // with the family
+  int family_dof = 0;        // its columns
+  bool replaced = false;     // a library term explains the family's share better
+  bool alternative = false;  // ... as well (and none better)
+  LibraryTerm term;          // that term (its value and sigma with `current` and it alone)
+  double term_alone = 0.0;   // held-out chi-square with the term instead of the family
+  double both = 0.0;         // with the family and the term
+  double term_gain = 0.0;    // (family - both) / scale
+  double family_gain = 0.0;  // (term_alone - both) / scale
+  double term_needed = 0.0;  // the quantiles the gains are tested against
+  double family_needed = 0.0;
+  /// "the library term gyro y: 52 +- 0.1 ppm/(deg/s) * omega_y^2 predicts the held-out dwells
+  /// and turns better (...)"; empty when neither replaced nor an alternative.
+  std::string reason() const;
+};
+
+/// The contest of the family's columns `family` (catalog indices) added to `current` against
+/// every library term (alpha: the family-wise level).
+HeldoutContest contest_family(const DwellTests& dwells, const std::vector<int>& current,
+                              const std::vector<int>& family, double alpha,
+                              const LibraryTurns* turns = nullptr);
+
 /// Fits the residual of the model `parameters` on the dwells (and with `turns`, on the turns)
 /// against the library (alpha: the level of the held-out confirmation). Terms the model's columns
 /// explain are projected out. With `select` false only the turns' test runs (the selection runs
