@@ -3,8 +3,8 @@
 // updates are recorded in bounded memory (filter/noise/autocorrelation.hpp), and tested at the
 // end: their NIS against chi-square(updates) (upper tail: more residual than the noise model
 // holds), and their whiteness by Ljung-Box against chi-square(lags) where the update's sigma is
-// the noise (not a bound), Bonferroni over every test (docs/methods/kalman-filter.md "Innovation
-// consistency").
+// the noise (the dwells' zero velocity, not a bound), Bonferroni over every test
+// (docs/methods/kalman-filter.md "Innovation consistency").
 #pragma once
 
 #include <array>
@@ -53,10 +53,11 @@ struct ChannelCheck {
   double ljung_box_p = 1.0;  // upper tail of chi-square(lags) at Q
   int largest_lag = 0;       // the lag of the largest |autocorrelation|
   double largest_autocorrelation = 0.0;
-  /// The lower tail of chi-square(updates) at nis below the threshold: the update's sigma is a
-  /// bound, not the noise (the known position's 1 mm, the table's 0.1 arcsec hold). Its
-  /// innovations are then the filter's own state error seen through a gain made for more noise
-  /// than there is, correlated by construction: their whiteness is not tested (white stays true).
+  /// The update's sigma is a bound, not the noise: every kind but the dwells' zero velocity (the
+  /// known position's 1 mm, the table's 0.1 arcsec hold, the turns' 0.1 mm/s), or a NIS below
+  /// the lower tail of chi-square(updates) at the threshold. Its innovations are then the
+  /// filter's own state error seen through a gain made for more noise than there is, correlated
+  /// by construction: their whiteness is not tested (white stays true), their NIS is.
   bool sigma_bound = false;
   bool nis_holds = true;  // nis_p at or above the Bonferroni threshold
   bool white = true;      // ljung_box_p at or above it (or not tested)
