@@ -117,8 +117,9 @@ void print_innovation_check(const InnovationCheck& c) {
                 k.ljung_box_p, k.white ? (k.sigma_bound ? "b" : " ") : "*");
   for (const auto& f : c.failures) std::printf("   Not consistent: %s\n", f.c_str());
   std::printf(
-      "   (*: fails at alpha / tests; b: the update's sigma is a bound, NIS per dof below its "
-      "quantile: whiteness not tested)\n");
+      "   (*: fails at alpha / tests; b: the update's sigma is a bound, not the noise (all but the "
+      "dwells' zero velocity, or a NIS per dof below its lower quantile): whiteness not "
+      "tested)\n");
 }
 
 void print_kalman_verdicts(const KalmanRun& run, const SensorProfile& profile,
