@@ -238,6 +238,7 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
   std::printf("\nResult written to %s (%.2f s, %.0fx real time)\n", out_path.c_str(), seconds,
               kr.duration / seconds);
   print_kalman_verdicts(kr, profile, truth);
+  print_innovation_check(kr.innovations);
   return row;
 }
 

@@ -103,6 +103,25 @@ void print_installation(const InstallationResult& in) {
 }
 }  // namespace
 
+void print_innovation_check(const InnovationCheck& c) {
+  if (!c.tested()) return;
+  std::printf(
+      "Innovations against the noise model (NIS upper tail and Ljung-Box whiteness per channel, "
+      "alpha %.2g over %d tests): %s\n",
+      c.alpha, c.tests, c.consistent ? "consistent" : "NOT consistent");
+  std::printf("   %-24s %8s %10s %9s %10s %5s %9s\n", "channel", "updates", "NIS/dof", "p", "Q",
+              "lags", "p");
+  for (const auto& k : c.channels)
+    std::printf("   %-24s %8ld %10.3f %9.2g%s %10.4g %5d %9.2g%s\n", k.channel.c_str(), k.updates,
+                k.nis_per_dof, k.nis_p, k.nis_holds ? " " : "*", k.ljung_box_q, k.lags,
+                k.ljung_box_p, k.white ? (k.sigma_bound ? "b" : " ") : "*");
+  for (const auto& f : c.failures) std::printf("   Not consistent: %s\n", f.c_str());
+  std::printf(
+      "   (*: fails at alpha / tests; b: the update's sigma is a bound, not the noise (all but the "
+      "dwells' zero velocity, or a NIS per dof below its lower quantile): whiteness not "
+      "tested)\n");
+}
+
 void print_kalman_verdicts(const KalmanRun& run, const SensorProfile& profile,
                            const ResultCoefficients& truth) {
   const ResultCoefficients coefficients = result_coefficients(run);

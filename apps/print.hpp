@@ -23,6 +23,9 @@ void print_coefficient_table(const ResultCoefficients& coefficients,
 void print_truth_verdict(const ResultCoefficients& coefficients, const ResultCoefficients& truth);
 void print_kalman_verdicts(const KalmanRun& run, const SensorProfile& profile,
                            const ResultCoefficients& truth);
+/// The filter's innovation tests: the verdict, and each channel's NIS per dof (p) and Ljung-Box
+/// Q (p), failures marked.
+void print_innovation_check(const InnovationCheck& check);
 /// Live convergence table on a terminal (standard error): per family, the largest sigma against
 /// its target.
 void print_live_table(const MonitorRecord& record, const std::map<std::string, double>& targets);

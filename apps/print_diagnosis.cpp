@@ -2,6 +2,7 @@
 #include <cstdio>
 
 #include "apps/diagnose.hpp"
+#include "apps/print.hpp"
 #include "filter/diagnosis/diagnosis_table.hpp"
 #include "models/coefficient_families.hpp"
 #include "report/diagnosis_report.hpp"
@@ -23,6 +24,7 @@ void print_verdict(const TableDiagnosis& d) {
     std::printf("; filter NIS per dof %.3f%s", c.nis_per_dof,
                 c.filter_holds ? "" : " REJECTS the noise model");
   std::printf("\n");
+  if (c.filter) print_innovation_check(c.innovations);
   if (d.unexplained.present) {
     std::printf("Unexplained: what the findings leave (no family of the catalog explains it):\n");
     for (const auto& s : d.unexplained.signature) std::printf("   %s\n", s.c_str());

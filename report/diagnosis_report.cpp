@@ -81,6 +81,7 @@ void add_verdict(json& j, const TableDiagnosis& d) {
                          {"filter", c.filter},
                          {"nis_per_dof", c.nis_per_dof},
                          {"filter_holds", c.filter_holds},
+                         {"innovations", innovation_check_json(c.innovations)},
                          {"dwells_sigma_scale", c.dwells_sigma_scale},
                          {"filter_sigma_scale", c.filter_sigma_scale}};
   json rejected = json::array();
@@ -347,7 +348,10 @@ std::string diagnosis_markdown(const TableDiagnosis& d, const std::string& sessi
   const ResidualCheck& c = d.check;
   m << "\n\nWith the findings, the dwells' chi2 is " << fixed(c.dwells_chi2, 1) << " on "
     << c.dwells_dof << " dof (99 % quantile " << fixed(c.dwells_quantile, 1) << ")";
-  if (c.filter) m << ", the filter's NIS per dof " << fixed(c.nis_per_dof, 3);
+  if (c.filter)
+    m << ", the filter's NIS per dof " << fixed(c.nis_per_dof, 3) << " (its innovations per "
+      << "channel, NIS and whiteness at alpha " << c.innovations.alpha << ": "
+      << c.innovations.verdict << ")";
   m << (c.holds() ? ": the noise model holds." : ": the noise model does not hold.");
   if (d.unexplained.present) {
     m << "\n\n**Unexplained** (no family of the catalog explains it; the sigmas are scaled by the "

@@ -203,11 +203,33 @@ nlohmann::ordered_json kalman_convergence(const KalmanRun& r) {
 }
 }  // namespace
 
+nlohmann::ordered_json innovation_check_json(const InnovationCheck& c) {
+  nlohmann::ordered_json channels = nlohmann::ordered_json::array();
+  for (const auto& k : c.channels)
+    channels.push_back({{"channel", k.channel},
+                        {"updates", k.updates},
+                        {"nis_per_dof", k.nis_per_dof},
+                        {"nis_p", k.nis_p},
+                        {"mean", k.mean},
+                        {"ljung_box_q", k.ljung_box_q},
+                        {"ljung_box_lags", k.lags},
+                        {"ljung_box_p", k.ljung_box_p},
+                        {"largest_autocorrelation", k.largest_autocorrelation},
+                        {"largest_autocorrelation_lag", k.largest_lag},
+                        {"sigma_bound", k.sigma_bound},
+                        {"nis_holds", k.nis_holds},
+                        {"white", k.white}});
+  return {{"alpha", c.alpha},           {"tests", c.tests},     {"threshold", c.threshold},
+          {"consistent", c.consistent}, {"verdict", c.verdict}, {"channels", channels}};
+}
+
 nlohmann::ordered_json result_sections(const KalmanRun& r) {
   nlohmann::ordered_json d;
   d["misalignment_frame"] = misalignment_frame_name(r.misalignment_frame);
   d["method"] = kalman_method(r);
-  d["consistency"] = {{"nis_per_dof", r.nis_per_dof}, {"samples", r.samples}};
+  d["consistency"] = {{"nis_per_dof", r.nis_per_dof},
+                      {"samples", r.samples},
+                      {"innovations", innovation_check_json(r.innovations)}};
   d["convergence"] = kalman_convergence(r);
   d["installation"] = installation_section(r.installation);
   if (r.motion) {

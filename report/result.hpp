@@ -47,6 +47,9 @@ nlohmann::ordered_json coefficients_json(const ResultCoefficients& coefficients)
 
 /// The sections after "coefficients" of each method's result file.
 nlohmann::ordered_json result_sections(const KalmanRun& run);
+/// The filter's innovation tests (docs/formats.md "consistency"): alpha, tests, threshold,
+/// verdict, and per channel its NIS with p-value and its Ljung-Box Q with p-value.
+nlohmann::ordered_json innovation_check_json(const InnovationCheck& check);
 nlohmann::ordered_json result_sections(const ClosedFormReport& report,
                                        MisalignmentFrame frame = MisalignmentFrame::Table);
 

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "filter/noise/autocorrelation.hpp"
+
 namespace sinscal {
 
 double log10_chi2_tail(double x, int dof) {
@@ -53,23 +55,11 @@ TestVerdict ljung_box(const std::vector<double>& series, int lags) {
   const auto n = static_cast<int>(series.size());
   const int h = lags > 0 ? lags : std::min(10, n / 5);
   if (h < 1 || n <= h + 1) return v;
-  double mean = 0.0;
-  for (double x : series) mean += x;
-  mean /= n;
-  double c0 = 0.0;
-  for (double x : series) c0 += (x - mean) * (x - mean);
-  if (!(c0 > 0.0)) return v;
-  double q = 0.0;
-  for (int k = 1; k <= h; ++k) {
-    double ck = 0.0;
-    for (int t = k; t < n; ++t)
-      ck += (series[static_cast<std::size_t>(t)] - mean) *
-            (series[static_cast<std::size_t>(t - k)] - mean);
-    const double r = ck / c0;
-    q += r * r / (n - k);
-  }
+  AutocorrelationSums sums(h);  // the filter's streaming sums (filter/noise/autocorrelation.hpp)
+  for (double x : series) sums.push(x);
+  if (!sums.varies()) return v;  // constant: not tested
   v.dof = h;
-  chi2_verdict(v, "ljung-box", static_cast<double>(n) * (n + 2.0) * q);
+  chi2_verdict(v, "ljung-box", sums.ljung_box_q(h));
   return v;
 }
 

@@ -273,8 +273,10 @@ ResidualCheck residual_check(const FitFigures& fit, const KalmanRun* filter) {
   if (filter) {
     c.filter = true;
     c.nis_per_dof = filter->nis_per_dof;
-    c.filter_holds = c.nis_per_dof <= kNisPerDofLimit;
-    if (!c.filter_holds) c.filter_sigma_scale = std::sqrt(c.nis_per_dof);
+    // The innovations' tests (whiteness hook, issue 33): per channel, not a fixed NIS limit.
+    c.innovations = filter->innovations;
+    c.filter_holds = c.innovations.consistent;
+    if (!c.filter_holds) c.filter_sigma_scale = std::max(1.0, std::sqrt(c.nis_per_dof));
   }
   return c;
 }
@@ -329,11 +331,8 @@ Unexplained unexplained_of(const TableDiagnosis& d, const std::vector<DwellResid
     const auto where = dwell_signature(residuals);
     u.signature.insert(u.signature.end(), where.begin(), where.end());
   }
-  if (!d.check.filter_holds) {
-    std::snprintf(b, sizeof b, "turns: the filter's NIS per dof %.3g (above %.3g)",
-                  d.check.nis_per_dof, kNisPerDofLimit);
-    u.signature.emplace_back(b);
-  }
+  if (!d.check.filter_holds)  // whiteness hook (issue 33): where the innovations fail
+    for (const auto& f : d.check.innovations.failures) u.signature.push_back("filter: " + f);
   for (const auto& r : d.rejected)
     u.signature.push_back("the residual " + r.finding.family + " would have taken (" +
                           (r.finding.source == TableFinding::Source::Dwells ? "dwells" : "turns") +
@@ -570,11 +569,10 @@ class TableRounds {
                       "with the findings the held-out dwells still reject the noise model "
                       "(predictive chi2 %.4g on %d inputs, 99 %% quantile %.4g)",
                       d_.check.heldout_chi2, d_.check.heldout_inputs, d_.check.heldout_quantile);
-      else
-        std::snprintf(b, sizeof b,
-                      "with the findings the filter's NIS per dof is still %.3g (above %.3g)",
-                      d_.check.nis_per_dof, kNisPerDofLimit);
-      d_.rejected.push_back({std::move(f), b});
+      d_.rejected.push_back({std::move(f), dwells
+                                               ? std::string(b)
+                                               : "with the findings the filter's innovations are " +
+                                                     d_.check.innovations.verdict});
     }
     d_.findings = std::move(kept);
     return confirmed;

@@ -11,6 +11,7 @@
 #include "filter/diagnosis/diagnosis.hpp"
 #include "filter/diagnosis/diagnosis_kalman.hpp"
 #include "filter/diagnosis/term_library.hpp"
+#include "filter/kalman/innovation_check.hpp"
 
 namespace sinscal {
 
@@ -123,7 +124,11 @@ struct ResidualCheck {
   bool heldout_hold = true;
   bool filter = false;  // the filter ran
   double nis_per_dof = 0.0;
-  bool filter_holds = true;         // NIS per dof within kNisPerDofLimit
+  /// The filter's innovations per channel: NIS (upper tail) and whiteness (Ljung-Box) at the
+  /// family-wise kInnovationAlpha (filter/kalman/innovation_check.hpp); filter_holds is its
+  /// verdict.
+  InnovationCheck innovations;
+  bool filter_holds = true;         // the innovations consistent with the noise model
   double dwells_sigma_scale = 1.0;  // sqrt(chi2 / dof) where the dwells do not hold, else 1
   double filter_sigma_scale = 1.0;  // sqrt(NIS per dof) where the filter does not hold, else 1
   bool holds() const { return dwells_hold && heldout_hold && filter_holds; }
@@ -131,9 +136,6 @@ struct ResidualCheck {
 
 /// The level of the residual's chi-square test (the final model against its noise model).
 constexpr double kResidualLevel = 0.99;
-/// The filter's NIS per dof above this rejects its noise model: the chi-square quantile per dof of
-/// the thousands of updates of a session is within a few percent of 1 (a clean session: 0.4-0.8).
-constexpr double kNisPerDofLimit = 1.0;
 
 /// A finding the in-sample test took but the held-out data contradict: not named, and the
 /// diagnosis stops there (its residual is "unexplained").

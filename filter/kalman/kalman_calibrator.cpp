@@ -343,6 +343,7 @@ void Calibrator::update(double t_plan) {
         dwell = &d;
   }
   const NavState& x = nav_.state();
+  in_dwell_ = dwell != nullptr;
   if (!dwell) {
     // Turning about the IMU reference point: zero velocity holds, the attitude is not known.
     if (o_.zero_velocity_in_motion) apply(zero_velocity(layout_, x, o_.motion_velocity_sigma));
@@ -418,6 +419,7 @@ void Calibrator::apply(const Measurement& m) {
   const Eigen::MatrixXd K = llt.solve(HP).transpose();
   last_nis_ = z.dot(llt.solve(z));
   last_nis_dof_ = r;
+  record_innovations(m, z, S);
   if (!holdout_.empty() && holdout_.back().dof == 0) {
     HoldoutPrediction& h = holdout_.back();
     h.nis = last_nis_;
@@ -449,6 +451,24 @@ void Calibrator::apply(const Measurement& m) {
   if (StateLayout::on(layout_.wander)) wander_ += dx.segment<6>(layout_.wander.index);
   // Keep the coning/sculling memory: the correction is tiny and the increments unchanged.
   nav_.correct(x);
+}
+
+void Calibrator::record_innovations(const Measurement& m, const Eigen::VectorXd& z,
+                                    const Eigen::MatrixXd& S) {
+  for (int i = 0; i < m.rows(); ++i) {
+    const int state = m.states[static_cast<std::size_t>(i)];
+    InnovationKind kind = InnovationKind::Attitude;
+    int axis = state - layout_.attitude.index;
+    if (state >= layout_.velocity.index && state < layout_.velocity.index + layout_.velocity.size) {
+      kind = in_dwell_ ? InnovationKind::VelocityDwells : InnovationKind::VelocityTurns;
+      axis = state - layout_.velocity.index;
+    } else if (state >= layout_.position.index &&
+               state < layout_.position.index + layout_.position.size) {
+      kind = InnovationKind::Position;
+      axis = state - layout_.position.index;
+    }
+    innovations_.add(kind, axis, z(i) / std::sqrt(S(i, i)));
+  }
 }
 
 std::vector<CoefficientEstimate> Calibrator::estimate() const {

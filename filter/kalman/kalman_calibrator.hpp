@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "filter/kalman/error_propagation.hpp"
+#include "filter/kalman/innovation_check.hpp"
 #include "filter/kalman/measurements.hpp"
 #include "filter/kalman/misalignment_frame.hpp"
 #include "filter/kalman/state_layout.hpp"
@@ -248,6 +249,8 @@ class Calibrator {
   int updates() const { return updates_; }
   double last_nis() const { return last_nis_; }
   int last_nis_dof() const { return last_nis_dof_; }
+  /// The normalized innovations of the updates so far, by channel (innovation_check.hpp).
+  const InnovationRecord& innovations() const { return innovations_; }
   /// Attitude updates that took the attitude from the table's angles.
   int table_attitude_updates() const { return table_updates_; }
   /// The first update after each held-out interval (CalibratorOptions::holdout).
@@ -285,6 +288,8 @@ class Calibrator {
   /// The known attitude of a dwell: the table's angles when the log has them, else the plan's.
   Eigen::Matrix3d dwell_attitude(const PlanDwell& dwell);
   void apply(const Measurement& m);
+  /// Records the update's normalized innovations z_i / sqrt(S_ii) by channel.
+  void record_innovations(const Measurement& m, const Eigen::VectorXd& z, const Eigen::MatrixXd& S);
   void initialize_covariance();
 
   std::vector<PlanDwell> dwells_;
@@ -331,6 +336,8 @@ class Calibrator {
   std::vector<double> prior_sigma_;  // catalog order, SI
   bool after_holdout_ = false;       // the next update is the first after a held-out interval
   std::vector<HoldoutPrediction> holdout_;
+  InnovationRecord innovations_;
+  bool in_dwell_ = false;  // the update being applied is a dwell's (else a turn's)
 };
 
 }  // namespace sinscal

@@ -295,6 +295,7 @@ void summarize(const Calibrator& kf, const PlanTimeline& timeline, const KalmanR
   r.accel_triad_frame = kf.layout().accel_triad_frame;
   r.nis_per_dof = kf.nis_dof() > 0 ? kf.nis_sum() / kf.nis_dof() : 0.0;
   r.log_likelihood = kf.log_likelihood();
+  r.innovations = innovation_check(kf.innovations());
   std::tie(r.coefficient_covariance, r.covariance_catalog) = coefficient_covariance(kf);
   r.estimates = kf.estimate();
   r.unobservable_directions =

@@ -98,6 +98,8 @@ struct KalmanRun {
   double t_last = 0.0;    // s, log time of the last sample read
   double nis_per_dof = 0.0;
   double log_likelihood = 0.0;  // innovation log-likelihood (Calibrator::log_likelihood)
+  /// The innovations' NIS and whiteness per channel, and their verdict (innovation_check.hpp).
+  InnovationCheck innovations;
   /// Covariance of the coefficient states at the end (SI), rows and columns in the order of
   /// `covariance_catalog` (their coefficient_catalog() indices).
   Eigen::MatrixXd coefficient_covariance;
