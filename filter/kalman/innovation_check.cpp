@@ -13,11 +13,15 @@ namespace {
 const char* const kKinds[4] = {"velocity (turns)", "velocity (dwells)", "position", "attitude"};
 const char* const kAxes[3] = {"north", "east", "down"};
 
+// A statistic that is not a finite number (a diverged filter's NaN innovations) fails the
+// upper test (p 0) and never the lower one (p 1); Boost throws on it.
 double chi2_upper(double x, double dof) {
+  if (!std::isfinite(x)) return 0.0;
   return boost::math::cdf(boost::math::complement(boost::math::chi_squared(dof), x));
 }
 
 double chi2_lower(double x, double dof) {
+  if (!std::isfinite(x)) return 1.0;
   return boost::math::cdf(boost::math::chi_squared(dof), x);
 }
 
