@@ -526,9 +526,8 @@ class TableRounds {
   // (with a session) makes the residual unexplained too.
   void library(const std::vector<int>& confirmed) {
     const auto lt = library_turns();
-    LibraryFit fit =
-        fit_term_library(dwells_, with_thermal_turn_findings(confirmed, d_.findings),
-                         o_.dwells.alpha, lt ? &*lt : nullptr, d_.unexplained.present);
+    LibraryFit fit = fit_term_library(dwells_, with_thermal_turn_findings(confirmed, d_.findings),
+                                      o_.dwells.alpha, lt ? &*lt : nullptr, d_.unexplained.present);
     if (fit.turns_reject) {
       d_.unexplained.present = true;
       d_.unexplained.signature.push_back(fit.turns_signature);
