@@ -52,7 +52,8 @@ ChannelCheck channel_check(const std::string& name, const AutocorrelationSums& s
 
 void InnovationRecord::add(InnovationKind kind, int axis, double normalized) {
   if (axis < 0 || axis > 2) throw std::invalid_argument("innovation record: axis out of range");
-  auto& c = channels_[static_cast<std::size_t>(3 * static_cast<int>(kind) + axis)];
+  const int index = 3 * static_cast<int>(kind) + axis;
+  auto& c = channels_[static_cast<std::size_t>(index)];
   if (!c) c.emplace(kInnovationLags);
   c->push(normalized);
 }
