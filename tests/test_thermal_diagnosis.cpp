@@ -373,6 +373,41 @@ TEST_CASE("Thermal diagnosis: Monte Carlo, hidden families named first, clean na
 
 namespace {
 
+// A ramp's session (rot19 repeated in config/chambers/ramp.ini) of nav-fog-thermal at `rate_hz`,
+// its filter profile without `hidden`, diagnosed as `sinscal diagnose` does (`run_filter` false:
+// as with --no-kalman, the turns then only in the term library's test).
+struct RampDiagnosis {
+  TableDiagnosis d;
+  ImuErrorModel truth;
+};
+
+RampDiagnosis ramp_table_diagnosis(const std::string& dir, const std::vector<std::string>& hidden,
+                                   std::uint64_t seed, bool run_filter, double rate_hz) {
+  std::filesystem::create_directories(dir);
+  SessionSimulation spec;
+  spec.plan_path = test::source_path("config/plans/rot19.ini");
+  spec.data_sensor_path = test::source_path("config/sensors/nav-fog-thermal.ini");
+  spec.filter_sensor_path = profile_variant(dir, "filter", hidden);
+  spec.rate_hz = rate_hz;
+  spec.seed = seed;
+  const ChamberSimulation ramp = simulate_chamber(
+      dir + "/ramp", spec, ChamberProgram::load(test::source_path("config/chambers/ramp.ini")));
+  const Session session = Session::load(ramp.path);
+  const SensorProfile profile = SensorProfile::load(session.sensor_file);
+  const TableAttitudeError table{kDefaultTableAttitudeSigma};
+  TurnModel model = turn_model_of(session, profile, table.sigma);
+  model.run_filter = run_filter;
+  const auto about = linearize(model, 0);
+  const ClosedFormReport cal =
+      run_closed_form(session, default_stage1(&profile), table, !about, about ? &*about : nullptr);
+  TableDiagnosisOptions to;
+  to.dwells.thermal = true;
+  to.heldout_turns = run_filter;
+  Stage2Options s2 = cal.stage2_options;
+  s2.reference_temperature_c = profile.reference_temperature_c;
+  return {diagnose_table(cal.stage1, session.site, s2, to, &model), ramp.sessions.front().truth};
+}
+
 // A ramp's session (rot19 repeated in config/chambers/ramp.ini, 50 Hz) of nav-fog-thermal, its
 // filter profile without `hidden`; diagnosed as `sinscal diagnose --no-kalman` does (the dwells,
 // each at its mean temperature and rate): the first finding's family and its ambiguous set.
@@ -385,35 +420,14 @@ struct RampFinding {
 
 RampFinding ramp_diagnosis(const std::string& dir, const std::vector<std::string>& hidden,
                            std::uint64_t seed) {
-  std::filesystem::create_directories(dir);
-  SessionSimulation spec;
-  spec.plan_path = test::source_path("config/plans/rot19.ini");
-  spec.data_sensor_path = test::source_path("config/sensors/nav-fog-thermal.ini");
-  spec.filter_sensor_path = profile_variant(dir, "filter", hidden);
-  spec.rate_hz = 50.0;
-  spec.seed = seed;
-  const ChamberSimulation ramp = simulate_chamber(
-      dir + "/ramp", spec, ChamberProgram::load(test::source_path("config/chambers/ramp.ini")));
-  const Session session = Session::load(ramp.path);
-  const SensorProfile profile = SensorProfile::load(session.sensor_file);
-  const TableAttitudeError table{kDefaultTableAttitudeSigma};
-  TurnModel model = turn_model_of(session, profile, table.sigma);
-  model.run_filter = false;
-  const auto about = linearize(model, 0);
-  const ClosedFormReport cal =
-      run_closed_form(session, default_stage1(&profile), table, !about, about ? &*about : nullptr);
-  TableDiagnosisOptions to;
-  to.dwells.thermal = true;
-  to.heldout_turns = false;
-  Stage2Options s2 = cal.stage2_options;
-  s2.reference_temperature_c = profile.reference_temperature_c;
-  const TableDiagnosis d = diagnose_table(cal.stage1, session.site, s2, to, &model);
+  const RampDiagnosis r = ramp_table_diagnosis(dir, hidden, seed, false, 50.0);
+  const TableDiagnosis& d = r.d;
   RampFinding out;
   out.findings = static_cast<int>(d.findings.size());
   if (!d.findings.empty()) {
     out.first.push_back(d.findings.front().family);
     for (const auto& a : d.findings.front().ambiguous_with) out.first.push_back(a);
-    const Eigen::VectorXd truth = ramp.sessions.front().truth.vector();
+    const Eigen::VectorXd truth = r.truth.vector();
     for (const auto& c : d.findings.front().coefficients)
       if (!c.source.empty()) out.z.push_back((c.value - truth(c.catalog)) / c.sigma);
   }
@@ -488,41 +502,6 @@ TEST_CASE("Thermal diagnosis: Monte Carlo of ramps, hidden families named first"
 }
 
 namespace {
-
-// A ramp's session (rot19 repeated in config/chambers/ramp.ini) of nav-fog-thermal at `rate_hz`,
-// its filter profile without `hidden`, diagnosed as `sinscal diagnose` does (`run_filter` false:
-// as with --no-kalman, the turns then only in the term library's test).
-struct RampDiagnosis {
-  TableDiagnosis d;
-  ImuErrorModel truth;
-};
-
-RampDiagnosis ramp_table_diagnosis(const std::string& dir, const std::vector<std::string>& hidden,
-                                   std::uint64_t seed, bool run_filter, double rate_hz) {
-  std::filesystem::create_directories(dir);
-  SessionSimulation spec;
-  spec.plan_path = test::source_path("config/plans/rot19.ini");
-  spec.data_sensor_path = test::source_path("config/sensors/nav-fog-thermal.ini");
-  spec.filter_sensor_path = profile_variant(dir, "filter", hidden);
-  spec.rate_hz = rate_hz;
-  spec.seed = seed;
-  const ChamberSimulation ramp = simulate_chamber(
-      dir + "/ramp", spec, ChamberProgram::load(test::source_path("config/chambers/ramp.ini")));
-  const Session session = Session::load(ramp.path);
-  const SensorProfile profile = SensorProfile::load(session.sensor_file);
-  const TableAttitudeError table{kDefaultTableAttitudeSigma};
-  TurnModel model = turn_model_of(session, profile, table.sigma);
-  model.run_filter = run_filter;
-  const auto about = linearize(model, 0);
-  const ClosedFormReport cal =
-      run_closed_form(session, default_stage1(&profile), table, !about, about ? &*about : nullptr);
-  TableDiagnosisOptions to;
-  to.dwells.thermal = true;
-  to.heldout_turns = run_filter;
-  Stage2Options s2 = cal.stage2_options;
-  s2.reference_temperature_c = profile.reference_temperature_c;
-  return {diagnose_table(cal.stage1, session.site, s2, to, &model), ramp.sessions.front().truth};
-}
 
 // The library term "omega_a (T - T0)" on gyro axis a (the scale factor's slope), or null.
 const LibraryTerm* scale_slope_term(const LibraryFit& fit, int axis) {
