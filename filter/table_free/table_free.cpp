@@ -701,9 +701,12 @@ class TableFreeSolver {
     out_.chi2_per_dof = out_.chi2 / out_.dof;
   }
 
-  // The whitened, weighted Jacobian of the fit and its residuals at the solution.
-  static void jacobian_of(ceres::Problem& problem, Eigen::MatrixXd& J, Eigen::VectorXd* r) {
+  // The whitened, weighted Jacobian of the fit and its residuals at the solution; its rows in
+  // the order of `blocks` (all blocks in the order they were added when empty).
+  static void jacobian_of(ceres::Problem& problem, Eigen::MatrixXd& J, Eigen::VectorXd* r,
+                          const std::vector<ceres::ResidualBlockId>& blocks = {}) {
     ceres::Problem::EvaluateOptions eo;
+    eo.residual_blocks = blocks;
     ceres::CRSMatrix crs;
     std::vector<double> res;
     problem.Evaluate(eo, nullptr, r ? &res : nullptr, nullptr, &crs);
@@ -775,9 +778,13 @@ class TableFreeSolver {
 
   // The leverage of each part (the sum of the hat matrix's diagonal over its residuals): the
   // parameters it determines, the directions shared with the other parts counted by share.
+  // The rows part by part: the problem holds each pose's accelerometer and gyro blocks in turn.
   std::array<double, 3> leverages(ceres::Problem& problem) const {
+    std::vector<ceres::ResidualBlockId> blocks = accel_ids_;
+    blocks.insert(blocks.end(), gyro_ids_.begin(), gyro_ids_.end());
+    blocks.insert(blocks.end(), turn_ids_.begin(), turn_ids_.end());
     Eigen::MatrixXd J;
-    jacobian_of(problem, J, nullptr);
+    jacobian_of(problem, J, nullptr, blocks);
     const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(J).householderQ() *
                               Eigen::MatrixXd::Identity(J.rows(), J.cols());
     const Eigen::VectorXd h = Q.rowwise().squaredNorm();  // hat matrix diagonal

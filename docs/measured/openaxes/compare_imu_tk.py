@@ -1,14 +1,19 @@
 #!/usr/bin/env python3
 """Compare a sinscal table-free result.json of the OpenAXES imu9 recording with the authors'
 imu_tk coefficients (calibration/README.md of OpenAXES-IMU/OpenAXES: the 36 numbers of
---write-calibration-full; column-major misalignment*scale matrices T K and biases, corrected =
-T K (raw - b)). usage: compare.py result.json adxl|bmi"""
+--write-calibration-full, MATLAB's column-major (:) of the misalignment*scale matrices T K and
+the biases). The authors ran imu_tk_matlab (calibrate.m with their patch), whose models are
+  accelerometers: corrected = T K raw - b  (accCostFunctLSQNONLIN.m: b subtracted AFTER T K, so
+                  b is in corrected units; sinscal's raw = L f + b_raw has b_raw = (T K)^-1 b)
+  gyros:          corrected = T K (raw - b)  (the bias removed before, in raw units).
+usage: compare.py result.json adxl|bmi [36 coefficients to compare with instead of the authors']"""
 import json, math, sys
 
 C = [float(x) for x in ("0.96276 0 0 0.0015751 0.96732 0 -0.00018891 0.000859 0.97079 0.064447 "
      "0.011034 0.034253 0.95418 0 0 0.0031573 0.96061 0 0.009235 0.00049713 0.9501 -0.033224 "
      "0.080497 0.01579 0.97288 0.0076747 -0.0063582 -0.011829 1.0062 -0.00033403 0.010087 "
      "0.00029571 1.0068 -0.00020494 0.00063007 -0.00036962").split()]
+if len(sys.argv) > 3: C = [float(x) for x in sys.argv[3].split()]
 def colmajor(v): return [[v[0], v[3], v[6]], [v[1], v[4], v[7]], [v[2], v[5], v[8]]]
 TK = {"adxl": colmajor(C[0:9]), "bmi": colmajor(C[12:21])}
 B = {"adxl": C[9:12], "bmi": C[21:24]}
@@ -42,11 +47,12 @@ rows = []
 def row(name, ours, sigma, theirs, unit):
     rows.append((name, ours, sigma, theirs, (ours - theirs)/sigma if sigma > 0 else float("nan"), unit))
 
-A_t = inv(TK[which])             # raw = A_t x_t + b: rows are the sensors' axes (imu_tk frame)
+A_t = inv(TK[which])             # raw = A_t (x_t + b): rows are the sensors' axes (imu_tk frame)
 L, Q = lq(A_t)                   # the same triad in sinscal's frame (lower triangular)
+b_raw = [sum(A_t[i][k]*B[which][k] for k in range(3)) for i in range(3)]  # the bias in raw units
 ug = 9.80665e-6
 for i, ax in enumerate("xyz"):
-    v, s = val(f"accel.bias.{ax}"); row(f"accel.bias.{ax}", v, s, B[which][i]/ug, "ug")
+    v, s = val(f"accel.bias.{ax}"); row(f"accel.bias.{ax}", v, s, b_raw[i]/ug, "ug")
 for i, ax in enumerate("xyz"):
     v, s = val(f"accel.scale.{ax}"); row(f"accel.scale.{ax}", v, s, (L[i][i]-1)*1e6, "ppm")
 for n, (i, j) in (("yx", (1, 0)), ("zx", (2, 0)), ("zy", (2, 1))):
