@@ -1077,11 +1077,11 @@ fixed 2 "noise|outside it" tf --pose-accel-only
 # Gyro columns swapped (issue 34): the turns no longer turn the poses into each other. x and y:
 # the turns' chi2 34.9 times the bound their timing allows; y and z: no convergence.
 meas handheld-mpu-gyro-x-y-swapped mpu6050-calibration; set_key "$d/session.ini" columns "ax ay az gy gx gz"
-fixed 2 "plausibility gate|fit: |turns chi2|beyond its bound|wrong file, column or unit" tf --pose-accel-only
+fixed 2 "did not converge|gyro columns, unit or sample rate" tf --pose-accel-only
 meas handheld-mpu-gyro-y-z-swapped mpu6050-calibration; set_key "$d/session.ini" columns "ax ay az gx gz gy"
 fixed 2 "did not converge|gyro columns, unit or sample rate" tf --pose-accel-only
 meas handheld-mpu-gyro-x-y-swapped-diagnose mpu6050-calibration; set_key "$d/session.ini" columns "ax ay az gy gx gz"
-fixed 2 "plausibility gate|fit: |turns chi2|beyond its bound" S diagnose --session session.ini --out out/diag --no-plot --pose-accel-only
+fixed 2 "did not converge|gyro columns, unit or sample rate" S diagnose --session session.ini --out out/diag --no-plot --pose-accel-only
 meas handheld-xsens-no-gyro-offset xsens-mti-handheld; awk '!/^gyro_offset/' "$d/session.ini" > "$d/s" && mv "$d/s" "$d/session.ini"
 fixed 2 "rate at rest|xsens_gyro.txt: pose 1" tf
 meas handheld-xsens-no-accel-offset xsens-mti-handheld; awk '!/^accel_offset/' "$d/session.ini" > "$d/s" && mv "$d/s" "$d/session.ini"
