@@ -108,8 +108,10 @@ class HandheldDesign {
   const Eigen::MatrixXd& J() const { return J_; }
   const Eigen::VectorXd& r0() const { return r0_; }
   const Eigen::MatrixXd& M() const { return M_; }
+  // The turn into pose p's sigma: its noise integrated, times the calibration's turns' factor.
   double turn_sigma(Eigen::Index p) const {
-    return cal_.poses[static_cast<std::size_t>(p)].turn_sigma;
+    return cal_.poses[static_cast<std::size_t>(p)].turn_sigma *
+           std::max(1.0, cal_.turn_fit.sigma_scale);
   }
   Eigen::Index turn_row(Eigen::Index p) const { return 6 * poses() + 2 * p; }  // into pose p+1
 
@@ -207,8 +209,11 @@ void HandheldDesign::pose_rows(Eigen::Index p) {
   s.t = d.t;
   ImuErrorModel::JacobianColumns J6;
   m.jacobian(s, Eigen::Vector3d::Zero(), columns_, J6);
-  const Eigen::Vector3d va = cal_.accel_noise.cwiseAbs2() / n;
+  // The pose means' noise as the calibration completed it: white plus each triad's bias wander.
+  const Eigen::Vector3d va = cal_.accel_noise.cwiseAbs2() / n +
+                             Eigen::Vector3d::Constant(std::pow(cal_.accel_fit.wander, 2));
   Eigen::Matrix3d cov = (cal_.gyro_noise.cwiseAbs2() / n).asDiagonal();
+  cov += std::pow(cal_.gyro_rest_fit.wander, 2) * Eigen::Matrix3d::Identity();
   cov += has_site_ ? Eigen::Matrix3d(omega_h_ * omega_h_ / 2.0 *
                                      (Eigen::Matrix3d::Identity() - d.u * d.u.transpose()))
                    : Eigen::Matrix3d(Omega_ * Omega_ / 3.0 * Eigen::Matrix3d::Identity());
@@ -268,7 +273,7 @@ void HandheldDesign::turn_rows(Eigen::Index p) {
   const Eigen::Matrix3d Cm = q.toRotationMatrix();
   const Eigen::Vector3d pred = Cm.transpose() * from.direction;
   const Eigen::Matrix<double, 3, 2> Eto = tangent(to.direction);
-  const double w = 1.0 / to.turn_sigma;
+  const double w = 1.0 / turn_sigma(p + 1);
   const Eigen::Index row = turn_row(p);
   r0_.segment<2>(row) = w * Eto.transpose() * (pred - to.direction);
   const Eigen::MatrixXd dtheta = w * Eto.transpose() * skew(pred) * Cm.transpose() * S;
