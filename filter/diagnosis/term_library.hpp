@@ -91,8 +91,9 @@ struct LibraryTurns {
 /// family) and the family gains nothing once a term T is in, T explains the family's share of
 /// the held-out data: better when T still gains with the family in (the family is replaced: not
 /// named), else as well (the plan cannot tell them apart: T is the family's alternative, the
-/// finding reported as the pair; for this statement T alone need gain only the quantile of 1 dof
-/// at 1 - alpha, it claims no finding of T).
+/// finding reported as the pair; this statement claims no finding of T: a T alone below its
+/// Bonferroni level counts when it gains the quantile of 1 dof at 1 - alpha and predicts the
+/// held-out data at least as well as the family alone).
 struct HeldoutContest {
   int blocks = 0;            // dwells and turn segments
   int terms = 0;             // library terms tried (the catalog's own terms excluded)
