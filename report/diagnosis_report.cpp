@@ -182,6 +182,9 @@ std::string finding_title(const TableFinding& f) {
   if (f.ambiguous_with.empty()) return f.family;
   std::string t = f.family;
   for (const auto& a : f.ambiguous_with) t += " / " + a;
+  if (f.picked_by == "catalog")  // a family and a library term (TableFinding::library_alternative)
+    return t + " (not separable on this plan: the data cannot choose; the model extended with " +
+           f.family + ", the catalog's family)";
   return t + " (ambiguous on this plan's dwells; the model extended with " + f.family +
          (f.picked_by == "user"    ? ", the user's pick)"
           : f.picked_by == "turns" ? ", the turns' pick)"
@@ -280,11 +283,13 @@ void markdown_finding(std::ostringstream& m, const TableFinding& f, int number) 
     m << "This plan cannot tell " << f.family;
     for (const auto& a : f.ambiguous_with) m << " from " << a;
     m << ": each explains the dwells as well. The model was extended with " << f.family << " ("
-      << (f.picked_by == "user"    ? "`--prefer`"
-          : f.picked_by == "turns" ? "the turns' pick: the best held-out turns (each member's "
-                                     "model predicting turns it was not fitted to); `--prefer "
-                                     "FAMILY` picks another"
-                                   : "the best fit; `--prefer FAMILY` picks another")
+      << (f.picked_by == "user"      ? "`--prefer`"
+          : f.picked_by == "turns"   ? "the turns' pick: the best held-out turns (each member's "
+                                       "model predicting turns it was not fitted to); `--prefer "
+                                       "FAMILY` picks another"
+          : f.picked_by == "catalog" ? "the catalog's family: the library term predicts the "
+                                       "held-out dwells and turns as well, the data cannot choose"
+                                     : "the best fit; `--prefer FAMILY` picks another")
       << "); later rounds test the rest against it. What separates them: " << f.family << ": "
       << f.separated_by.front();
     for (std::size_t i = 0; i < f.ambiguous_with.size(); ++i)

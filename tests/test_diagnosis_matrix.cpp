@@ -9,7 +9,9 @@
 // The full matrix is a documented command (hidden test, [.]):
 //   SINSCAL_MATRIX_SEEDS=30 build/tests/sinscal_tests "[matrix]"
 // with SINSCAL_MATRIX_FILTER=TEXT (cells whose name contains it), SINSCAL_MATRIX_BAND=strong|limit
-// (5-10 or 3-5 detection sigmas; default both) and SINSCAL_MATRIX_OUT=FILE (rows appended).
+// (5-10 or 3-5 detection sigmas; default both), SINSCAL_MATRIX_PLANS=a.ini,b.ini (default
+// rot19.ini,seed8.ini), SINSCAL_MATRIX_VERBOSE=1 (each seed's story) and SINSCAL_MATRIX_OUT=FILE
+// (rows appended).
 // CI runs a slice ([matrix_slice]).
 #include <catch2/catch.hpp>
 #include <cstdio>
@@ -134,6 +136,10 @@ CellScore run_cell(const Cell& cell, int seeds, double lo, double hi, std::uint6
                             ": diagnosis failed: " + e.what();
       continue;
     }
+    if (std::getenv("SINSCAL_MATRIX_VERBOSE"))
+      std::printf("    seed %llu: %s\n",
+                  static_cast<unsigned long long>(seed0 + static_cast<std::uint64_t>(k)),
+                  o.story.c_str());
     const bool right = cell.families.empty() ? o.result.findings.empty() : o.first_right;
     score.first_right += right ? 1 : 0;
     score.ambiguous_first += o.ambiguous_first ? 1 : 0;
@@ -164,8 +170,14 @@ std::vector<Cell> matrix_cells() {
   const std::vector<std::string> families = {
       "accel.k2",        "gyro.scale_asym", "accel.scale_asym", "gyro.g_sensitivity",
       "accel.lever_arm", "time_delay",      "gyro.bias_drift",  "accel.bias_drift"};
+  // SINSCAL_MATRIX_PLANS: other plans of config/plans, comma-separated (rot19-2rates.ini: turns
+  // at two rates, docs/methods/diagnosis.md).
+  const char* env_plans = std::getenv("SINSCAL_MATRIX_PLANS");
+  std::vector<std::string> plans;
+  std::stringstream parts(env_plans ? env_plans : "rot19.ini,seed8.ini");
+  for (std::string p; std::getline(parts, p, ',');) plans.push_back(p);
   for (const std::string profile : {"nav-fog.ini", "mems.ini"})
-    for (const std::string plan : {"rot19.ini", "seed8.ini"}) {
+    for (const std::string& plan : plans) {
       cells.push_back({plan, profile, {}});
       for (const auto& f : families) cells.push_back({plan, profile, {f}});
       // Pairs: a dwell effect and a turn effect together.

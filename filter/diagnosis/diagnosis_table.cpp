@@ -347,6 +347,18 @@ void scale_sigmas(TableFinding& f, const ResidualCheck& c) {
   for (auto& k : f.combinations) k.sigma *= c.dwells_sigma_scale;
 }
 
+// The plan cannot tell the finding's family from a library term (HeldoutContest::alternative):
+// the finding becomes a set the plan cannot separate, reported as an ambiguous set of families is
+// (the term beside the family, with what separates it), the model extended with the family (the
+// catalog's: the model holds no library term), not as the family alone.
+void pair_with_term(TableFinding& f, const HeldoutContest& c) {
+  f.library_alternative = c.reason();
+  f.alternative_term = c.term;
+  f.ambiguous_with.push_back(c.term.name());
+  f.separated_by.push_back(c.term.separated_by);
+  if (f.picked_by.empty()) f.picked_by = "catalog";
+}
+
 // The held-out turns gain at least q with the finding: their chi-square falls by q or more, in
 // their residual's scale where it exceeds 1 per dof (as heldout_refusal scales the dwells').
 bool turns_confirm(const TableFinding& f, double q) {
@@ -518,7 +530,7 @@ class TableRounds {
     const auto lt = library_turns();
     const HeldoutContest c =
         contest_family(dwells_, base, f.components, o_.dwells.alpha, lt ? &*lt : nullptr);
-    if (c.alternative) f.library_alternative = c.reason();
+    if (c.alternative) pair_with_term(f, c);
     return c.replaced ? c.reason() : "";
   }
 

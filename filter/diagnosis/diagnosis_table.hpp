@@ -104,7 +104,12 @@ struct TableFinding : TestVerdict {
   std::optional<HeldoutTurns> turns_before, turns_after;
   /// A library term that predicts the held-out dwells and turns as well as the family (the plan
   /// cannot tell them apart, term_library.hpp HeldoutContest): the contest's statement, else "".
+  /// The finding is then a set the plan cannot separate, as an ambiguous set of families is: the
+  /// term's name() in ambiguous_with, its separated_by in separated_by, picked_by "catalog" (the
+  /// model holds catalog families only; the data cannot choose); the term (its value and sigma
+  /// with the model before the finding) in alternative_term.
   std::string library_alternative;
+  std::optional<LibraryTerm> alternative_term;
 };
 
 /// The final model's residual against its noise model: whether the findings leave the dwells and

@@ -29,8 +29,13 @@ struct LibraryTerm {
   /// Other library terms this plan cannot tell from it (their columns, with the model's
   /// projected out, correlate beyond kAliasCorrelation): each with its own value and sigma.
   std::vector<LibraryTerm> aliases;
+  /// What in a plan separates the term from a catalog family it shares a plan's data with (its
+  /// kind's: turns at a second rate for the rate terms, ...), as the family table's separated_by.
+  std::string separated_by;
   /// "accel x: 97 +- 6 ug/g^2 * f_y f_z"
   std::string text() const;
+  /// "gyro y: omega_y^2 (library term)": the term as a member of a set a plan cannot separate.
+  std::string name() const;
 };
 
 /// Two library columns correlated beyond this (with the model's columns projected out) are one
@@ -85,8 +90,10 @@ struct LibraryTurns {
 /// family's against that of its dof at 1 - alpha. When both gain alone (the library sees the
 /// family) and the family gains nothing once a term T is in, T explains the family's share of
 /// the held-out data: better when T still gains with the family in (the family is replaced: not
-/// named), else as well (the plan cannot tell them apart: T is the family's alternative, stated
-/// with it).
+/// named), else as well (the plan cannot tell them apart: T is the family's alternative, the
+/// finding reported as the pair; this statement claims no finding of T: a T alone below its
+/// Bonferroni level counts when it gains the quantile of 1 dof at 1 - alpha and predicts the
+/// held-out data at least as well as the family alone).
 struct HeldoutContest {
   int blocks = 0;            // dwells and turn segments
   int terms = 0;             // library terms tried (the catalog's own terms excluded)
