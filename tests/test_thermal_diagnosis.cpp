@@ -420,7 +420,8 @@ struct RampDiagnosis {
 };
 
 RampDiagnosis ramp_table_diagnosis(const std::string& dir, const std::vector<std::string>& hidden,
-                                   std::uint64_t seed, bool run_filter, double rate_hz) {
+                                   std::uint64_t seed, bool run_filter, double rate_hz,
+                                   int max_findings = 0) {
   std::filesystem::create_directories(dir);
   SessionSimulation spec;
   spec.plan_path = test::source_path("config/plans/rot19.ini");
@@ -436,12 +437,12 @@ RampDiagnosis ramp_table_diagnosis(const std::string& dir, const std::vector<std
   TurnModel model = turn_model_of(session, profile, table.sigma);
   model.run_filter = run_filter;
   const auto about = linearize(model, 0);
-  if (std::getenv("X_SEED")) std::printf("linearized %d\n", about ? 1 : 0);  // EXPLORE
   const ClosedFormReport cal =
       run_closed_form(session, default_stage1(&profile), table, !about, about ? &*about : nullptr);
   TableDiagnosisOptions to;
   to.dwells.thermal = true;
   to.heldout_turns = run_filter;
+  if (max_findings > 0) to.dwells.max_findings = max_findings;
   Stage2Options s2 = cal.stage2_options;
   s2.reference_temperature_c = profile.reference_temperature_c;
   return {diagnose_table(cal.stage1, session.site, s2, to, &model), ramp.sessions.front().truth};
@@ -633,31 +634,28 @@ TEST_CASE("Thermal diagnosis: a ramp's dwells test degree by degree, time after 
   CHECK(has(candidate_components({"accel.bias_temp2"}, {}, true), "accel.bias_temp2"));
 }
 
-TEST_CASE("EXPLORE ramp", "[.explore]") {
-  const char* s = std::getenv("X_SEED");
-  const char* h = std::getenv("X_HIDDEN");
-  const char* f = std::getenv("X_FILTER");
-  std::vector<std::string> hidden;
-  if (h) {
-    std::istringstream in(h);
-    std::string w;
-    while (in >> w) hidden.push_back(w);
-  }
-  if (h && std::string(h) == "all")
-    hidden = {"gyro.bias_temp1",         "gyro.bias_temp2",     "gyro.scale_temp1",
-              "gyro.misalignment_temp1", "gyro.bias_temp_rate", "accel.bias_temp1",
-              "accel.bias_temp2",        "accel.scale_temp1",   "accel.misalignment_temp1"};
-  const std::string dir = test::temp_dir("explore_ramp");
-  const RampDiagnosis r =
-      ramp_table_diagnosis(dir, hidden, s ? std::atoi(s) : 13, f && std::string(f) == "1", 20.0);
-  std::printf("findings:");
-  for (const auto& x : r.d.findings) std::printf(" %s", x.family.c_str());
-  std::printf("\nrejected:");
-  for (const auto& x : r.d.rejected) std::printf(" %s", x.finding.family.c_str());
-  std::printf("\nunexplained %d\n", r.d.unexplained.present ? 1 : 0);
-  for (const auto& x : r.d.unexplained.signature) std::printf("  sig %s\n", x.c_str());
-  if (r.d.unexplained.library)
-    for (const auto& t : r.d.unexplained.library->terms)
-      std::printf("  term %s\n", t.text().c_str());
-  for (const auto& x : r.d.stops) std::printf("  stop %s\n", x.c_str());
+TEST_CASE("Thermal diagnosis: a ramp with every thermal family hidden names a family it has first",
+          "[thermal][diagnosis][long]") {
+  // nav-fog-thermal's nine thermal families all missing from the filter's profile, the dwells'
+  // test (the filter's test off, one round): on a ramp time and temperature rise together, and
+  // a line in time (accel.bias_drift, truth zero) fitted the accelerometers' hidden linear and
+  // quadratic temperature terms better than the line in temperature (F 2321 against 2145 on
+  // seed 2). The degree hierarchy and time after temperature make the first finding a family
+  // whose truth is not zero.
+  const std::vector<std::string> all = {
+      "gyro.bias_temp1",         "gyro.bias_temp2",     "gyro.scale_temp1",
+      "gyro.misalignment_temp1", "gyro.bias_temp_rate", "accel.bias_temp1",
+      "accel.bias_temp2",        "accel.scale_temp1",   "accel.misalignment_temp1"};
+  const std::string dir = test::temp_dir("thermal_diagnosis_ramp_all_hidden");
+  const RampDiagnosis r = ramp_table_diagnosis(dir, all, 2, false, 20.0, 1);
+  // Round 1's finding, named or refused at the end (the residual is unexplained with one
+  // finding of nine).
+  std::string round1;
+  for (const auto& f : r.d.findings)
+    if (f.round == 1) round1 = f.family;
+  for (const auto& f : r.d.rejected)
+    if (f.finding.round == 1) round1 = f.finding.family;
+  CAPTURE(round1);
+  REQUIRE(!round1.empty());
+  CHECK(std::find(all.begin(), all.end(), round1) != all.end());
 }
