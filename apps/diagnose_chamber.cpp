@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
+#include <stdexcept>
 
 #include "apps/cli.hpp"
 #include "apps/diagnose.hpp"
@@ -14,6 +16,7 @@
 #include "models/units.hpp"
 #include "report/output.hpp"
 #include "report/thermal_diagnosis_report.hpp"
+#include "rig/session.hpp"
 
 namespace sinscal::cli {
 
@@ -77,40 +80,71 @@ void print_thermal_findings(const ThermalDiagnosis& d) {
   for (const auto& s : d.stops) std::printf("Stop: %s\n", s.c_str());
 }
 
+// The soak nearest the reference temperature, each soak's log read once for its temperature (a
+// soak not settled is refused here, before any calibration).
+struct NearestSoak {
+  std::size_t index = 0;
+  double gyro_temperature_c = 0.0;
+};
+
+NearestSoak nearest_soak(const ChamberSoaks& chamber, double t0) {
+  NearestSoak n;
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < chamber.sessions.size(); ++k) {
+    const SoakTemperature T = measure_soak_temperature(Session::load(chamber.sessions[k]).log);
+    check_soak_settled(T, chamber);
+    if (std::abs(T.gyro_mean_c - t0) < best) {
+      best = std::abs(T.gyro_mean_c - t0);
+      n = {k, T.gyro_mean_c};
+    }
+  }
+  return n;
+}
+
+struct NonThermal {
+  std::string statement;
+  std::vector<std::string> named;  // the families its diagnosis named
+};
+
 // The non-thermal families (K2, g-sensitivity, lever arms, ...) act at every temperature: they
 // are tested on the soak nearest the reference temperature, where the thermal terms vanish (a
 // thermal family the model lacks cannot pose as one of them), as a table session; its diagnosis
-// goes to DIR/soak-K. Returns the statement of what was tested and found.
-std::string diagnose_non_thermal(const std::vector<std::string>& sessions,
-                                 const std::vector<SoakRecord>& records, double t0,
-                                 const ChamberDiagnoseOptions& o) {
-  std::size_t k = 0;
-  for (std::size_t j = 1; j < records.size(); ++j)
-    if (std::abs(records[j].gyro_temperature_c - t0) < std::abs(records[k].gyro_temperature_c - t0))
-      k = j;
+// goes to DIR/soak-K. What it names joins every soak's filter before the thermal fit: a soak
+// calibrated without it absorbs it into its coefficients differently at each temperature (a
+// hidden g-sensitivity made one soak's filter diverge and the others' fit name
+// gyro.scale_temp2, whose truth is zero).
+NonThermal diagnose_non_thermal(const ChamberSoaks& chamber, double t0,
+                                const ChamberDiagnoseOptions& o) {
+  const NearestSoak n = nearest_soak(chamber, t0);
   char b[120];
-  std::snprintf(b, sizeof b, "soak %zu (%.2f C, the nearest to T0 = %g C)", k + 1,
-                records[k].gyro_temperature_c, t0);
+  std::snprintf(b, sizeof b, "soak %zu (%.2f C, the nearest to T0 = %g C)", n.index + 1,
+                n.gyro_temperature_c, t0);
   const std::string where = b;
-  std::printf("\nNon-thermal families, tested on %s as a table session:\n", where.c_str());
+  std::printf("Non-thermal families, tested on %s as a table session:\n", where.c_str());
   TableDiagnoseOptions t;
-  t.out_dir = o.out_dir + "/soak-" + std::to_string(k + 1);
+  t.out_dir = o.out_dir + "/soak-" + std::to_string(n.index + 1);
   t.dwells.alpha = o.alpha;
   t.table_sigma = o.table_sigma;
   t.plot = false;
-  std::string found;
+  NonThermal out;
   try {
-    const TableDiagnosis d = diagnose_table_session(sessions[k], t);
-    for (const auto& f : d.findings) found += (found.empty() ? "" : ", ") + f.family;
+    const TableDiagnosis d = diagnose_table_session(chamber.sessions[n.index], t);
+    for (const auto& f : d.findings) out.named.push_back(f.family);
   } catch (const std::exception& e) {
-    return "the non-thermal families not tested: the table diagnosis of " + where + " stopped (" +
-           e.what() + ")";
+    out.statement = "the non-thermal families not tested: the table diagnosis of " + where +
+                    " stopped (" + e.what() + ")";
+    return out;
   }
-  return "the non-thermal families (K2, g-sensitivity, scale asymmetry, lever arms, time delay, "
-         "...) tested on " +
-         where + " only, as a table session (" + t.out_dir +
-         "): " + (found.empty() ? "none named" : "named " + found) +
-         "; on the other soaks they are fitted soak by soak, not tested";
+  std::string found;
+  for (const auto& f : out.named) found += (found.empty() ? "" : ", ") + f;
+  out.statement =
+      "the non-thermal families (K2, g-sensitivity, scale asymmetry, lever arms, time delay, "
+      "...) tested on " +
+      where + " only, as a table session (" + t.out_dir + "): " +
+      (found.empty() ? "none named"
+                     : "named " + found + ", added to every soak's filter before the thermal fit") +
+      "; on the other soaks they are fitted soak by soak, not tested";
+  return out;
 }
 
 // A table log's temperature span below which it is one temperature for the diagnosis.
@@ -151,19 +185,37 @@ int diagnose_chamber(const std::string& chamber_path, const ChamberDiagnoseOptio
   refuse_overwrite(inputs, {{"diagnosis.json", json_path}});
   std::vector<SoakEstimate> estimates;
   std::vector<SoakRecord> records;
-  std::string profile_path = o.sensor;
+  const std::string profile_path =
+      o.sensor.empty() ? Session::load(chamber.sessions.front()).sensor_file : o.sensor;
+  if (profile_path.empty())
+    throw std::runtime_error(chamber.sessions.front() +
+                             ": a soak's session needs its sensor profile ([session] sensor =)");
+  const SensorProfile profile = SensorProfile::load(profile_path);
+  const NonThermal non_thermal = diagnose_non_thermal(chamber, profile.reference_temperature_c, o);
+  std::printf("\n");
+  chamber.extra_families = non_thermal.named;
+  const ChamberRuns runs = calibrate_soaks_keep_going(chamber);
   std::printf("%-5s %-40s %10s %10s %8s\n", "soak", "session", "T accel", "T gyro", "NIS/dof");
-  for (std::size_t k = 0; k < chamber.sessions.size(); ++k) {
-    const SoakRun r = calibrate_soak(chamber.sessions[k], chamber);
-    if (profile_path.empty()) profile_path = r.session.sensor_file;
+  for (std::size_t i = 0; i < runs.runs.size(); ++i) {
+    const SoakRun& r = runs.runs[i];
     estimates.push_back(r.estimate);
-    records.push_back({chamber.sessions[k], "", r.temperature.accel_mean_c,
+    records.push_back({chamber.sessions[runs.index[i]], "", r.temperature.accel_mean_c,
                        r.temperature.gyro_mean_c, r.temperature.max_c - r.temperature.min_c,
                        r.run.nis_per_dof});
-    std::printf("%-5zu %-40s %10.2f %10.2f %8.3f\n", k + 1, chamber.sessions[k].c_str(),
-                r.temperature.accel_mean_c, r.temperature.gyro_mean_c, r.run.nis_per_dof);
+    std::printf("%-5zu %-40s %10.2f %10.2f %8.3f\n", runs.index[i] + 1,
+                chamber.sessions[runs.index[i]].c_str(), r.temperature.accel_mean_c,
+                r.temperature.gyro_mean_c, r.run.nis_per_dof);
   }
-  const SensorProfile profile = SensorProfile::load(profile_path);
+  std::vector<std::string> set_aside;
+  for (const auto& f : runs.failed) {
+    std::printf("%-5zu %-40s set aside: %s\n", f.index + 1, f.session.c_str(), f.cause.c_str());
+    set_aside.push_back(soak_failure_stop(f, chamber.sessions.size()));
+  }
+  if (runs.runs.size() < 2)
+    throw std::runtime_error(chamber_path + ": " + std::to_string(runs.runs.size()) + " of " +
+                             std::to_string(chamber.sessions.size()) +
+                             " soaks calibrated, a thermal fit needs at least 2: " +
+                             (runs.failed.empty() ? "" : runs.failed.front().cause));
   ThermalDiagnosisOptions to;
   to.alpha = o.alpha;
   for (const auto& f : coefficient_families())
@@ -174,10 +226,9 @@ int diagnose_chamber(const std::string& chamber_path, const ChamberDiagnoseOptio
               profile.reference_temperature_c, model.empty() ? "none" : model.c_str());
   to.non_thermal_elsewhere = true;
   ThermalDiagnosis d = diagnose_soaks(estimates, profile.reference_temperature_c, to);
+  d.stops.insert(d.stops.begin(), set_aside.begin(), set_aside.end());
+  d.stops.push_back(non_thermal.statement);
   print_thermal_findings(d);
-  d.stops.push_back(
-      diagnose_non_thermal(chamber.sessions, records, profile.reference_temperature_c, o));
-  std::printf("Stop: %s\n", d.stops.back().c_str());
   std::filesystem::create_directories(o.out_dir);
   std::printf("Written: %s\n",
               write_thermal_diagnosis(d, chamber_path, records, o.out_dir).c_str());

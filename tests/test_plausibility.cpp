@@ -8,6 +8,7 @@
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"
 #include "rig/motion.hpp"
+#include "rig/thermal.hpp"
 
 using namespace sinscal;
 
@@ -213,4 +214,52 @@ TEST_CASE("Plausibility gate: the integrating methods refuse irregular sample in
     CHECK(c.passed);
     CHECK_THAT(c.detail, Catch::Contains("imu.txt: no time column") && Catch::Contains("200 Hz"));
   }
+}
+
+TEST_CASE("Plausibility gate: the profile's thermal terms at each dwell's temperature",
+          "[plausibility][thermal]") {
+  // seed8 at -40 C (60 C below the profile's T0) of a nav-fog-thermal unit whose gyro bias moves
+  // by the profile's largest linear and quadratic terms, both away from T0's bias (1.68 deg/h per
+  // axis there, above the base terms' bound of about 1.7 deg/h on |omega| on some dwells): the
+  // gate takes each dwell's temperature and the thermal terms into its bounds (a ramp's cold
+  // dwells failed it before, issue 33). Without them the same log fails; a unit error still
+  // fails with them.
+  const Plan plan = test::load_plan("seed8.ini");
+  const SensorProfile profile =
+      SensorProfile::load(test::source_path("config/sensors/nav-fog-thermal.ini"));
+  ImuErrorModel truth = profile.draw(3);
+  const double T0 = profile.reference_temperature_c, cold = T0 - 60.0;
+  truth.gyro.bias_temp.col(0).setConstant(-profile.ranges.at("gyro.bias_temp1").hi);
+  truth.gyro.bias_temp.col(1).setConstant(profile.ranges.at("gyro.bias_temp2").hi);
+  const SensorTemperature temperature(ChamberAir{{0.0}, {cold}}, 600.0);
+  const Motion motion = build_motion(plan, plan.site);
+  const auto samples = test::simulate(motion, truth, kRate, &profile.noise, 3, &temperature);
+  REQUIRE(samples.front().has_temperature);
+  const std::string path = test::temp_dir("plausibility_thermal") + "/imu.csv";
+  const auto gate_with = [&](const PlausibilityLimits& limits, double scale) {
+    {
+      LogWriter w(path, kRate, false, true);
+      for (auto s : samples) {
+        s.dtheta_b *= scale;
+        w.write(s);
+      }
+      w.close();
+    }
+    LogReader reader(LogFormat::native_format(path, kRate));
+    return check_plausibility(reader, "imu.csv", test::timeline(plan), plan.site, 0.0, limits);
+  };
+  const PlausibilityLimits limits = PlausibilityLimits::from_profile(&profile);
+  CHECK(limits.rate_thermal[1] > 0.0);
+  const auto r = gate_with(limits, 1.0);
+  INFO(r.failures());
+  CHECK(r.passed());
+  PlausibilityLimits base = limits;
+  base.rate_thermal = {};
+  base.specific_force_thermal = {};
+  base.rate_per_temperature_rate = 0.0;
+  const auto without = gate_with(base, 1.0);
+  CHECK_FALSE(check(without, "Earth rate").passed);
+  const auto unit = gate_with(limits, units::deg);  // rad declared as deg
+  CHECK_FALSE(check(unit, "Earth rate").passed);
+  CHECK_THAT(check(unit, "Earth rate").detail, Catch::Contains("at -40 C"));
 }

@@ -158,7 +158,9 @@ std::string heldout_refusal(const FitFigures& before, const FitFigures& after, i
 /// What could not be separated (aliased components), one entry per family.
 std::vector<CandidateTest> not_separable(const std::vector<CandidateTest>& last_round);
 /// Catalog indices of the components of `families` (empty: every extended family of the family
-/// table, the thermal ones with `thermal`) not yet in `current`.
+/// table, the thermal ones with `thermal`) not yet in `current`. With `thermal` the default set
+/// grows degree by degree: a thermal family of degree d once degree d - 1 of the same coefficient
+/// is in `current`, a bias drift in time once the same bias's degree-1 temperature term is.
 std::vector<int> candidate_components(const std::vector<std::string>& families,
                                       const std::vector<int>& current, bool thermal = false);
 /// Tests every candidate against the model `current` whose fit is `now`.

@@ -159,6 +159,20 @@ class IntervalWatch {
   std::size_t n_ = 0;
 };
 
+// Adds a sample's temperatures to a dwell's sums (the first sample also starts its rate).
+void add_temperature(DwellMean& m, const ImuSample& s, double& t_first, double& T_first) {
+  if (!s.has_temperature) return;
+  if (!m.has_temperature) {
+    t_first = s.t;
+    T_first = s.gyro_temperature_c;
+  } else if (s.t > t_first) {
+    m.gyro_temperature_rate = (s.gyro_temperature_c - T_first) / (s.t - t_first);
+  }
+  m.has_temperature = true;
+  m.accel_temperature_c += s.accel_temperature_c;
+  m.gyro_temperature_c += s.gyro_temperature_c;
+}
+
 // One pass over the log: dwell means, saturation and the sample intervals.
 std::vector<DwellMean> read_means(LogReader& reader, const PlanTimeline& timeline,
                                   double time_offset, bool dwell_checks, SaturationWatch& sat,
@@ -171,6 +185,7 @@ std::vector<DwellMean> read_means(LogReader& reader, const PlanTimeline& timelin
   }
   ImuSample s;
   std::size_t next = 0;
+  double t_first = 0.0, T_first = 0.0;  // the current dwell's first temperature
   // A log the reader refuses part of the way is the estimators' to report (with their results up
   // to there): the gate judges what it could read.
   auto next_sample = [&]() {
@@ -194,6 +209,7 @@ std::vector<DwellMean> read_means(LogReader& reader, const PlanTimeline& timelin
         means[next].f_b += s.dv_b;
         means[next].seconds += s.dt;
         ++means[next].samples;
+        add_temperature(means[next], s, t_first, T_first);
         break;
       }
       if (t <= d.t_end - edge) break;  // before this dwell's middle
@@ -204,6 +220,8 @@ std::vector<DwellMean> read_means(LogReader& reader, const PlanTimeline& timelin
     if (m.seconds > 0.0) {
       m.f_b /= m.seconds;
       m.omega_ib_b /= m.seconds;
+      m.accel_temperature_c /= static_cast<double>(m.samples);
+      m.gyro_temperature_c /= static_cast<double>(m.samples);
     }
   return means;
 }
@@ -251,11 +269,30 @@ PlausibilityLimits PlausibilityLimits::from_profile(const SensorProfile* p) {
       kMinRateFraction * Omega,
       3.0 * (std::sqrt(3.0) * (gb + p->noise.gyro.bias_instability + gs * g) + (gk + gm) * Omega));
   l.direction = std::max(kMinDirection, 3.0 * (am + ak + ab / g));
+  l.reference_temperature_c = p->reference_temperature_c;
+  for (int d = 1; d <= 3; ++d) {
+    const auto of = [&](const std::string& family) {
+      return largest(*p, family + "_temp" + std::to_string(d));
+    };
+    const auto k = static_cast<std::size_t>(d - 1);
+    l.specific_force_thermal[k] = 3.0 * (std::sqrt(3.0) * of("accel.bias") +
+                                         (of("accel.scale") + of("accel.misalignment")) * g);
+    l.rate_thermal[k] = 3.0 * (std::sqrt(3.0) * of("gyro.bias") +
+                               (of("gyro.scale") + of("gyro.misalignment")) * Omega);
+  }
+  l.rate_per_temperature_rate = 3.0 * std::sqrt(3.0) * largest(*p, "gyro.bias_temp_rate");
   l.accel_range = p->accel_range;
   l.gyro_range = p->gyro_range;
   l.accel_white = p->noise.accel.white;
   l.gyro_white = p->noise.gyro.white;
   return l;
+}
+
+double PlausibilityLimits::thermal_part(const std::array<double, 3>& per_degree, double dT) {
+  double out = 0.0;
+  for (std::size_t k = 0; k < per_degree.size(); ++k)
+    out += per_degree[k] * std::pow(std::abs(dT), static_cast<double>(k + 1));
+  return out;
 }
 
 std::string plausibility_number(double v, int precision) {
@@ -306,17 +343,23 @@ PlausibilityReport check_plausibility(LogReader& reader, const std::string& inpu
     const std::string where = input + ": " + dwell_name(m.dwell);
     if (m.samples == 0) continue;  // the log ends early: the estimators name the mismatch
     const double f = m.f_b.norm();
-    const double f_tol = l.specific_force + 5.0 * l.accel_white / std::sqrt(m.seconds);
+    const double dTa = m.has_temperature ? m.accel_temperature_c - l.reference_temperature_c : 0;
+    const double dTg = m.has_temperature ? m.gyro_temperature_c - l.reference_temperature_c : 0;
+    const double f_tol = l.specific_force + 5.0 * l.accel_white / std::sqrt(m.seconds) +
+                         PlausibilityLimits::thermal_part(l.specific_force_thermal, dTa);
     if (std::abs(f - g) > f_tol)
       magnitude.add(where + ": |f| = " + number(f) + " m/s^2 at rest where gravity is " +
                     number(g) + " (" + number(f / g) + " times): " + unit_cause(f / g, dt, false));
     const double w = m.omega_ib_b.norm();
-    const double w_tol = l.rate + 5.0 * l.gyro_white / std::sqrt(m.seconds);
+    const double w_tol = l.rate + 5.0 * l.gyro_white / std::sqrt(m.seconds) +
+                         PlausibilityLimits::thermal_part(l.rate_thermal, dTg) +
+                         l.rate_per_temperature_rate * std::abs(m.gyro_temperature_rate);
     if (l.check_rate && std::abs(w - Omega) > w_tol)
       rate.add(where + ": |omega| = " + number(w / units::deg_per_h) +
                " deg/h at rest where the Earth rate is " + number(Omega / units::deg_per_h) +
-               " deg/h (bound " + number(w_tol / units::deg_per_h, 3) +
-               " from the profile): " + unit_cause(w / Omega, dt, true));
+               " deg/h (bound " + number(w_tol / units::deg_per_h, 3) + " from the profile" +
+               (m.has_temperature ? " at " + number(m.gyro_temperature_c, 3) + " C" : "") +
+               "): " + unit_cause(w / Omega, dt, true));
     const Eigen::Vector3d expected = m.dwell.C_b_n_known.transpose() * f_n;
     const double angle = std::atan2(expected.cross(m.f_b).norm(), expected.dot(m.f_b));
     if (f > 0.0 && angle > l.direction)

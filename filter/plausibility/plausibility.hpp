@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <array>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -45,8 +46,20 @@ struct PlausibilityLimits {
   /// 100 Hz walks the integrated angle by about 1 arcmin, the attitude budget of a table session.
   static constexpr double kIntegratingIntervalSpread = 0.02;
 
+  /// The profile's thermal terms, 3 times their largest as the base terms': at a dwell's mean
+  /// temperature T the specific-force and rate tolerances grow by sum over the degree d of
+  /// `*_thermal[d - 1] |T - T0|^d`, the rate's also by `rate_per_temperature_rate |dT/dt|` (the
+  /// gyro bias in dT/dt). Zero without thermal terms; not used on a log without temperatures.
+  double reference_temperature_c = 25.0;           // T0, deg C
+  std::array<double, 3> specific_force_thermal{};  // m/s^2 per C^d
+  std::array<double, 3> rate_thermal{};            // rad/s per C^d
+  double rate_per_temperature_rate = 0.0;          // rad/s per C/s
+  /// The thermal part of a tolerance (`specific_force_thermal` or `rate_thermal`) at |T - T0|.
+  static double thermal_part(const std::array<double, 3>& per_degree, double dT);
+
   /// Bounds from the sensor profile's error ranges (3 times the largest error they allow, plus
-  /// 5 noise sigmas of a dwell's mean), or generic bounds without a profile (nullptr).
+  /// 5 noise sigmas of a dwell's mean; the thermal terms at each dwell's temperature), or generic
+  /// bounds without a profile (nullptr).
   static PlausibilityLimits from_profile(const SensorProfile* profile);
 };
 
@@ -78,6 +91,11 @@ struct DwellMean {
   Eigen::Vector3d omega_ib_b = Eigen::Vector3d::Zero();  // rad/s
   double seconds = 0.0;                                  // averaged time
   std::size_t samples = 0;
+  /// The log's temperatures over the averaged samples (when it has them): the means, and the
+  /// gyros' rate of change from the first to the last sample (deg C, deg C/s).
+  bool has_temperature = false;
+  double accel_temperature_c = 0.0, gyro_temperature_c = 0.0;
+  double gyro_temperature_rate = 0.0;
 };
 
 /// Reads the log once: the means over the middle of each static dwell (the plan's timing shifted

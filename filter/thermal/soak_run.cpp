@@ -86,6 +86,19 @@ SoakEstimate soak_estimate(const KalmanRun& run, const CalibratorOptions& o,
 }
 }  // namespace
 
+void check_soak_settled(const SoakTemperature& T, const ChamberSoaks& chamber) {
+  if (!(T.max_c - T.min_c > chamber.tolerance_c)) return;
+  char msg[400];
+  std::snprintf(msg, sizeof msg,
+                "the temperature moves by %.2f C during the soak (%.2f C at t = %.1f s, line "
+                "%zu; %.2f C at t = %.1f s, line %zu), more than the soak tolerance %g C of %s: "
+                "the soak had not settled (its settling time too short for the sensor's lag)",
+                T.max_c - T.min_c, T.min_c, T.t_min, T.line_min, T.max_c, T.t_max, T.line_max,
+                chamber.tolerance_c, chamber.path.c_str());
+  throw LogError(T.line_min > T.line_max ? T.file_min : T.file_max,
+                 std::max(T.line_min, T.line_max), msg);
+}
+
 SoakRun calibrate_soak(const std::string& session_path, const ChamberSoaks& chamber,
                        const KalmanRunOptions& run) {
   SoakRun r;
@@ -95,17 +108,7 @@ SoakRun calibrate_soak(const std::string& session_path, const ChamberSoaks& cham
                       ": a soak's session needs its sensor profile ([session] sensor =)");
   r.temperature = measure_soak_temperature(r.session.log);
   const SoakTemperature& T = r.temperature;
-  if (T.max_c - T.min_c > chamber.tolerance_c) {
-    char msg[400];
-    std::snprintf(msg, sizeof msg,
-                  "the temperature moves by %.2f C during the soak (%.2f C at t = %.1f s, line "
-                  "%zu; %.2f C at t = %.1f s, line %zu), more than the soak tolerance %g C of %s: "
-                  "the soak had not settled (its settling time too short for the sensor's lag)",
-                  T.max_c - T.min_c, T.min_c, T.t_min, T.line_min, T.max_c, T.t_max, T.line_max,
-                  chamber.tolerance_c, chamber.path.c_str());
-    throw LogError(T.line_min > T.line_max ? T.file_min : T.file_max,
-                   std::max(T.line_min, T.line_max), msg);
-  }
+  check_soak_settled(T, chamber);
   const SensorProfile profile = SensorProfile::load(r.session.sensor_file);
   r.reference_temperature_c = profile.reference_temperature_c;
   CalibratorOptions o = calibrator_options_from_profile(profile);
@@ -116,6 +119,7 @@ SoakRun calibrate_soak(const std::string& session_path, const ChamberSoaks& cham
     if (!f.thermal()) continue;
     o.layout.set(f.name, false);
   }
+  for (const auto& f : chamber.extra_families) o.layout.set(f, true);
   // Priors at the soak's temperature: each thermal family's range at this |T - T0| added.
   for (std::size_t i = 0; i < cat.size(); ++i) {
     const std::string& family = cat[i].family;
@@ -135,10 +139,30 @@ SoakRun calibrate_soak(const std::string& session_path, const ChamberSoaks& cham
   }
   r.run = run_kalman(r.session, o, nullptr, run);
   if (!r.run.stopped.empty() || !r.run.diverged.empty())
-    throw std::runtime_error(session_path + ": the soak's calibration stopped: " +
-                             (r.run.stopped.empty() ? r.run.diverged : r.run.stopped));
+    throw SoakStopped(session_path + ": the soak's calibration stopped: " +
+                      (r.run.stopped.empty() ? r.run.diverged : r.run.stopped));
   r.estimate = soak_estimate(r.run, o, session_path, T);
   return r;
+}
+
+ChamberRuns calibrate_soaks_keep_going(const ChamberSoaks& chamber, const KalmanRunOptions& run) {
+  ChamberRuns out;
+  for (std::size_t k = 0; k < chamber.sessions.size(); ++k) {
+    try {
+      out.runs.push_back(calibrate_soak(chamber.sessions[k], chamber, run));
+      out.index.push_back(k);
+    } catch (const SoakStopped& e) {
+      out.failed.push_back({k, chamber.sessions[k], e.what()});
+    }
+  }
+  return out;
+}
+
+std::string soak_failure_stop(const SoakFailure& f, std::size_t soaks) {
+  return "soak " + std::to_string(f.index + 1) + " of " + std::to_string(soaks) +
+         " set aside, the fit and the tests use the others: " + f.cause +
+         " (its data do not follow the filter's model at that temperature: an effect the model "
+         "lacks, thermal or not; the non-thermal families' test of one soak may name it)";
 }
 
 }  // namespace sinscal
