@@ -5,8 +5,9 @@
 // The matrix at more seeds is a documented measurement (hidden test, [.]):
 //   SINSCAL_OPEN_WORLD_SEEDS=30 build/tests/sinscal_tests "[open_world_matrix]"
 // with SINSCAL_OPEN_WORLD_FILTER=TEXT (effects whose name contains it) and
-// SINSCAL_OPEN_WORLD_PLANS=rot19.ini,seed8.ini and SINSCAL_OPEN_WORLD_SCALE=S (every effect S
-// times its size); results in docs/accuracy.md.
+// SINSCAL_OPEN_WORLD_PLANS=rot19.ini,seed8.ini, SINSCAL_OPEN_WORLD_SCALE=S (every effect S
+// times its size) and SINSCAL_OPEN_WORLD_VERBOSE=1 (every seed's story, refusals, terms);
+// results in docs/accuracy.md.
 #include <catch2/catch.hpp>
 #include <cstdio>
 #include <cstdlib>
@@ -46,6 +47,27 @@ int score_terms(const TableDiagnosis& d, const OpenWorldEffect& e, double scale 
   return -1;
 }
 
+// One seed's outcome: its story, refused findings with their reasons, the library's terms
+// (SINSCAL_OPEN_WORLD_VERBOSE set: a cell examined seed by seed).
+void print_seed(std::uint64_t seed, const DiagnosisOutcome& o, int term) {
+  std::printf("  seed %llu: term %d, unexplained %d: %s\n", static_cast<unsigned long long>(seed),
+              term, o.result.unexplained.present ? 1 : 0, o.story.c_str());
+  for (const auto& f : o.result.findings)
+    if (!f.library_alternative.empty())
+      std::printf("    alternative to %s: %s\n", f.family.c_str(), f.library_alternative.c_str());
+  for (const auto& r : o.result.rejected)
+    std::printf("    refused %s (round %d): %s\n", r.finding.family.c_str(), r.finding.round,
+                r.reason.c_str());
+  std::printf(
+      "    held-out predictive chi2 %.4g on %d inputs (99 %% quantile %.4g); dwells chi2 %.4g on "
+      "%d dof (%.4g)\n",
+      o.result.check.heldout_chi2, o.result.check.heldout_inputs, o.result.check.heldout_quantile,
+      o.result.check.dwells_chi2, o.result.check.dwells_dof, o.result.check.dwells_quantile);
+  if (o.result.unexplained.library)
+    for (const auto& t : o.result.unexplained.library->terms)
+      std::printf("    library: %s\n", t.text().c_str());
+}
+
 OpenWorldScore run_effect(const std::string& plan, std::size_t effect, int seeds,
                           std::uint64_t seed0, double scale) {
   OpenWorldScore s;
@@ -69,6 +91,7 @@ OpenWorldScore run_effect(const std::string& plan, std::size_t effect, int seeds
     if (term != 0 && s.first_terms.empty())
       for (const auto& t : o.result.unexplained.library->terms) s.first_terms += t.text() + "; ";
     const bool wrong = !o.result.findings.empty();
+    if (std::getenv("SINSCAL_OPEN_WORLD_VERBOSE")) print_seed(seed, o, term);
     if (wrong && !e.formula.empty() &&
         o.result.findings.front().library_alternative.find(e.formula) != std::string::npos)
       ++s.alternative;
