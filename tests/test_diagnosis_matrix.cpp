@@ -10,9 +10,8 @@
 //   SINSCAL_MATRIX_SEEDS=30 build/tests/sinscal_tests "[matrix]"
 // with SINSCAL_MATRIX_FILTER=TEXT (cells whose name contains it), SINSCAL_MATRIX_BAND=strong|limit
 // (5-10 or 3-5 detection sigmas; default both), SINSCAL_MATRIX_PLANS=a.ini,b.ini (default
-// rot19.ini,seed8.ini), SINSCAL_MATRIX_VERBOSE=1 (each seed's story) and SINSCAL_MATRIX_OUT=FILE
-// (rows appended).
-// CI runs a slice ([matrix_slice]).
+// rot19.ini,seed8.ini), SINSCAL_MATRIX_VERBOSE=1 (every seed's story, refusals and stops) and
+// SINSCAL_MATRIX_OUT=FILE (rows appended). CI runs a slice ([matrix_slice]).
 #include <catch2/catch.hpp>
 #include <cstdio>
 #include <cstdlib>
@@ -108,6 +107,23 @@ struct CellScore {
   std::string worst_story;
 };
 
+// One seed's outcome, its refused findings with their reasons and its stops
+// (SINSCAL_MATRIX_VERBOSE set: a cell's misses examined seed by seed).
+void print_seed(std::uint64_t seed, const DiagnosisOutcome& o) {
+  std::printf("  seed %llu: first right %d, all named %d: %s\n",
+              static_cast<unsigned long long>(seed), o.first_right ? 1 : 0, o.all_named ? 1 : 0,
+              o.story.c_str());
+  for (const auto& r : o.result.rejected)
+    std::printf("    refused %s (round %d): %s\n", r.finding.family.c_str(), r.finding.round,
+                r.reason.c_str());
+  for (const auto& w : o.result.stops) std::printf("    stop: %s\n", w.c_str());
+  std::printf(
+      "    held-out predictive chi2 %.4g on %d inputs (99 %% quantile %.4g); dwells chi2 %.4g on "
+      "%d dof (%.4g)\n",
+      o.result.check.heldout_chi2, o.result.check.heldout_inputs, o.result.check.heldout_quantile,
+      o.result.check.dwells_chi2, o.result.check.dwells_dof, o.result.check.dwells_quantile);
+}
+
 // Runs `seeds` sessions of the cell, magnitudes in [lo, hi] detection sigmas.
 CellScore run_cell(const Cell& cell, int seeds, double lo, double hi, std::uint64_t seed0) {
   std::vector<ProfileLine> lines;
@@ -136,10 +152,6 @@ CellScore run_cell(const Cell& cell, int seeds, double lo, double hi, std::uint6
                             ": diagnosis failed: " + e.what();
       continue;
     }
-    if (std::getenv("SINSCAL_MATRIX_VERBOSE"))
-      std::printf("    seed %llu: %s\n",
-                  static_cast<unsigned long long>(seed0 + static_cast<std::uint64_t>(k)),
-                  o.story.c_str());
     const bool right = cell.families.empty() ? o.result.findings.empty() : o.first_right;
     score.first_right += right ? 1 : 0;
     score.ambiguous_first += o.ambiguous_first ? 1 : 0;
@@ -149,6 +161,7 @@ CellScore run_cell(const Cell& cell, int seeds, double lo, double hi, std::uint6
       ++score.magnitudes;
       score.covered += o.worst_sigma < 3.0 ? 1 : 0;
     }
+    if (std::getenv("SINSCAL_MATRIX_VERBOSE")) print_seed(seed0 + static_cast<std::uint64_t>(k), o);
     if ((!right || !o.false_names.empty()) && score.worst_story.empty())
       score.worst_story =
           "seed " + std::to_string(seed0 + static_cast<std::uint64_t>(k)) + ": " + o.story;

@@ -6,7 +6,7 @@
 //   SINSCAL_OPEN_WORLD_SEEDS=30 build/tests/sinscal_tests "[open_world_matrix]"
 // with SINSCAL_OPEN_WORLD_FILTER=TEXT (effects whose name contains it) and
 // SINSCAL_OPEN_WORLD_PLANS=rot19.ini,seed8.ini and SINSCAL_OPEN_WORLD_SCALE=S (every effect S
-// times its size), SINSCAL_OPEN_WORLD_VERBOSE=1 (each seed's story, library terms and refusals);
+// times its size), SINSCAL_OPEN_WORLD_VERBOSE=1 (every seed's story, refusals, terms);
 // results in docs/accuracy.md.
 #include <algorithm>
 #include <catch2/catch.hpp>
@@ -66,6 +66,27 @@ bool right_pair_term(const TableFinding& f, const OpenWorldEffect& e, double sca
          std::abs(t.value - scale * e.value) < 3.0 * t.sigma;
 }
 
+// One seed's outcome: its story, refused findings with their reasons, the library's terms
+// (SINSCAL_OPEN_WORLD_VERBOSE set: a cell examined seed by seed).
+void print_seed(std::uint64_t seed, const DiagnosisOutcome& o, int term) {
+  std::printf("  seed %llu: term %d, unexplained %d: %s\n", static_cast<unsigned long long>(seed),
+              term, o.result.unexplained.present ? 1 : 0, o.story.c_str());
+  for (const auto& f : o.result.findings)
+    if (!f.library_alternative.empty())
+      std::printf("    alternative to %s: %s\n", f.family.c_str(), f.library_alternative.c_str());
+  for (const auto& r : o.result.rejected)
+    std::printf("    refused %s (round %d): %s\n", r.finding.family.c_str(), r.finding.round,
+                r.reason.c_str());
+  std::printf(
+      "    held-out predictive chi2 %.4g on %d inputs (99 %% quantile %.4g); dwells chi2 %.4g on "
+      "%d dof (%.4g)\n",
+      o.result.check.heldout_chi2, o.result.check.heldout_inputs, o.result.check.heldout_quantile,
+      o.result.check.dwells_chi2, o.result.check.dwells_dof, o.result.check.dwells_quantile);
+  if (o.result.unexplained.library)
+    for (const auto& t : o.result.unexplained.library->terms)
+      std::printf("    library: %s\n", t.text().c_str());
+}
+
 OpenWorldScore run_effect(const std::string& plan, std::size_t effect, int seeds,
                           std::uint64_t seed0, double scale) {
   OpenWorldScore s;
@@ -95,16 +116,7 @@ OpenWorldScore run_effect(const std::string& plan, std::size_t effect, int seeds
       ++s.right_term;
       s.wrong_term -= term < 0 ? 1 : 0;
     }
-    if (std::getenv("SINSCAL_OPEN_WORLD_VERBOSE")) {
-      std::string terms;
-      if (o.result.unexplained.library)
-        for (const auto& t : o.result.unexplained.library->terms) terms += t.text() + "; ";
-      std::printf("    seed %llu: %s | unexplained %d | library: %s\n",
-                  static_cast<unsigned long long>(seed), o.story.c_str(),
-                  o.result.unexplained.present ? 1 : 0, terms.c_str());
-      for (const auto& r : o.result.rejected)
-        std::printf("      refused %s: %s\n", r.finding.family.c_str(), r.reason.c_str());
-    }
+    if (std::getenv("SINSCAL_OPEN_WORLD_VERBOSE")) print_seed(seed, o, term);
     s.wrong_first += wrong ? 1 : 0;
     s.unexplained += o.result.unexplained.present ? 1 : 0;
     s.quiet += o.result.findings.empty() && !o.result.unexplained.present ? 1 : 0;

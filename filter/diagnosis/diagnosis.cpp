@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <limits>
 #include <stdexcept>
+#include <tuple>
 
 #include "filter/strapdown/ins_error_model.hpp"
 #include "filter/thermal/soak_fit.hpp"
@@ -154,6 +155,45 @@ double predictive_chi2(const std::vector<WhiteDwell>& dwells, const Eigen::Vecto
   return z.dot(S.ldlt().solve(z));
 }
 
+// The variance and third cumulant of the held-out predictive chi-square when the model holds (the
+// data noise and the coefficients drawn from the weak prior): 2 tr(M^2) and 8 tr(M^3), M the
+// covariance of every dwell's whitened prediction error together. Dwell i's error is z_i = y_i -
+// A_i N_-i^-1 sum_k!=i A_k^T y_k = (rows of T) y + L_i^-1 A_i N_-i^-1 P0^-1 theta, so M = T T^T + W
+// W^T with W_i = L_i^-1 A_i N_-i^-1 P0^-1/2 (S_i = L_i L_i^T: each diagonal block of M is the
+// identity).
+std::pair<double, double> predictive_cumulants(const std::vector<WhiteDwell>& dwells,
+                                               const Eigen::VectorXd& p0) {
+  const Eigen::Index p = p0.size();
+  Eigen::Index n = 0;
+  std::vector<Eigen::Index> first;
+  for (const auto& w : dwells) {
+    first.push_back(n);
+    n += w.A.rows();
+  }
+  Eigen::MatrixXd A(n, p);
+  for (std::size_t i = 0; i < dwells.size(); ++i)
+    A.middleRows(first[i], dwells[i].A.rows()) = dwells[i].A;
+  Eigen::MatrixXd N = p0.cwiseInverse().cwiseAbs2().asDiagonal();
+  N += A.transpose() * A;
+  Eigen::MatrixXd big(n, n + p);
+  for (std::size_t i = 0; i < dwells.size(); ++i) {
+    const Eigen::MatrixXd& Ai = dwells[i].A;
+    const Eigen::Index r0 = first[i], rows = Ai.rows();
+    const Eigen::LDLT<Eigen::MatrixXd> Ni(N - Ai.transpose() * Ai);
+    Eigen::MatrixXd K = Ni.solve(A.transpose());  // p x n
+    K.middleCols(r0, rows).setZero();
+    Eigen::MatrixXd X(rows, n + p);
+    X.leftCols(n) = -Ai * K;
+    X.block(0, r0, rows, rows) += Eigen::MatrixXd::Identity(rows, rows);
+    X.rightCols(p) = Ai * Ni.solve(Eigen::MatrixXd(p0.cwiseInverse().asDiagonal()));
+    const Eigen::MatrixXd S = Eigen::MatrixXd::Identity(rows, rows) + Ai * Ni.solve(Ai.transpose());
+    const Eigen::LLT<Eigen::MatrixXd> llt(S);
+    big.middleRows(r0, rows) = llt.matrixL().solve(X);
+  }
+  const Eigen::MatrixXd M = big * big.transpose();
+  return {2.0 * M.squaredNorm(), 8.0 * (M * M).cwiseProduct(M).sum()};
+}
+
 // Fit, residuals and leave-one-dwell-out prediction of one parameter set.
 FitFigures figures(const StaticDesign& design, const std::vector<int>& parameters,
                    bool heldout = true) {
@@ -195,6 +235,9 @@ FitFigures figures(const StaticDesign& design, const std::vector<int>& parameter
   f.heldout = nz ? std::sqrt(hz / nz) : 0.0;
   f.heldout_chi2 = hz;
   f.heldout_inputs = heldout ? nz : 0;
+  if (heldout)
+    std::tie(f.heldout_predictive_variance, f.heldout_predictive_cumulant3) =
+        predictive_cumulants(dwells, p0);
   f.heldout_dwells = static_cast<int>(dwells.size());
   f.log_likelihood = -0.5 * f.chi2;
   f.bic = f.chi2 + f.fit.rank * std::log(std::max(1, inputs));
@@ -472,6 +515,17 @@ void run_rounds(DiagnosisReport& rep, int max_findings, const RoundRunner& run_r
 }
 
 }  // namespace diagnosis_detail
+
+double heldout_predictive_quantile(const HeldoutFigures& f, double level) {
+  const double m = f.heldout_inputs;
+  if (!(m > 0.0)) return 0.0;
+  const double c2 = 0.5 * f.heldout_predictive_variance, c3 = f.heldout_predictive_cumulant3 / 8.0;
+  if (!(c2 > 0.0) || !(c3 > 0.0)) return boost::math::quantile(boost::math::chi_squared(m), level);
+  // A chi-square of l dof has the quadratic form's skewness; shifted and scaled to its mean and
+  // variance.
+  const double l = c2 * c2 * c2 / (c3 * c3);
+  return m + std::sqrt(c2 / l) * (boost::math::quantile(boost::math::chi_squared(l), level) - l);
+}
 
 using namespace diagnosis_detail;
 

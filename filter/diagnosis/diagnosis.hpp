@@ -51,6 +51,14 @@ struct HeldoutFigures {
   /// dwells' uncertainty of the prediction): chi-square of heldout_inputs dof when the model holds.
   double heldout_predictive_chi2 = 0.0;
   int heldout_inputs = 0;
+  /// Its variance when the model holds, 2 tr(M^2), M the covariance of all the dwells' whitened
+  /// prediction errors together (tr(M) = heldout_inputs). The dwells' predictions share their
+  /// data, so the errors of different dwells correlate and the sum is wider than a chi-square of
+  /// heldout_inputs dof (seed8: 8 dwells, 48 inputs, about 25 coefficients: variance about twice
+  /// the chi-square's). 0: not computed (a chi-square of heldout_inputs dof is assumed).
+  double heldout_predictive_variance = 0.0;
+  /// Its third cumulant when the model holds, 8 tr(M^3) (the tail's skewness; 0: not computed).
+  double heldout_predictive_cumulant3 = 0.0;
   double heldout_accel = 0.0;  // m/s^2, same in the sensor's units
   double heldout_gyro = 0.0;   // rad/s
   int heldout_dwells = 0;      // dwells whose prediction the others determine
@@ -70,6 +78,12 @@ struct FitFigures : HeldoutFigures {
   double log_likelihood = 0.0;  // -chi2/2 (constant terms dropped)
   double bic = 0.0;             // chi2 + rank log(inputs)
 };
+
+/// The quantile at `level` of the held-out predictive chi-square when the model holds: a
+/// chi-square shifted and scaled to its mean (heldout_inputs), variance and third cumulant
+/// (Pearson's three-moment fit of a quadratic form), a chi-square of heldout_inputs dof when they
+/// are not computed.
+double heldout_predictive_quantile(const HeldoutFigures& f, double level);
 
 /// A combination of a family's coefficients that the data determine although the coefficients
 /// alone are not (each is aliased with base coefficients or the family's others): sum of

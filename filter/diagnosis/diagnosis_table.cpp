@@ -266,8 +266,7 @@ ResidualCheck residual_check(const FitFigures& fit, const KalmanRun* filter) {
   c.heldout_chi2 = fit.heldout_predictive_chi2;
   c.heldout_inputs = fit.heldout_inputs;
   if (c.heldout_inputs > 0) {
-    c.heldout_quantile =
-        boost::math::quantile(boost::math::chi_squared(c.heldout_inputs), kResidualLevel);
+    c.heldout_quantile = heldout_predictive_quantile(fit, kResidualLevel);
     c.heldout_hold = c.heldout_chi2 <= c.heldout_quantile;
   }
   if (filter) {
