@@ -220,7 +220,7 @@ int cmd_design(const std::vector<std::string>& args) {
       ("compare", po::value(&o.compare)->multitoken(),
        "--optimize: further plans to compare with (besides --plan)")
       ("beam", po::value(&o.beam)->default_value(4), "--optimize: plans kept per step")
-      ("structure-moves", po::value(&o.structure_moves)->default_value(400),
+      ("structure-moves", po::value(&o.structure_moves)->default_value(2000),
        "--optimize with --budget-s: covariance passes the structure moves may spend (turns "
        "split, inserted, removed, changed; 0: none)")
       ("search-rate", po::value(&o.search_rate_hz)->default_value(20.0),

@@ -156,6 +156,8 @@ nlohmann::ordered_json search_json(const SearchResult& r, const SearchOptions& s
 std::string structure_text(const SearchResult& r) {
   std::string out = "Structure moves (" + std::to_string(r.structure_evaluations) +
                     " covariance passes): " + std::to_string(r.structure.size()) + " accepted";
+  if (r.origin == "structure moves")
+    out += ", worst sigma/target " + fmt("%.4f", r.excess.worst_ratio) + " at the search rate";
   out += r.origin == "structure moves" ? ", their plan is the best within the budget.\n"
                                        : ", none better than the plan before them.\n";
   for (const auto& [what, ratio] : r.structure)

@@ -16,7 +16,8 @@ const char* const kAxisNames[6] = {"+x", "-x", "+y", "-y", "+z", "-z"};
 constexpr double kGrid = 0.1;  // s, the search's grid (filter/design/search.cpp)
 constexpr double kSplitAbove = 59.0 * units::deg;  // a turn split into halves (60 deg: 30 + 30)
 constexpr double kInsertAngle = 45.0 * units::deg;
-const double kAngles[] = {45.0 * units::deg, 90.0 * units::deg, 180.0 * units::deg};
+const double kAngles[] = {30.0 * units::deg, 45.0 * units::deg, 60.0 * units::deg,
+                          90.0 * units::deg, 180.0 * units::deg};
 
 int tenths(double s) { return static_cast<int>(std::floor(s / kGrid + 1e-6)); }
 
