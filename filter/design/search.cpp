@@ -238,9 +238,7 @@ void restructure(SearchResult& r, const Context& c) {
   if (r.origin != "beam") starts.push_back(r.best);
   for (const Plan& seed : c.search.seeds)
     if (auto g = genome_of(seed, c.table)) starts.push_back(*g);
-  const auto score = [&](const PlanGenome& g) {
-    return plan_excess(plan_of(g, c.table, c.site, c.search.name), c);
-  };
+  const auto score = [&](const PlanGenome& g) { return Grower(g, c).score(c); };
   const auto s = structure_search(starts, c.search.budget_s, c.table, c.site,
                                   c.search.structure_evaluations, score);
   if (!s) return;

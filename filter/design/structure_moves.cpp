@@ -99,7 +99,7 @@ struct Search {
   std::optional<State> best;  // of the smallest worst ratio
   bool spent() const { return evaluations >= max_evaluations; }
   Excess scored(const PlanGenome& g) {
-    const Excess e = score(g);
+    Excess e = score(g);
     ++evaluations;
     if (!best || e.worst_ratio < best->excess.worst_ratio) best = State{g, e};
     return e;
@@ -209,6 +209,7 @@ std::optional<PlanGenome> fitted(const PlanGenome& g, const std::vector<double>&
   const int shortest = static_cast<int>(std::lround(min_dwell / kGrid));
   if (available < n * shortest) return std::nullopt;
   std::vector<double> above;
+  above.reserve(dwells.size());
   for (double d : dwells) above.push_back(std::max(0.0, d - min_dwell));
   const std::vector<int> extra = shared_steps(above, available - n * shortest);
   PlanGenome out = g;
