@@ -23,7 +23,8 @@ struct DesignCliOptions {
   bool optimize = false;
   double budget_s = 0.0, search_rate_hz = 20.0;
   int beam = 4;
-  int robustness = 0;  // seeds per perturbation (0: none)
+  int structure_moves = 2000;  // --optimize with a budget: passes of the structure moves (0: none)
+  int robustness = 0;          // seeds per perturbation (0: none)
 };
 
 /// The options `calibrate --method kf` would run a session with, from the profile and table.

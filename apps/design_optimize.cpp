@@ -123,6 +123,9 @@ nlohmann::ordered_json search_json(const SearchResult& r, const SearchOptions& s
   nlohmann::ordered_json seeds = nlohmann::ordered_json::array();
   for (const auto& [name, ratio] : r.candidates)
     seeds.push_back({{"plan", name}, {"worst_ratio", ratio}});
+  nlohmann::ordered_json moves = nlohmann::ordered_json::array();
+  for (const auto& [what, ratio] : r.structure)
+    moves.push_back({{"move", what}, {"worst_ratio", ratio}});
   nlohmann::ordered_json cmp = nlohmann::ordered_json::array();
   for (const auto& c : rows)
     cmp.push_back({{"plan", c.name},
@@ -143,8 +146,23 @@ nlohmann::ordered_json search_json(const SearchResult& r, const SearchOptions& s
             {"meets_targets", r.meets},
             {"origin", r.origin},
             {"seeds", seeds},
+            {"structure_evaluations", r.structure_evaluations},
+            {"structure_moves", moves},
             {"path", path}}},
           {"comparison", cmp}};
+}
+
+// The structure moves' account: the moves accepted with the worst ratio after each.
+std::string structure_text(const SearchResult& r) {
+  std::string out = "Structure moves (" + std::to_string(r.structure_evaluations) +
+                    " covariance passes): " + std::to_string(r.structure.size()) + " accepted";
+  if (r.origin == "structure moves")
+    out += ", worst sigma/target " + fmt("%.4f", r.excess.worst_ratio) + " at the search rate";
+  out += r.origin == "structure moves" ? ", their plan is the best within the budget.\n"
+                                       : ", none better than the plan before them.\n";
+  for (const auto& [what, ratio] : r.structure)
+    out += "  " + what + ": worst sigma/target " + fmt("%.3f", ratio) + "\n";
+  return out + "\n";
 }
 
 // A plan needs about this many turns to observe the full model (docs/methods/design.md); a table
@@ -244,6 +262,7 @@ int design_optimize(const DesignCliOptions& o) {
   SearchOptions so;
   so.budget_s = o.budget_s;
   so.beam = o.beam;
+  so.structure_evaluations = o.structure_moves;
   so.rate_hz = o.search_rate_hz;
   // With --require only, the search targets the required families alone.
   if (o.require.empty() || !o.targets.empty()) so.targets = design_targets(o, profile);
@@ -302,7 +321,9 @@ int design_optimize(const DesignCliOptions& o) {
       "Searched rotation plans on %s: %d covariance passes, %.1f s CPU; %.1f s before "
       "refinement, %.1f s after.\n\n",
       table.name.c_str(), r.evaluations, cpu, r.duration_before_refinement, p.duration);
-  if (r.origin != "beam")
+  if (!r.structure.empty() || r.structure_evaluations > 0)
+    std::printf("%s", structure_text(r).c_str());
+  if (r.origin != "beam" && r.origin != "structure moves")
     std::printf(
         "The best plan within the budget is %s, a given plan as it is or with its dwells "
         "scaled: better than the beam's on the worst sigma/target.\n\n",

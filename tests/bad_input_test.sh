@@ -1239,6 +1239,10 @@ new design-optimize-targets-1e-9; cp "$tab" "$d/table.ini"
 fixed 1 "target of gyro.scale|no plan can meet it" dz --optimize --out out/o --targets "gyro.scale = 1e-9 ppm"
 new design-optimize-table-very-slow; cp "$tab" "$d/table.ini"; set_key "$d/table.ini" max_rate "0.01 deg/s"; set_key "$d/table.ini" max_acceleration "0.01 deg/s^2"
 fixed 1 "table turns 90 deg in|longer than the search's longest plan" dz --optimize --out out/o --targets "gyro.scale = 3 ppm"
+new design-structure-moves-negative; cp "$tab" "$d/table.ini"
+fixed 1 "--structure-moves must be within 0 and 100000 passes" dz --optimize --out out/o --budget-s 300 --structure-moves -1
+new design-structure-moves-without-optimize; cp "$tab" "$d/table.ini"
+fixed 1 "belong to --optimize" dz --structure-moves 10
 new design-targets-missing-file; cp "$tab" "$d/table.ini"
 fixed 1 "--targets /nonexistent/targets.ini: no such file" dz --optimize --out out/o --targets /nonexistent/targets.ini
 # No output overwrites an input, the calibration's own inputs included (resolved through links).

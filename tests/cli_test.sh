@@ -327,6 +327,20 @@ check "... writes the best as best_unmet.ini" test -s "$work/unmet/best_unmet.in
 check "... and says it" grep -q "No plan found within the budget meets every target" "$work/unmet.txt"
 check "... and prints the gap to the bound" grep -qE '^Bound \(convex relaxation .* % above it' "$work/unmet.txt"
 
+# design --optimize --budget-s with structure moves: the plan they write (turns split, inserted,
+# removed or changed, dwells refitted to the budget) runs unchanged through simulate and calibrate.
+"$bin" design --optimize --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog-extended.ini" \
+  --table "$src/config/tables/two-axis-20.ini" --targets "gyro.scale = 0.5 ppm; accel.scale = 0.5 ppm; accel.misalignment = 0.3 arcsec" \
+  --search-rate 10 --beam 1 --budget-s 150 --structure-moves 30 --out "$work/moves" > "$work/moves.txt"
+check "design --optimize --structure-moves exits 0 or 5" test $? -eq 0 -o $? -eq 5
+check "... spends at most the passes given and says so (design.json)" python3 -c "import json,sys; s=json.load(open('$work/moves/design.json'))['search']; sys.exit(not (0 < s['structure_evaluations'] <= 30 and s['origin'] == 'structure moves' and len(s['structure_moves']) > 0))"
+check "... prints the moves accepted" grep -qE '^Structure moves \(30 covariance passes\): [1-9][0-9]* accepted' "$work/moves.txt"
+moved=$(ls "$work/moves/optimized.ini" "$work/moves/best_unmet.ini" 2> /dev/null | head -1)
+"$bin" simulate --plan "$moved" --sensor "$src/config/sensors/nav-fog-extended.ini" --out "$work/moves/session" --rate 20 --seed 5 > /dev/null
+check "simulate runs the plan of the structure moves" test $? -eq 0
+"$bin" calibrate --session "$work/moves/session/session.ini" --method kf --out "$work/moves/result.json" > /dev/null
+check "calibrate runs the plan of the structure moves" test $? -eq 0
+
 # design --optimize --require: the shortest plan that determines the lever arms (they show only in
 # turns), confirmed observed by the final pass.
 "$bin" design --optimize --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog-extended.ini" \

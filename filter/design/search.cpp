@@ -10,6 +10,7 @@
 
 #include "filter/design/grower.hpp"
 #include "filter/design/hand_plans.hpp"
+#include "filter/design/structure_moves.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/imu_error_model.hpp"
 #include "models/units.hpp"
@@ -24,7 +25,8 @@ const char* const kAxisNames[6] = {"+x", "-x", "+y", "-y", "+z", "-z"};
 // Heading, pitch, roll (deg, ned-frd) that put body +x, -x, +y, -y, +z, -z up.
 const double kStartAngles[6][3] = {{0, 90, 0}, {0, -90, 0}, {0, 0, -90},
                                    {0, 0, 90}, {0, 0, 180}, {0, 0, 0}};
-constexpr double kGrid = 0.1;  // s: every duration of a searched plan is a multiple of it
+constexpr double kGrid = 0.1;       // s: every duration of a searched plan is a multiple of it
+constexpr double kSoftNorm = 16.0;  // Excess::soft_worst
 
 double on_grid(double seconds) { return std::ceil(seconds / kGrid - 1e-9) * kGrid; }
 
@@ -227,6 +229,30 @@ void improve(SearchResult& r, const Context& c) {
   }
 }
 
+// The structure moves (filter/design/structure_moves.hpp) from the best plan so far and from the
+// beam's and the seeds' rotation plans at the table's limits: their plan replaces the best when
+// its worst ratio is smaller.
+void restructure(SearchResult& r, const Context& c) {
+  std::vector<PlanGenome> starts;
+  if (auto g = genome_of(r.plan, c.table)) starts.push_back(*g);
+  if (r.origin != "beam") starts.push_back(r.best);
+  for (const Plan& seed : c.search.seeds)
+    if (auto g = genome_of(seed, c.table)) starts.push_back(*g);
+  const auto score = [&](const PlanGenome& g) { return Grower(g, c).score(c); };
+  const auto s = structure_search(starts, c.search.budget_s, c.table, c.site,
+                                  c.search.structure_evaluations, score);
+  if (!s) return;
+  r.evaluations += s->evaluations;
+  r.structure_evaluations = s->evaluations;
+  for (const auto& step : s->path) r.structure.emplace_back(step.move, step.worst_ratio);
+  if (!(s->excess.worst_ratio < r.excess.worst_ratio)) return;
+  r.best = s->genome;
+  r.plan = plan_of(r.best, c.table, c.site, c.search.name);
+  r.text = plan_text(r.best, c.table, c.site, c.search.name);
+  r.excess = s->excess;
+  r.origin = "structure moves";
+}
+
 }  // namespace
 
 Grower::Grower(const PlanGenome& genome, const Context& c) : g_(genome) {
@@ -341,12 +367,14 @@ Excess excess(const std::vector<CoefficientEstimate>& estimates,
   }
   Excess e;
   for (const auto& [family, ratio] : worst) {
+    e.soft_worst += std::pow(ratio, kSoftNorm);
     e.J += std::max(0.0, std::log(ratio));
     if (ratio > e.worst_ratio) {
       e.worst_ratio = ratio;
       e.worst_family = family;
     }
   }
+  e.soft_worst = std::pow(e.soft_worst, 1.0 / kSoftNorm);
   return e;
 }
 
@@ -408,6 +436,7 @@ SearchResult search_plan(const CalibratorOptions& options, const TableSpec& tabl
   ++r.evaluations;
   if (search.budget_s > 0.0 && !search.seeds.empty()) seeded(r, c);
   if (search.budget_s > 0.0 && search.improvement_passes > 0 && r.origin != "beam") improve(r, c);
+  if (search.budget_s > 0.0 && search.structure_evaluations > 0) restructure(r, c);
   r.meets = meets(r.excess);
   return r;
 }

@@ -49,6 +49,10 @@ struct SearchOptions {
   /// time between its dwells (at most `improvement_passes` evaluations, 0: none).
   std::vector<Plan> seeds;
   int improvement_passes = 60;
+  /// With a budget: covariance passes the structure moves may spend after the seeds
+  /// (filter/design/structure_moves.hpp), from the best plan so far, the beam's and each seed's
+  /// turns at the table's limits; 0: none.
+  int structure_evaluations = 0;
 };
 
 /// The shortest dwell after a turn the search uses on `table` (its settling, one update, the
@@ -69,6 +73,9 @@ struct Excess {
   double J = 0.0;
   double worst_ratio = 0.0;
   std::string worst_family;
+  /// A smooth worst ratio: the 16-norm of the families' worst ratios (the structure moves rank
+  /// by it, so that one of two balanced families may fall before the other).
+  double soft_worst = 0.0;
 };
 Excess excess(const std::vector<CoefficientEstimate>& estimates,
               const std::map<std::string, double>& targets);
@@ -91,6 +98,9 @@ struct SearchResult {
   int evaluations = 0;           // covariance passes, incremental and full
   std::vector<SearchStep> path;  // the best plan's growth, turn by turn (before refinement)
   double duration_before_refinement = 0.0;
+  /// The structure moves accepted (what, worst ratio after it) and the passes they spent.
+  std::vector<std::pair<std::string, double>> structure;
+  int structure_evaluations = 0;
 };
 
 /// `--require`: a family the plan must determine gets the target kRequiredFraction of its prior
