@@ -42,17 +42,25 @@ double seconds_since(Clock::time_point t0) {
 
 // The design bound and the seeded search in the toolbox's mode (--attitude none) at 491 s
 // (aims: the bound within 10 s, the optimization within 60 s of CPU).
-double bench_design_bound(const std::string& src, CalibratorOptions o, const TableSpec& table,
-                          const Plan& rot) {
+// The toolbox's mode (--attitude none, zero velocity in motion as the table gives it), its
+// targets and a budget of 491 s, seeded with rot19, seed8 and toolbox19.
+SearchOptions toolbox_search_491(const std::string& src, CalibratorOptions& o,
+                                 const TableSpec& table, const Plan& rot) {
   o.attitude = CalibratorOptions::AttitudeUpdates::None;
   o.zero_velocity_in_motion = table.reference_on_axes;
   SearchOptions so;
   so.targets = read_sigma_targets(IniFile(src + "/config/targets/reference-toolbox.ini"));
   so.budget_s = 491.0;
   so.seeds = {rot, Plan::load(src + "/config/plans/seed8.ini"),
-              Plan::load(src + "/config/plans/toolbox19.ini"),
-              Plan::load(src + "/config/plans/diagonal-491.ini"),
-              Plan::load(src + "/config/plans/searched-491.ini")};
+              Plan::load(src + "/config/plans/toolbox19.ini")};
+  return so;
+}
+
+double bench_design_bound(const std::string& src, CalibratorOptions o, const TableSpec& table,
+                          const Plan& rot) {
+  SearchOptions so = toolbox_search_491(src, o, table, rot);
+  so.seeds.push_back(Plan::load(src + "/config/plans/diagonal-491.ini"));
+  so.seeds.push_back(Plan::load(src + "/config/plans/searched-491.ini"));
   std::clock_t c0 = std::clock();
   const InformationLibrary lib = information_library(o, table, rot.site, so.targets, so.rate_hz);
   const DesignBound b = relaxed_bound(lib, so.budget_s);
@@ -76,14 +84,8 @@ double bench_design_bound(const std::string& src, CalibratorOptions o, const Tab
 // (design --optimize's default of 2000 passes; aim: the whole optimization within 60 s of CPU).
 double bench_structure_moves(const std::string& src, CalibratorOptions o, const TableSpec& table,
                              const Plan& rot) {
-  o.attitude = CalibratorOptions::AttitudeUpdates::None;
-  o.zero_velocity_in_motion = table.reference_on_axes;
-  SearchOptions so;
-  so.targets = read_sigma_targets(IniFile(src + "/config/targets/reference-toolbox.ini"));
-  so.budget_s = 491.0;
+  SearchOptions so = toolbox_search_491(src, o, table, rot);
   so.structure_evaluations = 2000;
-  so.seeds = {rot, Plan::load(src + "/config/plans/seed8.ini"),
-              Plan::load(src + "/config/plans/toolbox19.ini")};
   const std::clock_t c0 = std::clock();
   const SearchResult r = search_plan(o, table, rot.site, SearchSpace{}, so);
   std::printf(

@@ -103,23 +103,35 @@ inline std::vector<std::string> finding_set(const TableFinding& f) {
   return set;
 }
 
+/// The case's turn model and its closed-form calibration, as `sinscal diagnose` makes them (the
+/// turns' filter unless `turns` is false).
+struct CaseCalibration {
+  TurnModel model;
+  ClosedFormReport calibration;
+};
+
+inline CaseCalibration calibrate_case(const HiddenCase& c, bool turns = true) {
+  const Stage1Options s1 = default_stage1(&c.filter_profile);
+  const TableAttitudeError table{kDefaultTableAttitudeSigma};
+  CaseCalibration out{turn_model_of(c.session, c.filter_profile, table.sigma), {}};
+  out.model.run_filter = turns;
+  const auto about = linearize(out.model, 0);
+  out.calibration = run_closed_form(c.session, s1, table, !about, about ? &*about : nullptr);
+  return out;
+}
+
 /// Diagnoses the case as `sinscal diagnose` does (the turns' test unless `turns` is false) and
 /// scores it against the hidden families.
 inline DiagnosisOutcome diagnose_hidden(const HiddenCase& c, const std::vector<std::string>& hidden,
                                         const std::vector<std::string>& prefer = {},
                                         bool turns = true) {
-  const Stage1Options s1 = default_stage1(&c.filter_profile);
-  const TableAttitudeError table{kDefaultTableAttitudeSigma};
-  TurnModel model = turn_model_of(c.session, c.filter_profile, table.sigma);
-  model.run_filter = turns;
-  const auto about = linearize(model, 0);
-  const ClosedFormReport calibration =
-      run_closed_form(c.session, s1, table, !about, about ? &*about : nullptr);
+  CaseCalibration cc = calibrate_case(c, turns);
+  const ClosedFormReport& calibration = cc.calibration;
   TableDiagnosisOptions o;
   o.dwells.prefer = prefer;
   DiagnosisOutcome out;
   out.result =
-      diagnose_table(calibration.stage1, c.session.site, calibration.stage2_options, o, &model);
+      diagnose_table(calibration.stage1, c.session.site, calibration.stage2_options, o, &cc.model);
   const auto is_hidden = [&](const std::string& f) {
     return std::find(hidden.begin(), hidden.end(), f) != hidden.end();
   };

@@ -61,12 +61,9 @@ double detection_sigma(const std::string& plan, const std::string& profile,
   // The profile without the family (as the sessions' filter profile), a session without it.
   const HiddenCase c = hidden_case("matrix_sigma", plan, profile, {profile_line(family, 0.0, 0.0)},
                                    999, kMatrixRate);
-  const Stage1Options s1 = default_stage1(&c.filter_profile);
-  const TableAttitudeError table{kDefaultTableAttitudeSigma};
-  TurnModel model = turn_model_of(c.session, c.filter_profile, table.sigma);
-  const auto about = linearize(model, 0);
-  const ClosedFormReport cal =
-      run_closed_form(c.session, s1, table, !about, about ? &*about : nullptr);
+  const CaseCalibration cc = calibrate_case(c);
+  const TurnModel& model = cc.model;
+  const ClosedFormReport& cal = cc.calibration;
   Stage2Options o = cal.stage2_options;
   o.bias_wander = model.base.noise;  // the dwells' noise model as the diagnosis has it
   const auto& cat = coefficient_catalog();

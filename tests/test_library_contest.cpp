@@ -31,12 +31,9 @@ HeldoutContest drift_contest(std::uint64_t seed, const TermAt& term_at) {
       c.session.time_offset + 0.5 * PlanTimeline::of(c.session.plan, c.session.site).duration;
   inject_into_log(c.session.dir + "/imu.csv", kContestRate, term_at(mid));
   c.session = Session::load(c.session.path);
-  const Stage1Options s1 = default_stage1(&c.filter_profile);
-  const TableAttitudeError table{kDefaultTableAttitudeSigma};
-  TurnModel model = turn_model_of(c.session, c.filter_profile, table.sigma);
-  const auto about = linearize(model, 0);
-  const ClosedFormReport cal =
-      run_closed_form(c.session, s1, table, !about, about ? &*about : nullptr);
+  const CaseCalibration cc = calibrate_case(c);
+  const TurnModel& model = cc.model;
+  const ClosedFormReport& cal = cc.calibration;
   Stage2Options base = cal.stage2_options;
   base.bias_wander = model.base.noise;
   DiagnosisOptions o;

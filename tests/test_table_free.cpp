@@ -4,11 +4,13 @@
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <map>
 #include <random>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "filter/plausibility/rest_plausibility.hpp"
 #include "filter/table_free/table_free.hpp"
@@ -89,6 +91,32 @@ Site site_at(double lat_deg) {
   s.lat_rad = lat_deg * units::deg;
   s.h_m = 100.0;
   return s;
+}
+
+// The readings with a bias stepping from pose to pose (each axis N(0, sigma) per pose, in the
+// triad's physical unit), of zero mean over the poses' readings: the bias the fit takes (the
+// poses' mean) and so the turns stay right, the excess is the poses' alone.
+std::vector<ImuReading> with_pose_bias_steps(std::vector<ImuReading> counts,
+                                             const std::vector<TableFreePoseFit>& poses,
+                                             double sigma, std::uint64_t seed,
+                                             const Eigen::Vector3d& sensitivity,
+                                             Eigen::Vector3d ImuReading::*triad) {
+  std::mt19937_64 rng(derive_seed(seed, 5));
+  std::normal_distribution<double> step(0.0, sigma);
+  std::vector<Eigen::Vector3d> steps;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  double n = 0.0;
+  for (const auto& p : poses) {
+    steps.emplace_back(step(rng), step(rng), step(rng));
+    mean += static_cast<double>(p.last - p.first + 1) * steps.back();
+    n += static_cast<double>(p.last - p.first + 1);
+  }
+  mean /= n;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    const Eigen::Vector3d db = sensitivity.cwiseProduct(steps[i] - mean);
+    for (std::size_t k = poses[i].first; k <= poses[i].last; ++k) counts[k].*triad += db;
+  }
+  return counts;
 }
 
 }  // namespace
@@ -402,24 +430,9 @@ TEST_CASE(
   const TableFreeResult clean = calibrate_table_free_counts(s.counts, fine_scaling(), o);
   // The gyro bias steps from pose to pose (bias instability far beyond the model: 0.05 deg/s
   // against 0.002 deg/s of a pose mean's white noise); the turns and accelerometers untouched.
-  std::vector<ImuReading> counts = s.counts;
-  std::mt19937_64 rng(derive_seed(11, 5));
-  std::normal_distribution<double> step(0.0, 0.05 * units::deg_per_s);
-  // Steps of zero mean over the readings: the bias the fit takes (the poses' mean) and so the
-  // turns stay right, the excess is the gyro poses' alone.
-  std::vector<Eigen::Vector3d> steps;
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  double n = 0.0;
-  for (const auto& p : clean.poses) {
-    steps.emplace_back(step(rng), step(rng), step(rng));
-    mean += static_cast<double>(p.last - p.first + 1) * steps.back();
-    n += static_cast<double>(p.last - p.first + 1);
-  }
-  mean /= n;
-  for (std::size_t i = 0; i < clean.poses.size(); ++i) {
-    const Eigen::Vector3d db = fine_scaling().gyro_sensitivity.cwiseProduct(steps[i] - mean);
-    for (std::size_t k = clean.poses[i].first; k <= clean.poses[i].last; ++k) counts[k].gyro += db;
-  }
+  const std::vector<ImuReading> counts =
+      with_pose_bias_steps(s.counts, clean.poses, 0.05 * units::deg_per_s, 11,
+                           fine_scaling().gyro_sensitivity, &ImuReading::gyro);
   const TableFreeResult stepped = calibrate_table_free_counts(counts, fine_scaling(), o);
   CAPTURE(clean.accel_fit.chi2_per_dof(), clean.turn_fit.chi2_per_dof());
   CAPTURE(stepped.accel_fit.chi2_per_dof(), stepped.gyro_rest_fit.chi2_per_dof(),
@@ -518,22 +531,9 @@ TEST_CASE(
   // of a pose mean's white noise): only the magnitudes hold it (the directions take the rest),
   // P - 9 = 92 values of it: its size +-7.4 % at 1 sigma (0.87 mg; 0.78 mg with the rows
   // miscounted, whose gyro dof was 225 of 300).
-  std::vector<ImuReading> counts = s.counts;
-  std::mt19937_64 rng(derive_seed(13, 5));
-  std::normal_distribution<double> step(0.0, 1.0 * units::mg);
-  std::vector<Eigen::Vector3d> steps;
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  double n = 0.0;
-  for (const auto& p : clean.poses) {
-    steps.emplace_back(step(rng), step(rng), step(rng));
-    mean += static_cast<double>(p.last - p.first + 1) * steps.back();
-    n += static_cast<double>(p.last - p.first + 1);
-  }
-  mean /= n;
-  for (std::size_t i = 0; i < clean.poses.size(); ++i) {
-    const Eigen::Vector3d db = fine_scaling().accel_sensitivity.cwiseProduct(steps[i] - mean);
-    for (std::size_t k = clean.poses[i].first; k <= clean.poses[i].last; ++k) counts[k].accel += db;
-  }
+  const std::vector<ImuReading> counts =
+      with_pose_bias_steps(s.counts, clean.poses, 1.0 * units::mg, 13,
+                           fine_scaling().accel_sensitivity, &ImuReading::accel);
   const TableFreeResult stepped = calibrate_table_free_counts(counts, fine_scaling(), o);
   CAPTURE(stepped.accel_fit.wander / units::mg, clean.accel_fit.wander / units::mg);
   CHECK(stepped.accel_fit.wander > 0.78 * units::mg);
