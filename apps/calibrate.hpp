@@ -19,7 +19,8 @@ struct CalibrateOptions {
   ChannelSet channels{true, true, true, true};
   double arw = 0.0, vrw = 0.0, min_dwell = 20.0;  // deg/sqrt(h), ug/sqrt(Hz), s
   // both
-  double table_sigma = 2.5;  // arcsec
+  double table_sigma = 2.5;      // arcsec
+  bool cross_asymmetry = false;  // rate-table: the gyros' cross-axis asymmetries in the model
   /// --misalignment-frame: table | triad | empty (the method's and mode's own frame).
   std::string misalignment_frame;
   // Kalman filter

@@ -27,6 +27,9 @@ void add_options(po::options_description& d, CalibrateOptions& o) {
        "Earth rate and plan, saturation, fits; rests without a table); the result records it")
       ("table-sigma", po::value(&o.table_sigma)->default_value(2.5),
        "table attitude error per orientation and axis, 1-sigma [arcsec]")
+      ("cross-asymmetry", po::bool_switch(&o.cross_asymmetry),
+       "rate-table: the gyros' response to |rate| across each turn's axis in the model "
+       "(gyro.cross_asym.ij: offsets while turning that depend on the turn's direction)")
       ("misalignment-frame", po::value(&o.misalignment_frame),
        "kf, closed-form: the frame of the misalignments: table (relative to the table's platform; "
        "the default with table-attitude updates) | triad (within the triads, the accelerometer "
@@ -94,6 +97,9 @@ void check_method_options(const po::variables_map& vm, CalibrateOptions& o) {
       "passes", "motion", "base", "static-from", "static-window", "static-min", "static-rate-threshold",
       "on-bad-sample"};
   // clang-format on
+  if (o.cross_asymmetry && o.method != Method::RateTable)
+    throw UsageError("--cross-asymmetry acts in --method rate-table only, not in --method " +
+                     name_of(o.method));
   misalignment_frame_option(o);  // the table methods only; a known name
   check_table_free_options(vm, o, {closed_form_only, kf_only, {"table-sigma"}});
   if (o.method == Method::TableFree || o.method == Method::SixFace) return;

@@ -15,6 +15,7 @@ CoefficientInfo info_of(const RateCoefficient& c) {
   if (!c.in_catalog) {
     if (c.name.rfind("gyro.k2.", 0) == 0)
       return {c.name, "ppm/(deg/s)", 1e-6 / units::deg, "gyro.k2"};
+    if (c.name.rfind("gyro.cross_asym.", 0) == 0) return {c.name, "ppm", 1e-6, "gyro.cross_asym"};
     return {c.name, "ug/g^3", 1e-6 / (units::g0 * units::g0), "accel.k3"};
   }
   for (const auto& i : coefficient_catalog())

@@ -1,5 +1,6 @@
 #include "apophis_like.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <random>
@@ -53,7 +54,7 @@ std::string write_apophis_like(const std::string& dir, const ApophisLike& spec) 
   std::mt19937 rng(spec.seed);
   std::uniform_real_distribution<double> interval(1.0 / spec.max_hz, 1.0 / spec.min_hz);
   std::normal_distribution<double> unit(0.0, 1.0);
-  std::bernoulli_distribution flip(0.3);
+  std::bernoulli_distribution flip(spec.toggle_flip);
   const double gyro_white = spec.gyro_white > 0.0 ? spec.gyro_white : 0.05 * units::deg_per_s;
   const double accel_white = spec.accel_white > 0.0 ? spec.accel_white : 1e-3 * units::g0;
   const Eigen::Vector3d& gyro_bias = spec.gyro_bias;
@@ -100,6 +101,57 @@ std::string bmi160_profile_text() {
          "misalignment = 0 3600 arcsec\ng_sensitivity = 0 0.1 deg/s/g\narw = 0.42 deg/sqrt(h)\n"
          "range = 2000 deg/s\n\n[accel]\nbias = 0 80 mg\nscale = 0 40000 ppm\n"
          "misalignment = 0 3600 arcsec\nvrw = 180 ug/sqrt(Hz)\nrange = 16 g\n";
+}
+
+namespace {
+// The plan of apophis_rate_test(): its revolutions put the attitude at every segment where the
+// generated one is.
+const char* const kRateTestPlan =
+    "[plan]\nname = apophis-like-rate-test\ntype = rotations\nconvention = ned-frd\n"
+    "rotation_acceleration = 25 deg/s^2\n\n[site]\nlatitude = 28.6 deg\n\n"
+    "[start]\nheading = 0 deg\npitch = 0 deg\nroll = 180 deg\ndwell = 10 s\n\n"
+    "[rotations]\naxes = -z +z +y -y -x +x\nrate = 25 deg/s\nrevolutions = 3\n"
+    "pauses = 0 10 0 10 0 10 s\n";
+
+const char* const kZTurnsPlan =
+    "[plan]\nname = apophis-like-rate\ntype = rotations\nconvention = ned-frd\n"
+    "rotation_acceleration = 25 deg/s^2\n\n[site]\nlatitude = 28.6 deg\n\n"
+    "[start]\nheading = 0 deg\npitch = 0 deg\nroll = 180 deg\ndwell = 8 s\n\n"
+    "[rotations]\naxes = -z +z\nrate = 25 deg/s\nholds = 40 40 s\npauses = 0 15 s\n";
+}  // namespace
+
+ApophisLike apophis_rate_test() {
+  ApophisLike spec;
+  const double rate = 25.0 * units::deg_per_s, accel = 25.0 * units::deg_per_s;
+  const double hold = 3.0 * 2.0 * M_PI / rate - rate / accel;
+  spec.phases.push_back(rest_phase(10.0));
+  const Eigen::Vector3d z = Eigen::Vector3d::UnitZ(), y = Eigen::Vector3d::UnitY(),
+                        x = Eigen::Vector3d::UnitX();
+  for (const Eigen::Vector3d& a :
+       {Eigen::Vector3d(-z), z, y, Eigen::Vector3d(-y), Eigen::Vector3d(-x), x}) {
+    spec.phases.push_back(turn_phase(a, rate, accel, hold));
+    if (a == z || a == -y || a == x) spec.phases.push_back(rest_phase(10.0));
+  }
+  // Runs of 20 readings on average at one level: the means' effective sample count is about a
+  // nineteenth of their readings.
+  spec.toggle_flip = 0.05;
+  spec.gyro_white = 0.3 * units::deg_per_s;
+  spec.plan_text = kRateTestPlan;
+  spec.seed = 3;
+  return spec;
+}
+
+ApophisLike apophis_z_turns() {
+  ApophisLike spec;
+  const double rate = 25.0 * units::deg_per_s, accel = 25.0 * units::deg_per_s;
+  spec.phases = {rest_phase(8.0), turn_phase(-Eigen::Vector3d::UnitZ(), rate, accel, 40.0),
+                 turn_phase(Eigen::Vector3d::UnitZ(), rate, accel, 40.0), rest_phase(15.0)};
+  spec.toggling = false;  // white noise at the data sheet's densities (per reading at 15 Hz)
+  spec.gyro_white = 0.007 * units::deg_per_s * std::sqrt(15.0);
+  spec.accel_white = 180.0 * units::ug * std::sqrt(15.0);
+  spec.plan_text = kZTurnsPlan;
+  spec.sensor_text = bmi160_profile_text();
+  return spec;
 }
 
 }  // namespace sinscal::test

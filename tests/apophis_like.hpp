@@ -39,8 +39,9 @@ struct ApophisLike {
   Eigen::Matrix3d C_b_n_start = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();  // z up
   double min_hz = 12.0, max_hz = 18.0;  // the readings' true rate: uniform in the interval
   bool toggling = true;                 // two-level gyro y and accel y outputs, as the log's
-  double gyro_white = 0.0;              // rad/s per reading (0: as the log's, 0.05 deg/s)
-  double accel_white = 0.0;             // m/s^2 per reading (0: as the log's, 1 mg)
+  double toggle_flip = 0.3;  // probability per reading that the two-level outputs switch level
+  double gyro_white = 0.0;   // rad/s per reading (0: as the log's, 0.05 deg/s)
+  double accel_white = 0.0;  // m/s^2 per reading (0: as the log's, 1 mg)
   /// The sensors' biases (rad/s, m/s^2; the log's size by default).
   Eigen::Vector3d gyro_bias = Eigen::Vector3d(-1.27, 0.38, -1.15) * (M_PI / 180.0);
   Eigen::Vector3d accel_bias = Eigen::Vector3d(-0.03, 0.05, -0.02) * 9.80665;
@@ -54,5 +55,14 @@ std::string write_apophis_like(const std::string& dir, const ApophisLike& spec);
 
 /// The BMI160's data-sheet profile (docs/measured/apophis/bmi160.ini).
 std::string bmi160_profile_text();
+
+/// A rate test of the APOPHIS logs' structure: rests between +-25 deg/s turns of 3 whole
+/// revolutions about z, y and x (z up), the gyro y toggling between two levels 1.02 deg/s apart
+/// on 5 % of the readings, white noise as the log's across the turning axis (0.3 deg/s).
+ApophisLike apophis_rate_test();
+
+/// Board 1's rate test about z (8 s at rest, -z and +z at 25 deg/s for 40 s each, 15 s at rest)
+/// at the data sheet's white noise, with the BMI160 profile: turns that move no gravity.
+ApophisLike apophis_z_turns();
 
 }  // namespace sinscal::test

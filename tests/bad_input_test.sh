@@ -16,6 +16,7 @@
 # Usage: bad_input_test.sh SINSCAL_BINARY SOURCE_DIR WORK_DIR
 set -u
 bin=$(cd "$(dirname "$1")" && pwd)/$(basename "$1"); src=$(cd "$2" && pwd); work=$3
+gen=$(cd "$(dirname "$4")" && pwd)/$(basename "$4")  # tests/apophis_like_writer
 rm -rf "$work"; mkdir -p "$work/base" "$work/c"; work=$(cd "$work" && pwd)
 S() { "$bin" "$@"; }
 die() { echo "bad_input_test: setup failed: $*" >&2; exit 1; }
@@ -1014,6 +1015,26 @@ awk -F, -v OFS=, 'NR > 3 && sqrt($2*$2+$3*$3+$4*$4) > 0.005 { for (i = 2; i <= 4
 fixed 2 "rate-table fit|imu.csv: the gyros' chi2 per dof|a gyro offset while turning" rtcal
 POST='grep -q "rate-table fit" out/r.json'
 fixed 0 "" rtcal --force
+# Generated sessions of the APOPHIS logs' structure (tests/apophis_like.hpp: 12-18 Hz readings
+# without a time column, outputs toggling between two levels). A rate test whose gyro y toggles
+# slowly: the means' sigmas from their own autocorrelation, the fit's gate passes; a wrong unit
+# is refused. Turns about the vertical alone: the integrating methods cannot check the log's time.
+apnew() { new "$1"; "$gen" "$d" "$2" > /dev/null || die "apophis_like_writer $2"; }
+apcal() { S calibrate --session session.ini --out out/r.json "$@"; }
+apnew apophis-like-rate-test-control rate-test
+control 0 "" apcal --method rate-table
+apnew apophis-like-rate-test-gyro-unit rate-test; set_key "$d/session.ini" gyro_unit "rad/s"
+fixed 2 "log.csv: rate table: gyro.scale.|comes out at|not what the data show" apcal --method rate-table
+apnew apophis-like-rate-test-swapped-gyro-axes rate-test; set_key "$d/session.ini" columns "ax ay az gx gz gy"
+fixed 2 "rate table: gyro.scale.|not what the data show" apcal --method rate-table
+apnew apophis-like-cross-asymmetry-kf z-turns
+fixed 1 "--cross-asymmetry acts in --method rate-table only, not in --method kf" apcal --method kf --cross-asymmetry
+apnew apophis-like-z-turns-kf z-turns
+fixed 2 "turn timing|log.csv: the log's time cannot be checked|none of the 1 turns|--method rate-table" apcal --method kf
+apnew apophis-like-z-turns-closed-form z-turns
+fixed 2 "turn timing|log.csv: the log's time cannot be checked|--method rate-table" apcal --method closed-form
+apnew apophis-like-z-turns-rate-table z-turns
+control 0 "" apcal --method rate-table
 
 # --- issue 21: the plausibility gate without a table (filter/plausibility/rest_plausibility.hpp),
 # simulate's output directory, and the messages the probe found weak. The real recordings of

@@ -238,3 +238,74 @@ TEST_CASE("Several passes on a diverging log: a quiet pass's NaN stops the run, 
   // Never a run without a divergence whose estimates or NIS are not numbers.
   CHECK((!r.diverged.empty() || (r.model.vector().allFinite() && std::isfinite(r.nis_per_dof))));
 }
+
+namespace {
+std::string slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+RateTableResult rate_test_fit(const Session& s, bool white_means) {
+  const auto segments = rate_segments(s.plan, s.site);
+  RateTableOptions ro;
+  ro.nominal_rate_hz = s.rate_hz;
+  auto means = find_segments(read_rate_readings(s.log), segments, ro);
+  if (white_means)
+    for (auto& m : means) m.tau_omega.setOnes();
+  return rate_table_calibrate(segments, means, s.site, 0.0, ro);
+}
+}  // namespace
+
+TEST_CASE("Rate table: outputs toggling between two levels, the means' sigmas from their scatter",
+          "[rate_table][apophis][plausibility]") {
+  // The APOPHIS rate logs' gyro y toggles between two levels; a segment's mean then varies by
+  // far more than its readings' scatter over their count says. Each mean's variance comes from
+  // its own autocorrelation (an effective sample count): the fit's gate passes and every gyro
+  // coefficient is within 4 sigma of the generated truth; with white-noise sigmas it is refused.
+  const std::string dir = test::temp_dir("apophis_like_rate_test");
+  const test::ApophisLike spec = test::apophis_rate_test();
+  const Session s = Session::load(test::write_apophis_like(dir, spec));
+  const PlausibilityLimits limits = PlausibilityLimits::from_profile(nullptr);
+  const RateTableResult r = rate_test_fit(s, false);
+  std::ostringstream fits;
+  for (const auto& t : r.triad_fits)
+    fits << t.triad << " chi2 " << t.chi2 << " dof " << t.dof << "; ";
+  INFO(fits.str());
+  const PlausibilityCheck ok = check_rate_table_fit(r, limits, "log.csv");
+  INFO(ok.detail);
+  CHECK(ok.passed);
+  REQUIRE(r.triad_fits.front().dof >= 6);
+  // The truth: the generator's biases (the toggle's mean, half its step, on y), no scale,
+  // misalignment, asymmetry or g-sensitivity. The Earth rate (not generated, 13 deg/h) is below
+  // a third of the biases' sigmas here.
+  const Eigen::Vector3d bias = spec.gyro_bias + Eigen::Vector3d(0.0, 0.51, 0.0) * units::deg_per_s;
+  int checked = 0;
+  for (const auto& c : r.coefficients) {
+    if (c.name.rfind("gyro.", 0) != 0) continue;
+    const double truth = c.name.rfind("gyro.bias.", 0) == 0 ? bias(c.name.back() - 'x') : 0.0;
+    CAPTURE(c.name, c.value, c.sigma, truth);
+    CHECK(std::abs(c.value - truth) < 4.0 * c.sigma);
+    ++checked;
+  }
+  CHECK(checked >= 15);
+  // The same means with white-noise sigmas (count readings each): the gate refuses the gyros.
+  const RateTableResult white = rate_test_fit(s, true);
+  const PlausibilityCheck refused = check_rate_table_fit(white, limits, "log.csv");
+  INFO(refused.detail);
+  CHECK_FALSE(refused.passed);
+  CHECK_THAT(refused.detail, Catch::Contains("the gyros' chi2 per dof"));
+  // A wrong unit and swapped gyro columns are still refused, named.
+  const std::string text = slurp(dir + "/session.ini");
+  std::string rad = text;
+  rad.replace(rad.find("gyro_unit = deg/s"), 17, "gyro_unit = rad/s");
+  std::ofstream(dir + "/rad.ini") << rad;
+  CHECK_THROWS_WITH(rate_test_fit(Session::load(dir + "/rad.ini"), false),
+                    Catch::Contains("gyro.scale.") && Catch::Contains("comes out at"));
+  std::string swapped = text;
+  swapped.replace(swapped.find("gx gy gz"), 8, "gx gz gy");
+  std::ofstream(dir + "/swapped.ini") << swapped;
+  CHECK_THROWS_WITH(rate_test_fit(Session::load(dir + "/swapped.ini"), false),
+                    Catch::Contains("not what the data show"));
+}

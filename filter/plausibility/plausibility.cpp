@@ -514,7 +514,8 @@ PlausibilityCheck check_rate_table_fit(const RateTableResult& r, const Plausibil
             "' chi2 per dof " + number(per_dof, 3) + " over " + std::to_string(t.dof) +
             " dof (bound " + number(bound, 3) + ", its " + number(l.stage2_fit_z, 2) +
             "-sigma quantile): the segments' means do not fit the model (a segment not at its "
-            "commanded rate, a gyro offset while turning the model lacks, or noise densities "
+            "commanded rate, a gyro offset while turning the model lacks (across a turn's axis "
+            "and depending on its direction: --cross-asymmetry models it), or noise densities "
             "too small)");
   }
   return bad.check("rate-table fit");

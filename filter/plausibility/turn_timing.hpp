@@ -38,15 +38,26 @@ struct TurnTiming {
   double gravity_angle = 0.0;       // rad between the two rests' mean specific forces
   double disagreement = 0.0;        // rad: the second rest's gravity against the integrated one
   double tolerance = 0.0;           // rad: noise and the profile's sensor errors
+  /// rad: how far the integrated turn would leave gravity from where it leaves it now, were the
+  /// log's true rate kTimingProbe off the nominal one (a turn about gravity: none).
+  double probe_shift = 0.0;
   bool agrees() const { return disagreement <= tolerance; }
+  /// Whether the turn would show a time error of kTimingProbe beyond its tolerance.
+  bool judges() const { return probe_shift > tolerance; }
 };
+
+/// The relative error of the nominal rate a turn must be able to show to judge the log's time
+/// (the APOPHIS logs' 12-18 Hz about a nominal 15 Hz: up to 25 %).
+constexpr double kTimingProbe = 0.25;
 
 /// Every turn between two rests of the log (its readings at the reader's intervals: the nominal
 /// rate without a time column), in three streaming reads (memory independent of the log's
 /// length); throws LogError as the reader does.
 std::vector<TurnTiming> turn_timings(const LogFormat& log, const TurnTimingOptions& options);
 
-/// The gate's check "turn timing": fails on the first turn that disagrees, naming it.
+/// The gate's check "turn timing": fails on the first turn that disagrees, naming it; and when
+/// no turn judges the time (turns about the vertical move no gravity; long turns' tolerances are
+/// wider than what a time error moves), since the log's time then cannot be trusted.
 PlausibilityCheck check_turn_timing(const std::vector<TurnTiming>& turns, const LogFormat& log);
 
 }  // namespace sinscal

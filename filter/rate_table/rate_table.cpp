@@ -90,6 +90,12 @@ SegmentMean mean_of(const std::vector<RateReading>& r, std::size_t a, std::size_
   }
   m.var_omega /= std::max(1.0, n - 1.0);
   m.var_f /= std::max(1.0, n - 1.0);
+  std::vector<double> x(m.count);
+  for (int c = 0; c < 6; ++c) {
+    for (std::size_t k = m.first; k < m.last; ++k)
+      x[k - m.first] = c < 3 ? r[k].omega(c) : r[k].f(c - 3);
+    (c < 3 ? m.tau_omega(c) : m.tau_f(c - 3)) = autocorrelation_time(x);
+  }
   return m;
 }
 
@@ -121,8 +127,9 @@ MeanRow row_of(const RateSegment& s, const SegmentMean& m, const Eigen::Vector3d
   r.y_w = m.omega;
   r.y_f = m.f;
   // A floor far below any sensor's noise (noise-free simulations).
-  r.cov_w = (m.var_omega / n + Eigen::Vector3d::Constant(1e-20)).asDiagonal();
-  r.cov_f = (m.var_f / n + Eigen::Vector3d::Constant(1e-16)).asDiagonal();
+  r.cov_w =
+      (m.var_omega.cwiseProduct(m.tau_omega) / n + Eigen::Vector3d::Constant(1e-20)).asDiagonal();
+  r.cov_f = (m.var_f.cwiseProduct(m.tau_f) / n + Eigen::Vector3d::Constant(1e-16)).asDiagonal();
   if (s.kind == RateSegment::Kind::Static) {
     r.has_f = true;
     r.x_w = C_n_b * w_ie_n;
@@ -156,7 +163,26 @@ struct Param {
   std::function<Eigen::Matrix<double, 6, 1>(const MeanRow&)> column;
 };
 
-std::vector<Param> candidate_params(bool gyro_rates) {
+// The gyros' scale asymmetries and (with `cross`) their cross-axis asymmetries: the even part of
+// the response to each turn axis's rate.
+using AddParam =
+    std::function<void(const std::string&, int, std::function<double(const MeanRow&)>, bool)>;
+
+void add_gyro_asymmetries(bool cross, const AddParam& add) {
+  for (int i = 0; i < 3; ++i)
+    add(
+        std::string("gyro.scale_asym.") + kAxis[i], i,
+        [i](const MeanRow& r) { return std::abs(r.x_w(i)); }, true);
+  if (!cross) return;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (i != j)
+        add(
+            std::string("gyro.cross_asym.") + kAxis[i] + kAxis[j], i,
+            [j](const MeanRow& r) { return std::abs(r.x_w(j)); }, false);
+}
+
+std::vector<Param> candidate_params(bool gyro_rates, bool cross) {
   using V6 = Eigen::Matrix<double, 6, 1>;
   std::vector<Param> p;
   auto add = [&](const std::string& name, int row, std::function<double(const MeanRow&)> v,
@@ -182,6 +208,9 @@ std::vector<Param> candidate_params(bool gyro_rates) {
           add(tr + "misalignment." + kAxis[i] + kAxis[j], o + i,
               [x, j](const MeanRow& r) { return x(r)(j); });
   }
+  // The asymmetries before the g-sensitivity when the cross-axis ones are modelled: with gravity
+  // along one body axis, a g-sensitivity and the offsets while turning are one column space.
+  if (gyro_rates && cross) add_gyro_asymmetries(true, add);
   for (int i = 0; i < 3; ++i)
     add(std::string("accel.k2.") + kAxis[i], 3 + i,
         [i](const MeanRow& r) { return r.x_f(i) * r.x_f(i); });
@@ -190,9 +219,7 @@ std::vector<Param> candidate_params(bool gyro_rates) {
       add(std::string("gyro.g_sensitivity.") + kAxis[i] + kAxis[j], i,
           [j](const MeanRow& r) { return r.f_for_gyro(j); });
   if (gyro_rates) {
-    for (int i = 0; i < 3; ++i)
-      add(std::string("gyro.scale_asym.") + kAxis[i], i,
-          [i](const MeanRow& r) { return std::abs(r.x_w(i)); });
+    if (!cross) add_gyro_asymmetries(false, add);
     for (int i = 0; i < 3; ++i)
       add(
           std::string("gyro.k2.") + kAxis[i], i,
@@ -307,6 +334,33 @@ void drop_incomplete(const std::vector<Param>& params, std::vector<std::size_t>&
 
 }  // namespace
 
+double autocorrelation_time(const std::vector<double>& x) {
+  const std::size_t n = x.size();
+  if (n < 8) return 1.0;
+  double mean = 0.0;
+  for (const double v : x) mean += v;
+  mean /= static_cast<double>(n);
+  const auto autocovariance = [&](std::size_t lag) {
+    double s = 0.0;
+    for (std::size_t k = 0; k + lag < n; ++k) s += (x[k] - mean) * (x[k + lag] - mean);
+    return s / static_cast<double>(n);
+  };
+  const double c0 = autocovariance(0);
+  if (!(c0 > 0.0)) return 1.0;
+  // Pairs rho(2m - 1) + rho(2m), m = 1, 2, ..., summed while positive (Geyer's initial positive
+  // sequence), when the first is beyond 2 sigma of white noise's (each autocorrelation's sigma
+  // 1 / sqrt(n)): white noise gives 1, not 1 plus its noise's positive pairs.
+  const double noise = 2.0 * std::sqrt(2.0 / static_cast<double>(n));
+  const std::size_t max_lag = std::min<std::size_t>(n / 4, 2000);  // bounded cost
+  double tau = 1.0;
+  for (std::size_t lag = 1; lag + 1 <= max_lag; lag += 2) {
+    const double pair = (autocovariance(lag) + autocovariance(lag + 1)) / c0;
+    if (!(pair > (lag == 1 ? noise : 0.0))) break;
+    tau += 2.0 * pair;
+  }
+  return tau;
+}
+
 std::vector<RateSegment> rate_segments(const Plan& plan, const Site& site) {
   (void)site;
   std::vector<RateSegment> out;
@@ -392,7 +446,7 @@ RateTableResult rate_table_calibrate(const std::vector<RateSegment>& segments,
     commanded.push_back(row_of(segments[i], means[i], Eigen::Vector3d::Zero(), -down, options));
     ++(segments[i].kind == RateSegment::Kind::Static ? res.static_segments : res.rate_segments);
   }
-  const auto params = candidate_params(res.rate_segments > 0);
+  const auto params = candidate_params(res.rate_segments > 0, options.cross_asymmetry);
   auto keep = determined(whitened(commanded, params).A);
   drop_incomplete(params, keep);
   // A triad without coefficients has no rows (the accelerometers; the gyros keep their biases).

@@ -62,7 +62,17 @@ struct SegmentMean {
   std::size_t count = 0;
   Eigen::Vector3d omega = Eigen::Vector3d::Zero(), f = Eigen::Vector3d::Zero();          // means
   Eigen::Vector3d var_omega = Eigen::Vector3d::Zero(), var_f = Eigen::Vector3d::Zero();  // /read
+  /// Each output's integrated autocorrelation time in readings (at least 1): the mean's variance
+  /// is var * tau / count, an effective sample count count / tau. Outputs that toggle between
+  /// levels or ripple stay correlated over many readings (the APOPHIS BMI160 logs).
+  Eigen::Vector3d tau_omega = Eigen::Vector3d::Ones(), tau_f = Eigen::Vector3d::Ones();
 };
+
+/// The integrated autocorrelation time (in samples, at least 1) of `x`: 1 + 2 sum of its
+/// autocorrelations, summed in pairs (lags 2m - 1 and 2m) while a pair is positive (Geyer's
+/// initial positive sequence), when the first pair is beyond 2 sigma of white noise's (white
+/// noise: 1); lags up to a quarter of the samples and at most 2000.
+double autocorrelation_time(const std::vector<double>& x);
 
 struct RateTableOptions {
   double nominal_rate_hz = 100.0;  // readings per second, for the segments' expected lengths
@@ -73,6 +83,11 @@ struct RateTableOptions {
   double smoothing = 0.5;     // s: the detector's centred moving average (nominal readings)
   double min_fraction = 0.3;  // a run shorter than this fraction of the plan's segment: skipped
   double table_sigma = 0.0;   // rad per axis and static position (the table's attitude error)
+  /// The gyros' response to |rate| across each turn's axis (gyro.cross_asym.ij: gyro i's output
+  /// per |omega_j|, i != j; the even part of the cross-axis response, as the scale-factor
+  /// asymmetry is along it), taken with the scale asymmetries before the g-sensitivity, which a
+  /// single gravity direction cannot tell from them (calibrate --cross-asymmetry).
+  bool cross_asymmetry = false;
 };
 
 /// Finds the segments in the readings in order (the k-th run that matches the k-th segment; a
@@ -84,9 +99,10 @@ std::vector<SegmentMean> find_segments(const std::vector<RateReading>& readings,
                                        const RateTableOptions& options);
 
 struct RateCoefficient {
-  std::string name;  // catalog name (e.g. "gyro.scale.x") or rate-table only: gyro.k2.*, accel.k3.*
+  std::string name;  // catalog name (e.g. "gyro.scale.x") or rate-table only: gyro.k2.*,
+                     // gyro.cross_asym.*, accel.k3.*
   double value = 0.0, sigma = 0.0;  // SI (k2: 1/(rad/s) or 1/(m/s^2); k3 its square)
-  bool in_catalog = true;           // false: gyro.k2, accel.k3 (not in the result schema's model)
+  bool in_catalog = true;  // false: gyro.k2, gyro.cross_asym, accel.k3 (not in the schema's model)
 };
 
 struct RateTableResult {
