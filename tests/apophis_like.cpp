@@ -62,20 +62,25 @@ std::string write_apophis_like(const std::string& dir, const ApophisLike& spec) 
   const Eigen::Vector3d f_n(0.0, 0.0, -units::g0);
   std::ofstream log(dir + "/log.csv");
   log << "ax,ay,az,gx,gy,gz\n";
-  bool high = false;
+  bool high[3] = {false, false, false};
   for (double t = 0.0;; t += interval(rng)) {
     const auto k = static_cast<std::size_t>(t / kStep);
     if (k >= truth.omega_b.size()) break;
     Eigen::Vector3d w = truth.omega_b[k] + gyro_bias, f = truth.C_b_n[k].transpose() * f_n;
+    w += spec.gyro_cross_asym * truth.omega_b[k].cwiseAbs();
     f += accel_bias;
     for (int i = 0; i < 3; ++i) {
       w(i) += gyro_white * unit(rng);
       f(i) += accel_white * unit(rng);
     }
     if (spec.toggling) {
-      if (flip(rng)) high = !high;
-      w.y() += high ? 1.02 * units::deg_per_s : 0.0;
-      f.y() += high ? 0.018 * units::g0 : 0.0;
+      // The y level's draw first (the sequence of the default spec), then x's and z's if they
+      // toggle.
+      if (flip(rng)) high[1] = !high[1];
+      for (const int i : {0, 2})
+        if (spec.gyro_toggle(i) != 0.0 && flip(rng)) high[i] = !high[i];
+      for (int i = 0; i < 3; ++i) w(i) += high[i] ? spec.gyro_toggle(i) : 0.0;
+      f.y() += high[1] ? 0.018 * units::g0 : 0.0;
     }
     char line[200];
     std::snprintf(line, sizeof line, "%.7f,%.7f,%.7f,%.6f,%.6f,%.6f\n", f.x() / units::g0,
@@ -109,9 +114,9 @@ namespace {
 const char* const kRateTestPlan =
     "[plan]\nname = apophis-like-rate-test\ntype = rotations\nconvention = ned-frd\n"
     "rotation_acceleration = 25 deg/s^2\n\n[site]\nlatitude = 28.6 deg\n\n"
-    "[start]\nheading = 0 deg\npitch = 0 deg\nroll = 180 deg\ndwell = 10 s\n\n"
+    "[start]\nheading = 0 deg\npitch = 0 deg\nroll = 180 deg\ndwell = 30 s\n\n"
     "[rotations]\naxes = -z +z +y -y -x +x\nrate = 25 deg/s\nrevolutions = 3\n"
-    "pauses = 0 10 0 10 0 10 s\n";
+    "pauses = 0 30 0 30 0 30 s\n";
 
 const char* const kZTurnsPlan =
     "[plan]\nname = apophis-like-rate\ntype = rotations\nconvention = ned-frd\n"
@@ -124,17 +129,18 @@ ApophisLike apophis_rate_test() {
   ApophisLike spec;
   const double rate = 25.0 * units::deg_per_s, accel = 25.0 * units::deg_per_s;
   const double hold = 3.0 * 2.0 * M_PI / rate - rate / accel;
-  spec.phases.push_back(rest_phase(10.0));
+  spec.phases.push_back(rest_phase(30.0));
   const Eigen::Vector3d z = Eigen::Vector3d::UnitZ(), y = Eigen::Vector3d::UnitY(),
                         x = Eigen::Vector3d::UnitX();
   for (const Eigen::Vector3d& a :
        {Eigen::Vector3d(-z), z, y, Eigen::Vector3d(-y), Eigen::Vector3d(-x), x}) {
     spec.phases.push_back(turn_phase(a, rate, accel, hold));
-    if (a == z || a == -y || a == x) spec.phases.push_back(rest_phase(10.0));
+    if (a == z || a == -y || a == x) spec.phases.push_back(rest_phase(30.0));
   }
-  // Runs of 20 readings on average at one level: the means' effective sample count is about a
-  // nineteenth of their readings.
-  spec.toggle_flip = 0.05;
+  // Every gyro toggles (each its own level), runs of 10 readings on average at one level: the
+  // means' autocorrelation time is about 7 readings (segments of 400-600 readings).
+  spec.gyro_toggle.setConstant(1.02 * units::deg_per_s);
+  spec.toggle_flip = 0.1;
   spec.gyro_white = 0.3 * units::deg_per_s;
   spec.plan_text = kRateTestPlan;
   spec.seed = 3;

@@ -40,11 +40,17 @@ struct ApophisLike {
   double min_hz = 12.0, max_hz = 18.0;  // the readings' true rate: uniform in the interval
   bool toggling = true;                 // two-level gyro y and accel y outputs, as the log's
   double toggle_flip = 0.3;  // probability per reading that the two-level outputs switch level
+  /// Each gyro's toggle step (rad/s; the log's: gyro y 1.02 deg/s), each axis its own level; the
+  /// accelerometer y switches with the gyro y.
+  Eigen::Vector3d gyro_toggle = Eigen::Vector3d(0.0, 1.02, 0.0) * (M_PI / 180.0);
   double gyro_white = 0.0;   // rad/s per reading (0: as the log's, 0.05 deg/s)
   double accel_white = 0.0;  // m/s^2 per reading (0: as the log's, 1 mg)
   /// The sensors' biases (rad/s, m/s^2; the log's size by default).
   Eigen::Vector3d gyro_bias = Eigen::Vector3d(-1.27, 0.38, -1.15) * (M_PI / 180.0);
   Eigen::Vector3d accel_bias = Eigen::Vector3d(-0.03, 0.05, -0.02) * 9.80665;
+  /// Gyro i's output per |rate| about body axis j (i != j): an offset while turning across the
+  /// axis that depends on the turn's direction, as the APOPHIS rate logs show (0: none).
+  Eigen::Matrix3d gyro_cross_asym = Eigen::Matrix3d::Zero();
   unsigned seed = 1;
   std::string plan_text;    // plan.ini
   std::string sensor_text;  // sensor.ini (empty: none in the session)
@@ -56,9 +62,10 @@ std::string write_apophis_like(const std::string& dir, const ApophisLike& spec);
 /// The BMI160's data-sheet profile (docs/measured/apophis/bmi160.ini).
 std::string bmi160_profile_text();
 
-/// A rate test of the APOPHIS logs' structure: rests between +-25 deg/s turns of 3 whole
-/// revolutions about z, y and x (z up), the gyro y toggling between two levels 1.02 deg/s apart
-/// on 5 % of the readings, white noise as the log's across the turning axis (0.3 deg/s).
+/// A rate test of the APOPHIS logs' structure: 30 s rests between +-25 deg/s turns of 3 whole
+/// revolutions about z, y and x (z up), every gyro toggling between two levels 1.02 deg/s apart
+/// (each switching on 10 % of the readings), white noise as the log's across the turning axis
+/// (0.3 deg/s).
 ApophisLike apophis_rate_test();
 
 /// Board 1's rate test about z (8 s at rest, -z and +z at 25 deg/s for 40 s each, 15 s at rest)

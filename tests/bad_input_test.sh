@@ -1024,9 +1024,9 @@ apcal() { S calibrate --session session.ini --out out/r.json "$@"; }
 apnew apophis-like-rate-test-control rate-test
 control 0 "" apcal --method rate-table
 apnew apophis-like-rate-test-gyro-unit rate-test; set_key "$d/session.ini" gyro_unit "rad/s"
-fixed 2 "log.csv: rate table: gyro.scale.|comes out at|not what the data show" apcal --method rate-table
+fixed 2 "log.csv: segment 1 (start) not found in the log|no run of readings at its rest" apcal --method rate-table
 apnew apophis-like-rate-test-swapped-gyro-axes rate-test; set_key "$d/session.ini" columns "ax ay az gx gz gy"
-fixed 2 "rate table: gyro.scale.|not what the data show" apcal --method rate-table
+fixed 2 "log.csv: segment|not found in the log|rate of 25" apcal --method rate-table
 apnew apophis-like-cross-asymmetry-kf z-turns
 fixed 1 "--cross-asymmetry acts in --method rate-table only, not in --method kf" apcal --method kf --cross-asymmetry
 apnew apophis-like-z-turns-kf z-turns

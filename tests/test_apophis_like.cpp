@@ -261,9 +261,11 @@ RateTableResult rate_test_fit(const Session& s, bool white_means) {
 TEST_CASE("Rate table: outputs toggling between two levels, the means' sigmas from their scatter",
           "[rate_table][apophis][plausibility]") {
   // The APOPHIS rate logs' gyro y toggles between two levels; a segment's mean then varies by
-  // far more than its readings' scatter over their count says. Each mean's variance comes from
-  // its own autocorrelation (an effective sample count): the fit's gate passes and every gyro
-  // coefficient is within 4 sigma of the generated truth; with white-noise sigmas it is refused.
+  // far more than its readings' scatter over their count says. Generated: every gyro toggles
+  // (runs of 10 readings). Each mean's variance comes from its own autocorrelation (an effective
+  // sample count): the fit's gate passes and every gyro coefficient is within 4 sigma of the
+  // generated truth; with white-noise sigmas it is refused. A wrong unit and swapped gyro
+  // columns are refused (their segments are not in the log).
   const std::string dir = test::temp_dir("apophis_like_rate_test");
   const test::ApophisLike spec = test::apophis_rate_test();
   const Session s = Session::load(test::write_apophis_like(dir, spec));
@@ -277,10 +279,10 @@ TEST_CASE("Rate table: outputs toggling between two levels, the means' sigmas fr
   INFO(ok.detail);
   CHECK(ok.passed);
   REQUIRE(r.triad_fits.front().dof >= 6);
-  // The truth: the generator's biases (the toggle's mean, half its step, on y), no scale,
+  // The truth: the generator's biases (plus the toggles' mean, half their step), no scale,
   // misalignment, asymmetry or g-sensitivity. The Earth rate (not generated, 13 deg/h) is below
   // a third of the biases' sigmas here.
-  const Eigen::Vector3d bias = spec.gyro_bias + Eigen::Vector3d(0.0, 0.51, 0.0) * units::deg_per_s;
+  const Eigen::Vector3d bias = spec.gyro_bias + 0.5 * spec.gyro_toggle;
   int checked = 0;
   for (const auto& c : r.coefficients) {
     if (c.name.rfind("gyro.", 0) != 0) continue;
@@ -302,10 +304,54 @@ TEST_CASE("Rate table: outputs toggling between two levels, the means' sigmas fr
   rad.replace(rad.find("gyro_unit = deg/s"), 17, "gyro_unit = rad/s");
   std::ofstream(dir + "/rad.ini") << rad;
   CHECK_THROWS_WITH(rate_test_fit(Session::load(dir + "/rad.ini"), false),
-                    Catch::Contains("gyro.scale.") && Catch::Contains("comes out at"));
+                    Catch::Contains("segment 1 (start) not found in the log"));
   std::string swapped = text;
   swapped.replace(swapped.find("gx gy gz"), 8, "gx gz gy");
   std::ofstream(dir + "/swapped.ini") << swapped;
   CHECK_THROWS_WITH(rate_test_fit(Session::load(dir + "/swapped.ini"), false),
-                    Catch::Contains("not what the data show"));
+                    Catch::Contains("not found in the log") && Catch::Contains("rate of 25"));
+}
+
+TEST_CASE("Rate table: gyro offsets while turning across the axis (--cross-asymmetry)",
+          "[rate_table][apophis][plausibility]") {
+  // The APOPHIS rate logs' gyros: turning about z, gyro x reads 0.5-1.6 deg/s off its rest offset,
+  // by an amount that depends on the turn's direction (its even part). Generated: gyro x 3 % of
+  // |omega_z|, gyro z -2 % of |omega_x| (white noise, no toggling). Without the cross-axis
+  // asymmetry the gate refuses the gyros; with it the gate passes and each coefficient is within
+  // 4 sigma of the generated value.
+  test::ApophisLike spec = test::apophis_rate_test();
+  spec.toggling = false;
+  spec.gyro_cross_asym(0, 2) = 0.03;
+  spec.gyro_cross_asym(2, 0) = -0.02;
+  const std::string dir = test::temp_dir("apophis_like_cross_asym");
+  const Session s = Session::load(test::write_apophis_like(dir, spec));
+  const auto segments = rate_segments(s.plan, s.site);
+  RateTableOptions ro;
+  ro.nominal_rate_hz = s.rate_hz;
+  const auto means = find_segments(read_rate_readings(s.log), segments, ro);
+  const PlausibilityLimits limits = PlausibilityLimits::from_profile(nullptr);
+  const PlausibilityCheck without = check_rate_table_fit(
+      rate_table_calibrate(segments, means, s.site, 0.0, ro), limits, "log.csv");
+  INFO(without.detail);
+  CHECK_FALSE(without.passed);
+  CHECK_THAT(without.detail, Catch::Contains("--cross-asymmetry"));
+  ro.cross_asymmetry = true;
+  const RateTableResult r = rate_table_calibrate(segments, means, s.site, 0.0, ro);
+  const PlausibilityCheck with = check_rate_table_fit(r, limits, "log.csv");
+  INFO(with.detail);
+  CHECK(with.passed);
+  REQUIRE(r.triad_fits.front().dof >= 3);
+  int cross = 0;
+  for (const auto& c : r.coefficients) {
+    if (c.name.rfind("gyro.cross_asym.", 0) != 0 && c.name.rfind("gyro.scale", 0) != 0 &&
+        c.name.rfind("gyro.misalignment.", 0) != 0)
+      continue;
+    const double truth = c.name == "gyro.cross_asym.xz"   ? 0.03
+                         : c.name == "gyro.cross_asym.zx" ? -0.02
+                                                          : 0.0;
+    CAPTURE(c.name, c.value, c.sigma, truth);
+    CHECK(std::abs(c.value - truth) < 4.0 * c.sigma);
+    cross += c.name.rfind("gyro.cross_asym.", 0) == 0 ? 1 : 0;
+  }
+  CHECK(cross == 6);
 }

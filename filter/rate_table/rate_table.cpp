@@ -69,8 +69,27 @@ bool matches(const Eigen::Vector3d& w, const RateSegment& s, const RateTableOpti
   return (w - s.rate * s.axis_b).norm() < o.static_threshold + o.rate_tolerance * s.rate;
 }
 
+// `x` less its least-squares fit by a constant and a sinusoid of `step` rad per sample: what
+// turns with the body in a rate segment (the Earth rate and gravity across the axis) is a known
+// input, not noise, and would otherwise show as a long autocorrelation.
+std::vector<double> without_turning_part(std::vector<double> x, double step) {
+  if (!(step > 0.0)) return x;
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(x.size()), 3);
+  for (Eigen::Index k = 0; k < A.rows(); ++k) {
+    const double phase = step * static_cast<double>(k);
+    A.row(k) << 1.0, std::cos(phase), std::sin(phase);
+  }
+  const Eigen::Map<const Eigen::VectorXd> y(x.data(), static_cast<Eigen::Index>(x.size()));
+  const Eigen::Vector3d c = (A.transpose() * A).ldlt().solve(A.transpose() * y);
+  const Eigen::VectorXd residual = y - A * c;
+  for (std::size_t k = 0; k < x.size(); ++k) x[k] = residual(static_cast<Eigen::Index>(k));
+  return x;
+}
+
+// The segment's readings [a, b) trimmed by `trim` and 5 % at both ends: means, variances and
+// autocorrelation times (of the readings less what turns with the body at `step` rad per reading).
 SegmentMean mean_of(const std::vector<RateReading>& r, std::size_t a, std::size_t b,
-                    std::size_t trim) {
+                    std::size_t trim, double step) {
   const std::size_t cut = std::max(trim, (b - a) / 20);
   SegmentMean m;
   m.first = a + cut;
@@ -94,7 +113,7 @@ SegmentMean mean_of(const std::vector<RateReading>& r, std::size_t a, std::size_
   for (int c = 0; c < 6; ++c) {
     for (std::size_t k = m.first; k < m.last; ++k)
       x[k - m.first] = c < 3 ? r[k].omega(c) : r[k].f(c - 3);
-    (c < 3 ? m.tau_omega(c) : m.tau_f(c - 3)) = autocorrelation_time(x);
+    (c < 3 ? m.tau_omega(c) : m.tau_f(c - 3)) = autocorrelation_time(without_turning_part(x, step));
   }
   return m;
 }
@@ -126,10 +145,17 @@ MeanRow row_of(const RateSegment& s, const SegmentMean& m, const Eigen::Vector3d
   const double n = static_cast<double>(m.count);
   r.y_w = m.omega;
   r.y_f = m.f;
+  // The mean's variance: var tau / n, the readings' variance about their own mean corrected by
+  // (n - 1) / (n - tau) for what the mean took out of it (n / tau: the effective sample count).
   // A floor far below any sensor's noise (noise-free simulations).
-  r.cov_w =
-      (m.var_omega.cwiseProduct(m.tau_omega) / n + Eigen::Vector3d::Constant(1e-20)).asDiagonal();
-  r.cov_f = (m.var_f.cwiseProduct(m.tau_f) / n + Eigen::Vector3d::Constant(1e-16)).asDiagonal();
+  const auto of_mean = [n](const Eigen::Vector3d& var, const Eigen::Vector3d& tau) {
+    Eigen::Vector3d v;
+    for (int i = 0; i < 3; ++i)
+      v(i) = var(i) * tau(i) * (n - 1.0) / (n * std::max(1.0, n - tau(i)));
+    return v;
+  };
+  r.cov_w = (of_mean(m.var_omega, m.tau_omega) + Eigen::Vector3d::Constant(1e-20)).asDiagonal();
+  r.cov_f = (of_mean(m.var_f, m.tau_f) + Eigen::Vector3d::Constant(1e-16)).asDiagonal();
   if (s.kind == RateSegment::Kind::Static) {
     r.has_f = true;
     r.x_w = C_n_b * w_ie_n;
@@ -411,7 +437,9 @@ std::vector<SegmentMean> find_segments(const std::vector<RateReading>& readings,
     open = false;
     const double want = segments[p].duration * o.nominal_rate_hz * o.min_fraction;
     if (static_cast<double>(k - start) < std::max(want, 3.0 * static_cast<double>(w))) continue;
-    out.push_back(mean_of(readings, start, k, w));
+    const double step =
+        segments[p].kind == RateSegment::Kind::Rate ? segments[p].rate / o.nominal_rate_hz : 0.0;
+    out.push_back(mean_of(readings, start, k, w, step));
     ++p;
     if (k < readings.size()) --k;  // this reading may begin the next segment
   }
