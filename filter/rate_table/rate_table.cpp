@@ -451,7 +451,7 @@ std::vector<SegmentMean> find_segments(const std::vector<RateReading>& readings,
         (segments[p].kind == RateSegment::Kind::Static
              ? std::string("rest")
              : "rate of " + std::to_string(segments[p].rate / units::deg) + " deg/s") +
-        " long enough (the plan's order, rates and durations)");
+        " long enough (the plan's order, rates and durations, or the log's gyro unit or axes)");
   return out;
 }
 
