@@ -352,6 +352,7 @@ int design_optimize(const DesignCliOptions& o) {
     const SearchProgress progress(work_bound);
     return search_plan(ko, table, reference.site, SearchSpace{}, so);
   }();
+  const std::string moves_text = structure_text(r);  // before the annealing changes the origin
   const std::optional<AnnealReport> annealed = annealed_result(r, o, ko, table, reference.site, so);
   const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
   // A plan that misses a target is not written as the optimized plan.
@@ -365,8 +366,7 @@ int design_optimize(const DesignCliOptions& o) {
       "Searched rotation plans on %s: %d covariance passes, %.1f s CPU; %.1f s before "
       "refinement, %.1f s after.\n\n",
       table.name.c_str(), r.evaluations, cpu, r.duration_before_refinement, p.duration);
-  if (!r.structure.empty() || r.structure_evaluations > 0)
-    std::printf("%s", structure_text(r).c_str());
+  if (!r.structure.empty() || r.structure_evaluations > 0) std::printf("%s", moves_text.c_str());
   if (annealed) std::printf("%s", anneal_text(*annealed, r).c_str());
   if (r.origin != "beam" && r.origin != "structure moves" && r.origin != "annealing")
     std::printf(
