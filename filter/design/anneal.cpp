@@ -54,7 +54,7 @@ struct Annealer {
     return fitted(structure_proposal(g), budget, min_dwell, table, site);
   }
   Excess scored(const PlanGenome& g) {
-    const Excess e = score(g);
+    Excess e = score(g);
     ++r.evaluations;
     if (e.worst_ratio < r.excess.worst_ratio) {
       r.genome = g;
