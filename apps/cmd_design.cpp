@@ -116,16 +116,19 @@ void check_design_options(const DesignCliOptions& o, const po::variables_map& vm
   if (!(o.beam >= 1 && o.beam <= 64)) throw UsageError("--beam must be within 1 and 64");
   if (!(o.structure_moves >= 0 && o.structure_moves <= 100000))
     throw UsageError("--structure-moves must be within 0 and 100000 passes");
+  if (!(o.anneal >= 0 && o.anneal <= 1000000))
+    throw UsageError("--anneal must be within 0 and 1000000 iterations");
   if (o.robustness != 0 && !(o.robustness >= 2 && o.robustness <= 1000))
     throw UsageError("--robustness must be within 2 and 1000 seeds");
   if (o.optimize && (o.table.empty() || o.out.empty()))
     throw UsageError("--optimize needs --table (the limits to search within) and --out");
   auto given = [&](const char* key) { return vm.count(key) && !vm[key].defaulted(); };
-  if (!o.optimize && (given("budget-s") || given("compare") || given("targets") || given("beam") ||
-                      given("search-rate") || given("require") || given("structure-moves")))
+  if (!o.optimize &&
+      (given("budget-s") || given("compare") || given("targets") || given("beam") ||
+       given("search-rate") || given("require") || given("structure-moves") || given("anneal")))
     throw UsageError(
-        "--budget-s, --compare, --targets, --require, --beam, --search-rate and "
-        "--structure-moves belong to --optimize");
+        "--budget-s, --compare, --targets, --require, --beam, --search-rate, "
+        "--structure-moves and --anneal belong to --optimize");
   if (given("targets") && o.targets.find_first_not_of(" \t;") == std::string::npos)
     throw UsageError("--targets is empty: give \"family = value unit; ...\" or a file");
 }
@@ -223,6 +226,9 @@ int cmd_design(const std::vector<std::string>& args) {
       ("structure-moves", po::value(&o.structure_moves)->default_value(2000),
        "--optimize with --budget-s: covariance passes the structure moves may spend (turns "
        "split, inserted, removed, changed; 0: none)")
+      ("anneal", po::value(&o.anneal)->default_value(0),
+       "--optimize with --budget-s: iterations of simulated annealing over the same moves from "
+       "the search's plan (about one covariance pass each; 0: none)")
       ("search-rate", po::value(&o.search_rate_hz)->default_value(20.0),
        "--optimize: ideal IMU rate of the search's passes [Hz] (the result is confirmed at "
        "--rate)");

@@ -24,7 +24,8 @@ struct DesignCliOptions {
   double budget_s = 0.0, search_rate_hz = 20.0;
   int beam = 4;
   int structure_moves = 2000;  // --optimize with a budget: passes of the structure moves (0: none)
-  int robustness = 0;          // seeds per perturbation (0: none)
+  int anneal = 0;      // --optimize with a budget: iterations of the simulated annealing (0: none)
+  int robustness = 0;  // seeds per perturbation (0: none)
 };
 
 /// The options `calibrate --method kf` would run a session with, from the profile and table.

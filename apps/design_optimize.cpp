@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "apps/design.hpp"
+#include "filter/design/anneal.hpp"
 #include "filter/design/bound.hpp"
 #include "filter/design/search.hpp"
 #include "models/coefficient_families.hpp"
@@ -250,6 +251,48 @@ class SearchProgress {
   std::thread thread_;
 };
 
+// --anneal: the annealing from the search's plan (filter/design/anneal.hpp) and its CPU time.
+struct AnnealReport {
+  AnnealResult result;
+  int iterations = 0;
+  double cpu_s = 0.0;
+};
+
+std::optional<AnnealReport> annealed_result(SearchResult& r, const DesignCliOptions& o,
+                                            const CalibratorOptions& ko, const TableSpec& table,
+                                            const Site& site, const SearchOptions& so) {
+  if (o.anneal <= 0 || !(so.budget_s > 0.0)) return std::nullopt;
+  AnnealOptions a;
+  a.iterations = o.anneal;
+  const std::clock_t c0 = std::clock();
+  const SearchProgress progress("annealing, " + std::to_string(o.anneal) + " iterations");
+  const auto result = anneal_search_result(r, ko, table, site, so, a);
+  if (!result) return std::nullopt;
+  return AnnealReport{*result, o.anneal, static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC};
+}
+
+std::string anneal_text(const AnnealReport& a, const SearchResult& r) {
+  return "Simulated annealing (" + std::to_string(a.iterations) + " iterations, " +
+         std::to_string(a.result.evaluations) + " covariance passes, " + fmt("%.1f", a.cpu_s) +
+         " s CPU): worst sigma/target " + fmt("%.4f", a.result.start.worst_ratio) + " -> " +
+         fmt("%.4f", a.result.excess.worst_ratio) + " (" + a.result.excess.worst_family + "), " +
+         std::to_string(a.result.accepted) + " moves taken (" +
+         std::to_string(a.result.accepted_worse) + " worse)" +
+         (r.origin == "annealing" ? "; its plan is the best within the budget.\n\n"
+                                  : "; none better than the plan before it.\n\n");
+}
+
+nlohmann::ordered_json anneal_json(const AnnealReport& a) {
+  return {{"iterations", a.iterations},
+          {"evaluations", a.result.evaluations},
+          {"cpu_s", a.cpu_s},
+          {"start_worst_ratio", a.result.start.worst_ratio},
+          {"worst_ratio", a.result.excess.worst_ratio},
+          {"worst_family", a.result.excess.worst_family},
+          {"accepted", a.result.accepted},
+          {"accepted_worse", a.result.accepted_worse}};
+}
+
 }  // namespace
 
 int design_optimize(const DesignCliOptions& o) {
@@ -305,10 +348,12 @@ int design_optimize(const DesignCliOptions& o) {
   std::printf("Searching the shortest plan that meets the targets: %s\n", work_bound.c_str());
   std::fflush(stdout);
   const std::clock_t c0 = std::clock();
-  const SearchResult r = [&] {
+  SearchResult r = [&] {
     const SearchProgress progress(work_bound);
     return search_plan(ko, table, reference.site, SearchSpace{}, so);
   }();
+  const std::string moves_text = structure_text(r);  // before the annealing changes the origin
+  const std::optional<AnnealReport> annealed = annealed_result(r, o, ko, table, reference.site, so);
   const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
   // A plan that misses a target is not written as the optimized plan.
   const std::string written = r.meets ? plan_path : o.out + "/best_unmet.ini";
@@ -321,9 +366,9 @@ int design_optimize(const DesignCliOptions& o) {
       "Searched rotation plans on %s: %d covariance passes, %.1f s CPU; %.1f s before "
       "refinement, %.1f s after.\n\n",
       table.name.c_str(), r.evaluations, cpu, r.duration_before_refinement, p.duration);
-  if (!r.structure.empty() || r.structure_evaluations > 0)
-    std::printf("%s", structure_text(r).c_str());
-  if (r.origin != "beam" && r.origin != "structure moves")
+  if (!r.structure.empty() || r.structure_evaluations > 0) std::printf("%s", moves_text.c_str());
+  if (annealed) std::printf("%s", anneal_text(*annealed, r).c_str());
+  if (r.origin != "beam" && r.origin != "structure moves" && r.origin != "annealing")
     std::printf(
         "The best plan within the budget is %s, a given plan as it is or with its dwells "
         "scaled: better than the beam's on the worst sigma/target.\n\n",
@@ -346,6 +391,7 @@ int design_optimize(const DesignCliOptions& o) {
         so.budget_s > 0.0 ? " within the budget" : " within the search's limit",
         r.excess.worst_family.c_str(), r.excess.worst_ratio);
   nlohmann::ordered_json extra = search_json(r, so, cpu, rows);
+  if (annealed) extra["search"]["annealing"] = anneal_json(*annealed);
   if (bound) extra["bound"] = bound_json(*bound, rows.front().excess);
   if (!o.require.empty()) {
     std::cout << required_table(o.require, p, so.targets);

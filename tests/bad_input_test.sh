@@ -1264,6 +1264,10 @@ new design-structure-moves-negative; cp "$tab" "$d/table.ini"
 fixed 1 "--structure-moves must be within 0 and 100000 passes" dz --optimize --out out/o --budget-s 300 --structure-moves -1
 new design-structure-moves-without-optimize; cp "$tab" "$d/table.ini"
 fixed 1 "belong to --optimize" dz --structure-moves 10
+new design-anneal-negative; cp "$tab" "$d/table.ini"
+fixed 1 "--anneal must be within 0 and 1000000 iterations" dz --optimize --out out/o --budget-s 300 --anneal -1
+new design-anneal-without-optimize; cp "$tab" "$d/table.ini"
+fixed 1 "belong to --optimize" dz --anneal 10
 new design-targets-missing-file; cp "$tab" "$d/table.ini"
 fixed 1 "--targets /nonexistent/targets.ini: no such file" dz --optimize --out out/o --targets /nonexistent/targets.ini
 # No output overwrites an input, the calibration's own inputs included (resolved through links).

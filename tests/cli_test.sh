@@ -341,6 +341,18 @@ check "simulate runs the plan of the structure moves" test $? -eq 0
 "$bin" calibrate --session "$work/moves/session/session.ini" --method kf --out "$work/moves/result.json" > /dev/null
 check "calibrate runs the plan of the structure moves" test $? -eq 0
 
+# design --optimize --anneal: simulated annealing after the structure moves; its account in
+# design.json, never worse than its start; the plan written runs through simulate.
+"$bin" design --optimize --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog-extended.ini" \
+  --table "$src/config/tables/two-axis-20.ini" --targets "gyro.scale = 0.5 ppm; accel.scale = 0.5 ppm; accel.misalignment = 0.3 arcsec" \
+  --search-rate 10 --beam 1 --budget-s 150 --structure-moves 10 --anneal 30 --out "$work/anneal" > "$work/anneal.txt"
+check "design --optimize --anneal exits 0 or 5" test $? -eq 0 -o $? -eq 5
+check "... accounts for it in design.json" python3 -c "import json,sys; a=json.load(open('$work/anneal/design.json'))['search']['annealing']; sys.exit(not (a['iterations'] == 30 and 0 < a['evaluations'] <= 31 and a['worst_ratio'] <= a['start_worst_ratio']))"
+check "... prints it" grep -qE '^Simulated annealing \(30 iterations, [0-9]+ covariance passes' "$work/anneal.txt"
+annealed=$(ls "$work/anneal/optimized.ini" "$work/anneal/best_unmet.ini" 2> /dev/null | head -1)
+"$bin" simulate --plan "$annealed" --sensor "$src/config/sensors/nav-fog-extended.ini" --out "$work/anneal/session" --rate 20 --seed 5 > /dev/null
+check "simulate runs the annealed plan" test $? -eq 0
+
 # design --optimize --require: the shortest plan that determines the lever arms (they show only in
 # turns), confirmed observed by the final pass.
 "$bin" design --optimize --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog-extended.ini" \
