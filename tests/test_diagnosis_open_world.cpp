@@ -21,6 +21,9 @@ using namespace sinscal::test;
 namespace {
 
 constexpr double kOpenWorldRate = 20.0;  // Hz, as the diagnosis matrix
+// The rot19 accelerometer product at half the matrix's size: about 8 library sigmas in the
+// turns' velocity rows (105 +- 6.3 ug/g^2 at its size, seed 9000).
+constexpr double kAccelTurnScale = 0.5;
 
 struct OpenWorldScore {
   int seeds = 0, wrong_first = 0, unexplained = 0, quiet = 0, errors = 0;
@@ -242,4 +245,36 @@ TEST_CASE("Open world: turns at two rates tell omega_y^2 from the gyro scale asy
   CHECK(a.false_names.empty());
   CHECK(a.magnitudes_checked > 0);
   CHECK(a.worst_sigma < 3.0);
+}
+
+// The accelerometers' velocity over each turn (the library's turns rows: the specific force
+// rotated to NED from the dwell's known attitude, from rest to rest). An accelerometer product
+// f_y f_z is zero on every rot19 dwell (each has one body axis vertical), so only the turns can
+// find it: at half the matrix's size (about 8 library sigmas) it is unexplained
+// with its term within 3 sigma, and no catalog family is named first. A sign of the velocity
+// rows' accelerometer columns flipped finds the term at minus its value (red); a clean session's
+// turns hold their noise model (the velocity rows' covariance: the table's attitude times
+// gravity over the turn, the velocity random walk).
+TEST_CASE("Open world: the accelerometers' velocity over the turns finds a product",
+          "[diagnosis][open_world][accel_turns][long]") {
+  const std::size_t effect = 0;  // accel x += 100 ug/g^2 f_y f_z
+  const OpenWorldEffect e = open_world_effects(0.0)[effect];
+  const HiddenCase c =
+      open_world_case("rot19.ini", "nav-fog.ini", effect, 77, kOpenWorldRate, kAccelTurnScale);
+  const DiagnosisOutcome o = diagnose_hidden(c, {});
+  std::string terms;
+  if (o.result.unexplained.library)
+    for (const auto& t : o.result.unexplained.library->terms) terms += t.text() + "; ";
+  INFO("rot19 f_y f_z x" << kAccelTurnScale << ": " << o.story << " | library: " << terms);
+  for (const auto& f : o.result.findings) CHECK(is_pair_with(f, e));
+  CHECK(o.result.unexplained.present);
+  CHECK(score_terms(o.result, e, kAccelTurnScale) == 1);
+
+  for (const char* plan : {"rot19.ini", "seed8.ini"}) {
+    const HiddenCase clean = hidden_case("clean", plan, "nav-fog.ini", {}, 77, kOpenWorldRate);
+    const DiagnosisOutcome q = diagnose_hidden(clean, {});
+    INFO(plan << " clean: " << q.story);
+    CHECK(q.result.findings.empty());
+    CHECK_FALSE(q.result.unexplained.present);
+  }
 }
