@@ -118,8 +118,8 @@ inline std::vector<OpenWorldEffect> open_world_effects(double mid_s) {
                "omega_x |omega_x|", 3000.0 * units::deg_per_s});
   e.push_back(
       {"accel y += 20 ug sin(2 pi t / 29 s)",
-       [ug](double t, auto& f, auto&) { f(1) += 20.0 * ug * std::sin(2.0 * M_PI * t / 29.0); }, "",
-       0, "", 0.0});
+       [ug](double t, auto& f, auto&) { f(1) += 20.0 * ug * std::sin(2.0 * M_PI * t / 29.0); },
+       "accel", 1, "sin(2 pi t / 29 s)", 20.0});  // rot19's cycle (the library's period there)
   e.push_back({"gyro z bias step 0.1 deg/h at mid-session",
                [dph, mid_s](double t, auto&, auto& w) {
                  if (t > mid_s) w(2) += 0.1 * dph;

@@ -171,7 +171,9 @@ TEST_CASE("Open world: out-of-catalog effects on rot19 and seed8, measured",
 // CI: one seed of six cells of the matrix (seeds outside the measured ones). An anisoelastic
 // gyro term on seed8 and a gyro g^2 term on rot19 are found by the library within 3 sigma (a
 // sign or a column wrong turns them red); a cross-axis accelerometer product on seed8 (named
-// time_delay before issue 33) names no catalog family and is reported unexplained. The seed8 g^2
+// time_delay before issue 33) names no catalog family and is reported unexplained, with its term
+// within 3 sigma (the turns' velocity rows tell it from its alias on seed8's dwells, accel z
+// f_x f_y: 11 of 30 before them, 30 of 30 with them). The seed8 g^2
 // term (named gyro.bias_drift before the held-out test) and a gyro bias step half-way on rot19
 // (named gyro.bias_drift on 22 of 30) name no family: the held-out dwells and the library's
 // contest refuse the drift, and the library reports the term within 3 sigma (measured 10 of 10
@@ -190,7 +192,7 @@ TEST_CASE("Open world: out-of-catalog effects are unexplained, or their library 
     bool catalog;  // a catalog family may be named, with the effect's term as its alternative
   };
   for (const Case& k : {Case{"seed8.ini", 5, true, false}, Case{"rot19.ini", 1, true, false},
-                        Case{"seed8.ini", 0, false, false}, Case{"rot19.ini", 6, true, true},
+                        Case{"seed8.ini", 0, true, false}, Case{"rot19.ini", 6, true, true},
                         Case{"seed8.ini", 1, true, false}, Case{"rot19.ini", 4, true, false}}) {
     const OpenWorldEffect e = open_world_effects(0.0)[k.effect];
     const HiddenCase c = open_world_case(k.plan, "nav-fog.ini", k.effect, 77, kOpenWorldRate);
