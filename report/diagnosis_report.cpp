@@ -114,7 +114,11 @@ void add_verdict(json& j, const TableDiagnosis& d) {
                                               {"chi2", lib->turns_chi2},
                                               {"dof", lib->turns_dof},
                                               {"quantile", lib->turns_quantile},
-                                              {"rejects", lib->turns_reject}};
+                                              {"rejects", lib->turns_reject},
+                                              {"term", lib->turns_term},
+                                              {"term_z2", lib->turns_term_z2},
+                                              {"term_quantile", lib->turns_term_quantile},
+                                              {"term_rejects", lib->turns_term_reject}};
   }
   j["stops"] = d.stops;
 }

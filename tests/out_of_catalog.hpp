@@ -80,6 +80,28 @@ struct OpenWorldEffect {
 
 constexpr double kG = units::g0;
 
+/// Effects the library does not anticipate (issue 33's "cases that these do not anticipate"; no
+/// library term is theirs): the gyro scale factor stepping half-way, a gyro cross-rate product
+/// omega_x omega_y (zero on plans whose turns are about one body axis), a gyro bias that follows
+/// the direction of the table's last turn (hysteresis in the rate).
+inline void append_unanticipated_effects(std::vector<OpenWorldEffect>& e, double mid_s) {
+  const double dph = units::deg_per_h;
+  e.push_back({"gyro scale += 100 ppm (3 axes) at mid-session",
+               [mid_s](double t, auto&, auto& w) {
+                 if (t > mid_s) w *= 1.0 + 100e-6;
+               },
+               "", 0, "", 0.0});
+  e.push_back({"gyro z += 3000 ppm/(rad/s) omega_x omega_y",
+               [](double, auto&, auto& w) { w(2) += 3000e-6 * w(0) * w(1); }, "", 0, "", 0.0});
+  // The sign of the last sample turning faster than 1 deg/s (the sum of its body rates).
+  e.push_back({"gyro x bias 0.1 deg/h times the last turn's direction",
+               [dph, last = 1.0](double, auto&, auto& w) mutable {
+                 if (w.norm() > units::deg_per_s) last = w.sum() >= 0.0 ? 1.0 : -1.0;
+                 w(0) += 0.1 * dph * last;
+               },
+               "", 0, "", 0.0});
+}
+
 /// The effects of the open-world matrix (issue 33); the bias step at log time mid_s (s).
 inline std::vector<OpenWorldEffect> open_world_effects(double mid_s) {
   const double ug = units::ug, dph = units::deg_per_h, g2 = kG * kG;
@@ -96,8 +118,8 @@ inline std::vector<OpenWorldEffect> open_world_effects(double mid_s) {
                "omega_x |omega_x|", 3000.0 * units::deg_per_s});
   e.push_back(
       {"accel y += 20 ug sin(2 pi t / 29 s)",
-       [ug](double t, auto& f, auto&) { f(1) += 20.0 * ug * std::sin(2.0 * M_PI * t / 29.0); }, "",
-       0, "", 0.0});
+       [ug](double t, auto& f, auto&) { f(1) += 20.0 * ug * std::sin(2.0 * M_PI * t / 29.0); },
+       "accel", 1, "sin(2 pi t / 29 s)", 20.0});  // rot19's cycle (the library's period there)
   e.push_back({"gyro z bias step 0.1 deg/h at mid-session",
                [dph, mid_s](double t, auto&, auto& w) {
                  if (t > mid_s) w(2) += 0.1 * dph;
@@ -113,6 +135,7 @@ inline std::vector<OpenWorldEffect> open_world_effects(double mid_s) {
   e.push_back({"accel z += 20 ug (t / 600 s)^2",
                [ug](double t, auto& f, auto&) { f(2) += 20.0 * ug * (t / 600.0) * (t / 600.0); },
                "accel", 2, "t^2", 20.0 * 36.0});
+  append_unanticipated_effects(e, mid_s);
   return e;
 }
 

@@ -278,15 +278,31 @@ Stacked stack(const DwellTests& dwells, const std::vector<int>& parameters,
   return s;
 }
 
+// The rows of one turn segment: the attitude residual (3, NED) and the velocity residual (3, NED).
+constexpr Eigen::Index kTurnRows = 6;
+
 // One segment of the turns: from a dwell's middle to the next one's, the gyros' attitude against
 // the table's known one (rotation vector of C_pred C_known^T, NED: to first order the integral of
 // C_b_n times the gyro error, plus the two dwells' table errors), and the same integral of each
-// model and library column.
+// model and library column. And over the turn itself (from the dwell's end to the next one's
+// start, at rest at both ends) the velocity the accelerometers integrate from the dwell's known
+// attitude: zero to first order but for the accelerometer errors rotated to NED and the gyro
+// errors' attitude times the specific force (C_pred f = f_n + psi x f_n).
 struct Segment {
   Eigen::Matrix3d C = Eigen::Matrix3d::Identity();  // integrated C_b_n
   Eigen::Vector3d about = Eigen::Vector3d::Zero();  // the linearization model's share
   Eigen::MatrixXd A, B;                             // 3 x p, 3 x m
   double duration = 0.0;                            // s
+  // The velocity over the turn [turn_start, turn_end] (plan time, s).
+  double turn_start = 0.0, turn_end = 0.0;
+  bool turning = false;                              // the window has begun
+  Eigen::Matrix3d Cv = Eigen::Matrix3d::Identity();  // C_b_n from the dwell's known attitude
+  Eigen::Vector3d v = Eigen::Vector3d::Zero(), v_about = Eigen::Vector3d::Zero();
+  Eigen::MatrixXd Av, Bv;  // 3 x p, 3 x m: the columns' velocity
+  Eigen::MatrixXd A0, B0;  // the attitude columns at the window's start
+  Eigen::Vector3d about0 = Eigen::Vector3d::Zero();
+  double window = 0.0;                               // s
+  Eigen::Vector3d last_w = Eigen::Vector3d::Zero();  // the previous sample's rate (omega_dot)
 };
 
 // The turns' rows before whitening: residual (3 per segment), columns, durations.
@@ -294,7 +310,9 @@ struct TurnRaw {
   Eigen::MatrixXd A, B;
   Eigen::VectorXd y;
   std::vector<double> durations;
+  std::vector<double> windows;   // each segment's turn (the velocity's window), s
   std::vector<int> after_dwell;  // the plan dwell each segment starts at
+  double gravity = 0.0;          // m/s^2
 };
 
 // What the integration of the turns needs.
@@ -304,6 +322,7 @@ struct TurnsContext {
   std::vector<int> columns;  // catalog indices of the model's columns
   const std::vector<Column>* lib = nullptr;
   Eigen::Vector3d omega_ie_n = Eigen::Vector3d::Zero();
+  Eigen::Vector3d g_n = Eigen::Vector3d::Zero();  // normal gravity, NED
 };
 
 // A sample's temperatures against the model's reference (deg C) and the gyros' rate of change
@@ -322,10 +341,11 @@ SampleTemperature sample_temperature(const ImuSample& smp, double reference_c,
   return out;
 }
 
-void accumulate(Segment& g, const ImuSample& smp, double t, const TurnsContext& x,
-                const SampleTemperature& temp) {
+// The kinematics of one sample (omega_dot from the previous sample's rate, f_dot from the
+// rotation of the specific force in the body).
+KinematicSample kinematics(const ImuSample& smp, double t, const SampleTemperature& temp,
+                           Segment& g) {
   const double dt = smp.dt;
-  if (!(dt > 0.0)) return;
   KinematicSample ks;
   ks.omega_ib_b = smp.dtheta_b / dt;
   ks.f_ib_b = smp.dv_b / dt;
@@ -333,9 +353,59 @@ void accumulate(Segment& g, const ImuSample& smp, double t, const TurnsContext& 
   ks.accel_dtemp = temp.accel_dtemp;
   ks.gyro_dtemp = temp.gyro_dtemp;
   ks.gyro_dtemp_rate = temp.gyro_dtemp_rate;
-  ImuErrorModel::JacobianColumns J;
-  x.model.jacobian(ks, Eigen::Vector3d::Zero(), x.columns, J);
+  ks.omega_dot_ib_b = (ks.omega_ib_b - g.last_w) / dt;
+  g.last_w = ks.omega_ib_b;
+  return ks;
+}
+
+// The velocity rows' share of one sample inside the turn's window: the accelerometers' columns
+// rotated to NED, the gyros' (their attitude since the window began, psi) crossed with the
+// specific force: d(C_pred f) = C df - [f_n x] psi.
+void accumulate_velocity(Segment& g, const ImuSample& smp, const KinematicSample& ks,
+                         const ImuErrorModel::JacobianColumns& J, const TurnsContext& x) {
+  const double dt = smp.dt;
+  if (!g.turning) {
+    g.turning = true;
+    g.A0 = g.A;
+    g.B0 = g.B;
+    g.about0 = g.about;
+  }
+  // The attitude at the sample's middle (first-order rotation compensation of the increment).
+  const Eigen::Matrix3d C_mid = g.Cv * dcm_from_rotvec(0.5 * smp.dtheta_b);
+  const Eigen::Vector3d f_n = C_mid * ks.f_ib_b;
+  const Eigen::Matrix3d fx = skew(f_n);
+  // The increment in NED: C_k (I + S/2 + S^2/12) dv_b, S = [dtheta x], exact to second order in
+  // the rotation for a constant rate and a constant specific force in NED (the table's case:
+  // the sample's middle attitude, I + S/2 + S^2/8, leaves S^2/24 f dt per sample, about 0.7 mm/s
+  // over a seed8 move at 15 deg/s, which clean sessions' turns showed as rate terms).
+  const Eigen::Matrix3d S = skew(smp.dtheta_b);
+  g.v += g.Cv * (smp.dv_b + 0.5 * S * smp.dv_b + S * S * smp.dv_b / 12.0) + x.g_n * dt;
   const auto p = static_cast<Eigen::Index>(x.columns.size());
+  g.Av.leftCols(p) += C_mid * J.middleRows<3>(3).leftCols(p) * dt;
+  g.Av -= fx * (g.A - g.A0) * dt;
+  g.Bv -= fx * (g.B - g.B0) * dt;
+  for (std::size_t j = 0; j < x.lib->size(); ++j) {
+    const Column& c = (*x.lib)[j];
+    if (c.gyro) continue;
+    const double v = c.value(ks.f_ib_b, ks.omega_ib_b, ks.t);
+    g.Bv.col(static_cast<Eigen::Index>(j)) +=
+        C_mid.col(c.term.axis) * (v * c.term.si_per_unit * dt);
+  }
+  if (x.about)
+    g.v_about += (C_mid * (x.about->accel_output(ks) - ks.f_ib_b) - fx * (g.about - g.about0)) * dt;
+  g.Cv = dcm_from_rotvec(-x.omega_ie_n * dt) * g.Cv * dcm_from_rotvec(smp.dtheta_b);
+  g.window += dt;
+}
+
+void accumulate(Segment& g, const ImuSample& smp, double t, const TurnsContext& x,
+                const SampleTemperature& temp) {
+  const double dt = smp.dt;
+  if (!(dt > 0.0)) return;
+  const KinematicSample ks = kinematics(smp, t, temp, g);
+  ImuErrorModel::JacobianColumns J;
+  x.model.jacobian(ks, -ks.omega_ib_b.cross(ks.f_ib_b), x.columns, J);
+  const auto p = static_cast<Eigen::Index>(x.columns.size());
+  if (t - dt >= g.turn_start && t <= g.turn_end) accumulate_velocity(g, smp, ks, J, x);
   g.A.leftCols(p) += g.C * J.topRows<3>().leftCols(p) * dt;
   for (std::size_t j = 0; j < x.lib->size(); ++j) {
     const Column& c = (*x.lib)[j];
@@ -359,6 +429,31 @@ std::vector<PlanDwell> dwells_in_order(const DwellTests& dwells) {
   return d;
 }
 
+// The segments' rows: per segment the attitude residual, then the velocity's.
+TurnRaw turn_rows(const std::vector<Segment>& segs, const std::vector<PlanDwell>& d,
+                  const TurnsContext& x, Eigen::Index p, Eigen::Index m) {
+  TurnRaw r;
+  const auto n = static_cast<Eigen::Index>(kTurnRows * static_cast<Eigen::Index>(segs.size()));
+  r.A = Eigen::MatrixXd::Zero(n, p);
+  r.B.resize(n, m);
+  r.y.resize(n);
+  r.gravity = x.g_n.norm();
+  for (std::size_t j = 0; j < segs.size(); ++j) {
+    const auto at = static_cast<Eigen::Index>(kTurnRows * static_cast<Eigen::Index>(j));
+    r.A.middleRows(at, 3) = segs[j].A;
+    r.B.middleRows(at, 3) = segs[j].B;
+    r.y.segment<3>(at) =
+        rotvec_from_dcm(segs[j].C * d[j + 1].C_b_n_known.transpose()) - segs[j].about;
+    r.A.middleRows(at + 3, 3) = segs[j].Av;
+    r.B.middleRows(at + 3, 3) = segs[j].Bv;
+    r.y.segment<3>(at + 3) = segs[j].v - segs[j].v_about;
+    r.durations.push_back(segs[j].duration);
+    r.windows.push_back(segs[j].window);
+    r.after_dwell.push_back(d[j].index);
+  }
+  return r;
+}
+
 // Reads the log again and integrates each segment between consecutive dwells' middles.
 TurnRaw integrate_turns(const LibraryTurns& lt, const DwellTests& dwells, const TurnsContext& x,
                         Eigen::Index p, Eigen::Index m) {
@@ -370,8 +465,11 @@ TurnRaw integrate_turns(const LibraryTurns& lt, const DwellTests& dwells, const 
   std::vector<Segment> segs(d.size() - 1);
   for (std::size_t k = 0; k < segs.size(); ++k) {
     segs[k].C = d[k].C_b_n_known;
-    segs[k].A = Eigen::MatrixXd::Zero(3, p);
-    segs[k].B = Eigen::MatrixXd::Zero(3, m);
+    segs[k].Cv = d[k].C_b_n_known;
+    segs[k].turn_start = d[k].t_end;
+    segs[k].turn_end = d[k + 1].t_start;
+    segs[k].A = segs[k].Av = Eigen::MatrixXd::Zero(3, p);
+    segs[k].B = segs[k].Bv = Eigen::MatrixXd::Zero(3, m);
   }
   LogReader reader(lt.session->log);
   ImuSample smp;
@@ -385,36 +483,41 @@ TurnRaw integrate_turns(const LibraryTurns& lt, const DwellTests& dwells, const 
     if (k >= segs.size()) break;
     accumulate(segs[k], smp, t, x, temp);
   }
-  const auto n = static_cast<Eigen::Index>(3 * segs.size());
-  r.A = Eigen::MatrixXd::Zero(n, p);
-  r.B.resize(n, m);
-  r.y.resize(n);
-  for (std::size_t j = 0; j < segs.size(); ++j) {
-    const auto at = static_cast<Eigen::Index>(3 * j);
-    r.A.middleRows(at, 3) = segs[j].A;
-    r.B.middleRows(at, 3) = segs[j].B;
-    r.y.segment<3>(at) =
-        rotvec_from_dcm(segs[j].C * d[j + 1].C_b_n_known.transpose()) - segs[j].about;
-    r.durations.push_back(segs[j].duration);
-    r.after_dwell.push_back(d[j].index);
-  }
-  return r;
+  return turn_rows(segs, d, x, p, m);
 }
 
-// The covariance of the segments' residuals: each dwell's table error (attitude_sigma about each
-// NED axis, shared by the segments before and after it) and the angle random walk over each
-// segment; its Cholesky factor whitens the rows.
+// The covariance of the segments' residuals: each dwell's table error phi (attitude_sigma about
+// each NED axis) enters the attitude of the segments before (+phi) and after it (-phi), and the
+// velocity over the turn after it (C_pred f = f_n - phi x f_n integrates to phi x g_n T: the
+// specific force integrates to -g_n T over a turn from rest to rest); the angle random walk over
+// each segment (and its attitude times g over the turn, T^3 / 3), the velocity random walk over
+// each turn. Its Cholesky factor whitens the rows.
 Eigen::MatrixXd turns_covariance(const TurnRaw& r, const LibraryTurns& lt) {
   const auto S = static_cast<Eigen::Index>(r.durations.size());
   const double t2 = lt.attitude_sigma * lt.attitude_sigma;
   const double n2 = lt.noise.gyro.white * lt.noise.gyro.white;
-  Eigen::MatrixXd R = Eigen::MatrixXd::Zero(3 * S, 3 * S);
+  const double a2 = lt.noise.accel.white * lt.noise.accel.white;
+  const Eigen::Matrix3d gx = skew(Eigen::Vector3d(0.0, 0.0, r.gravity));
+  const Eigen::Index R6 = kTurnRows;
+  Eigen::MatrixXd R = Eigen::MatrixXd::Zero(R6 * S, R6 * S);
   for (Eigen::Index k = 0; k < S; ++k) {
-    R.block<3, 3>(3 * k, 3 * k).diagonal().array() +=
+    const double T = r.windows[static_cast<std::size_t>(k)];
+    const Eigen::Index a = R6 * k, v = a + 3;
+    R.block<3, 3>(a, a).diagonal().array() +=
         2.0 * t2 + n2 * r.durations[static_cast<std::size_t>(k)];
+    // The velocity: -T [g x] phi_k (the segment's attitude holds -phi_k, the one before +phi_k).
+    R.block<3, 3>(v, v) =
+        t2 * T * T * gx * gx.transpose() + n2 * T * T * T / 3.0 * gx * gx.transpose();
+    R.block<3, 3>(v, v).diagonal().array() += a2 * T;
+    R.block<3, 3>(a, v) = -t2 * T * gx;  // E[(-phi)(-T [g x] phi)^T] = T t2 [g x]^T
+    R.block<3, 3>(v, a) = R.block<3, 3>(a, v).transpose();
+    if (k > 0) {
+      R.block<3, 3>(a - R6, v) = t2 * T * gx;  // E[(+phi)(-T [g x] phi)^T]
+      R.block<3, 3>(v, a - R6) = R.block<3, 3>(a - R6, v).transpose();
+    }
     if (k + 1 < S) {
-      R.block<3, 3>(3 * k, 3 * k + 3).diagonal().array() -= t2;
-      R.block<3, 3>(3 * k + 3, 3 * k).diagonal().array() -= t2;
+      R.block<3, 3>(a, a + R6).diagonal().array() -= t2;
+      R.block<3, 3>(a + R6, a).diagonal().array() -= t2;
     }
   }
   return R;
@@ -431,6 +534,7 @@ TurnRaw append_turns(Stacked& s, const LibraryTurns& lt, const DwellTests& dwell
   x.columns = parameters;
   x.lib = &lib;
   x.omega_ie_n = Earth::wgs84().omega_ie_n(dwells.site().lat_rad);
+  x.g_n = Earth::wgs84().gravity_n(dwells.site().lat_rad, dwells.site().h_m);
   TurnRaw r = integrate_turns(lt, dwells, x, s.A.cols(), s.B.cols());
   if (r.y.size() == 0) return r;
   const Eigen::LLT<Eigen::MatrixXd> llt(turns_covariance(r, lt));
@@ -443,7 +547,7 @@ TurnRaw append_turns(Stacked& s, const LibraryTurns& lt, const DwellTests& dwell
   s.B.bottomRows(n) = L.solve(r.B);
   s.y.tail(n) = L.solve(r.y);
   s.first.pop_back();
-  for (Eigen::Index k = 0; k < n; k += 3) s.first.push_back(n0 + k);
+  for (Eigen::Index k = 0; k < n; k += kTurnRows) s.first.push_back(n0 + k);
   s.first.push_back(n0 + n);
   s.turn_rows = n;
   return r;
@@ -601,8 +705,36 @@ std::string how_to_add(const std::vector<LibraryTerm>& terms) {
   return out;
 }
 
+// The turns' residual along each library column alone (the model's columns projected out of
+// both): z_j = b_j . y / |b_j| over the turns' rows, at most chi-square of 1 dof where the noise
+// model holds (the projection only shrinks the residual's covariance), the largest z_j^2 tested
+// at 1 - (1 - kTurnsResidualLevel) / (columns) (Bonferroni). One term's share of the turns is
+// diluted in their chi-square over all their rows (rot19: about 93 dof, so a term at 8 sigmas
+// rejects that test on 6 seeds of 30); its own column carries it whole.
+void largest_turn_term(const Stacked& s, const std::vector<Column>& lib, LibraryFit& out) {
+  const Eigen::VectorXd y = s.y.tail(s.turn_rows);
+  int tried = 0;
+  for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(lib.size()); ++j) {
+    const Eigen::VectorXd b = s.B.col(j).tail(s.turn_rows);
+    const double n2 = b.squaredNorm();
+    if (!(n2 > 1e-12 * std::max(1.0, y.squaredNorm()))) continue;
+    ++tried;
+    const double z2 = b.dot(y) * b.dot(y) / n2;
+    if (z2 > out.turns_term_z2) {
+      out.turns_term_z2 = z2;
+      out.turns_term = lib[static_cast<std::size_t>(j)].term.name();
+    }
+  }
+  if (tried == 0) return;
+  out.turns_term_quantile = boost::math::quantile(
+      boost::math::chi_squared(1), 1.0 - (1.0 - kTurnsResidualLevel) / static_cast<double>(tried));
+  out.turns_term_reject = out.turns_term_z2 > out.turns_term_quantile;
+  out.turns_reject = out.turns_reject || out.turns_term_reject;
+}
+
 // The turns' residual against its noise model (after the model's columns are projected out).
-void turns_test(const Stacked& s, const TurnRaw& r, LibraryFit& out) {
+void turns_test(const Stacked& s, const TurnRaw& r, const std::vector<Column>& lib,
+                LibraryFit& out) {
   if (s.turn_rows == 0) return;
   out.turn_segments = static_cast<int>(r.durations.size());
   const Eigen::VectorXd y = s.y.tail(s.turn_rows);
@@ -611,18 +743,26 @@ void turns_test(const Stacked& s, const TurnRaw& r, LibraryFit& out) {
   out.turns_quantile =
       boost::math::quantile(boost::math::chi_squared(out.turns_dof), kTurnsResidualLevel);
   out.turns_reject = out.turns_chi2 > out.turns_quantile;
+  largest_turn_term(s, lib, out);
   std::vector<std::pair<double, int>> largest;
-  for (Eigen::Index k = 0; k + 2 < s.turn_rows; k += 3)
-    largest.emplace_back(y.segment<3>(k).squaredNorm(),
-                         r.after_dwell[static_cast<std::size_t>(k / 3)]);
+  for (Eigen::Index k = 0; k + kTurnRows <= s.turn_rows; k += kTurnRows)
+    largest.emplace_back(y.segment<kTurnRows>(k).squaredNorm(),
+                         r.after_dwell[static_cast<std::size_t>(k / kTurnRows)]);
   std::sort(largest.rbegin(), largest.rend());
   char b[300];
   std::snprintf(b, sizeof b,
-                "turns: the gyros' attitude between the dwells against the table's, chi2 %.4g on "
+                "turns: the gyros' attitude between the dwells against the table's and the "
+                "accelerometers' velocity over each turn, chi2 %.4g on "
                 "%.4g dof (its %.0f %% quantile %.4g) over %d segments",
                 out.turns_chi2, out.turns_dof, 100.0 * kTurnsResidualLevel, out.turns_quantile,
                 out.turn_segments);
   out.turns_signature = b;
+  if (out.turns_term_reject) {
+    std::snprintf(b, sizeof b,
+                  "; along the library term %s alone z^2 %.4g (its Bonferroni quantile %.4g)",
+                  out.turns_term.c_str(), out.turns_term_z2, out.turns_term_quantile);
+    out.turns_signature += b;
+  }
   for (std::size_t k = 0; k < std::min<std::size_t>(3, largest.size()); ++k) {
     std::snprintf(b, sizeof b, "%s after dwell %d (chi2 %.3g)", k == 0 ? "; largest" : ",",
                   largest[k].second, largest[k].first);
@@ -726,7 +866,7 @@ LibraryFit fit_term_library(const DwellTests& dwells, const std::vector<int>& pa
   TurnRaw raw;
   if (with_turns) raw = append_turns(s, *turns, dwells, parameters, lib);
   project_out_model(s);
-  turns_test(s, raw, out);
+  turns_test(s, raw, lib, out);
   if (!select && !out.turns_reject) return out;
   out.chi2_before = s.y.squaredNorm();
   std::vector<Eigen::Index> cols = forward_select(s, out.heldout_after);

@@ -60,7 +60,15 @@ struct LibraryFit {
   double turns_chi2 = 0.0;      // its chi-square with the model
   double turns_dof = 0.0;       // its expected value (rows minus the model's share)
   double turns_quantile = 0.0;  // the chi-square quantile at kTurnsResidualLevel
-  bool turns_reject = false;    // turns_chi2 beyond it: the turns hold what the model does not
+  /// The turns' residual along the library column that holds most of it alone (z^2, chi-square
+  /// of 1 dof under the noise model), tested at the Bonferroni quantile over the columns.
+  std::string turns_term;
+  double turns_term_z2 = 0.0;
+  double turns_term_quantile = 0.0;
+  bool turns_term_reject = false;
+  /// turns_chi2 beyond its quantile, or turns_term_z2 beyond its: the turns hold what the model
+  /// does not.
+  bool turns_reject = false;
   std::string turns_signature;  // "turns: attitude residual chi2 ... ; largest after dwell ..."
 };
 
