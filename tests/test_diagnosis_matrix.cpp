@@ -100,7 +100,9 @@ double detection_sigma(const std::string& plan, const std::string& profile,
 struct CellScore {
   int seeds = 0, first_right = 0, false_named = 0, all_named = 0, magnitudes = 0, covered = 0;
   int ambiguous_first = 0;
-  int errors = 0;  // diagnoses that failed (a filter run that stopped or diverged)
+  int unexplained = 0;  // seeds whose final residual is "unexplained" (Unexplained::present)
+  int quiet = 0;        // seeds with no finding and nothing unexplained
+  int errors = 0;       // diagnoses that failed (a filter run that stopped or diverged)
   std::string worst_story;
 };
 
@@ -114,6 +116,9 @@ void print_seed(std::uint64_t seed, const DiagnosisOutcome& o) {
     std::printf("    refused %s (round %d): %s\n", r.finding.family.c_str(), r.finding.round,
                 r.reason.c_str());
   for (const auto& w : o.result.stops) std::printf("    stop: %s\n", w.c_str());
+  if (o.result.unexplained.present)
+    for (const auto& w : o.result.unexplained.signature)
+      std::printf("    unexplained: %s\n", w.c_str());
   std::printf(
       "    held-out predictive chi2 %.4g on %d inputs (99 %% quantile %.4g); dwells chi2 %.4g on "
       "%d dof (%.4g)\n",
@@ -154,6 +159,8 @@ CellScore run_cell(const Cell& cell, int seeds, double lo, double hi, std::uint6
     score.ambiguous_first += o.ambiguous_first ? 1 : 0;
     score.false_named += o.false_names.empty() ? 0 : 1;
     score.all_named += o.all_named ? 1 : 0;
+    score.unexplained += o.result.unexplained.present ? 1 : 0;
+    score.quiet += o.result.findings.empty() && !o.result.unexplained.present ? 1 : 0;
     if (o.magnitudes_checked > 0) {
       ++score.magnitudes;
       score.covered += o.worst_sigma < 3.0 ? 1 : 0;
@@ -168,10 +175,10 @@ CellScore run_cell(const Cell& cell, int seeds, double lo, double hi, std::uint6
 
 std::string row(const Cell& cell, const char* band, const CellScore& s) {
   char b[512];
-  std::snprintf(b, sizeof b, "| %s | %s | %d/%d | %d | %d | %d/%d | %s | %d |", cell.name().c_str(),
-                band, s.first_right, s.seeds, s.ambiguous_first, s.false_named, s.covered,
-                s.magnitudes, cell.families.size() > 1 ? std::to_string(s.all_named).c_str() : "-",
-                s.errors);
+  std::snprintf(b, sizeof b, "| %s | %s | %d/%d | %d | %d | %d | %d | %d/%d | %s | %d |",
+                cell.name().c_str(), band, s.first_right, s.seeds, s.ambiguous_first, s.false_named,
+                s.unexplained, s.quiet, s.covered, s.magnitudes,
+                cell.families.size() > 1 ? std::to_string(s.all_named).c_str() : "-", s.errors);
   return b;
 }
 
@@ -208,8 +215,9 @@ TEST_CASE("Diagnosis matrix: every family hidden, both plans, both profiles", "[
   const int seeds = env_seeds ? std::atoi(env_seeds) : 30;
   const std::string band = env_band ? env_band : "";
   std::printf(
-      "| cell | band | named first | of which ambiguous | false name | magnitudes within 3 "
-      "sigma | pair both named |\n|---|---|---|---|---|---|---|\n");
+      "| cell | band | named first | of which an ambiguous set | false name | unexplained | quiet "
+      "| magnitudes within 3 sigma | pair both named | failed |\n"
+      "|---|---|---|---|---|---|---|---|---|---|\n");
   const auto cells = matrix_cells();
   for (std::size_t index = 0; index < cells.size(); ++index) {
     const Cell& cell = cells[index];
