@@ -4,6 +4,7 @@
 #pragma once
 
 #include <algorithm>
+#include <boost/math/distributions/binomial.hpp>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -169,6 +170,17 @@ inline DiagnosisOutcome diagnose_hidden(const HiddenCase& c, const std::vector<s
     return std::find(named.begin(), named.end(), h) != named.end();
   });
   return out;
+}
+
+/// The most seeds of `n` a cell may miss in a short (CI) run when its true rate is the
+/// acceptance's `rate` (issue 33: 95 %): the smallest k with P(misses > k) <= alpha under
+/// binomial(n, 1 - rate). A cell at the acceptance rate fails such a run at most alpha of the time;
+/// one far below it (a broken diagnosis) fails it.
+inline int allowed_misses(int n, double rate = 0.95, double alpha = 0.01) {
+  const boost::math::binomial misses(n, 1.0 - rate);
+  for (int k = 0; k < n; ++k)
+    if (boost::math::cdf(boost::math::complement(misses, k)) <= alpha) return k;
+  return n;
 }
 
 }  // namespace sinscal::test

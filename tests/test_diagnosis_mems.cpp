@@ -114,3 +114,31 @@ TEST_CASE("MEMS clean rot19 sessions: the dwells hold their noise model with the
     CHECK_FALSE(w.check.dwells_hold);
   }
 }
+
+TEST_CASE("MEMS clean sessions are quiet: no name and nothing unexplained, rot19 and seed8",
+          "[diagnosis][mems][long]") {
+  // Issue 33's acceptance: clean MEMS sessions quiet in at least 95 %. Quiet: no finding and the
+  // residual not "unexplained" (the dwells, the held-out dwells, the filter's innovations and the
+  // library's turns' test all consistent with the noise model). Before the library's turns were
+  // integrated about the linearization model exactly and held the gyros' bias wander, every clean
+  // MEMS session was unexplained (30 of 30 on both plans: turns' chi2 1e3-9e4 on 4-35 dof). A
+  // short run: at most allowed_misses(8) = 2 seeds of 8 not quiet per plan (binomial at 95 %,
+  // alpha 1 %); the 30-seed cells: docs/accuracy.md "The diagnosis matrix".
+  const int seeds = 8;
+  for (const std::string plan : {"rot19.ini", "seed8.ini"}) {
+    int quiet = 0;
+    std::string misses;
+    for (int k = 0; k < seeds; ++k) {
+      const auto seed = 8100 + static_cast<std::uint64_t>(k);
+      const HiddenCase c = hidden_case("mems_quiet", plan, "mems.ini", {}, seed, 20.0);
+      const DiagnosisOutcome o = diagnose_hidden(c, {});
+      const bool q = o.result.findings.empty() && !o.result.unexplained.present;
+      quiet += q ? 1 : 0;
+      if (q) continue;
+      misses += " seed " + std::to_string(seed) + ": " + o.story;
+      for (const auto& s : o.result.unexplained.signature) misses += "; " + s;
+    }
+    INFO(plan << ": quiet " << quiet << " of " << seeds << misses);
+    CHECK(seeds - quiet <= allowed_misses(seeds));
+  }
+}

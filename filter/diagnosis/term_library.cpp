@@ -454,6 +454,24 @@ TurnRaw turn_rows(const std::vector<Segment>& segs, const std::vector<PlanDwell>
   return r;
 }
 
+// The sample compensated with the linearization model (its exact inverse, not its first-order
+// share): a MEMS unit's gyro bias of 0.1-0.5 deg/s turns a segment of 30-180 s by 3-90 deg, where
+// the first-order share leaves second-order errors far above the noise (issue 33: every clean
+// MEMS session was "unexplained" by the turns' test).
+void compensate_sample(ImuSample& smp, const ImuErrorModel& about, double t,
+                       const SampleTemperature& temp) {
+  if (!(smp.dt > 0.0)) return;
+  KinematicSample k;
+  k.accel_dtemp = temp.accel_dtemp;
+  k.gyro_dtemp = temp.gyro_dtemp;
+  k.gyro_dtemp_rate = temp.gyro_dtemp_rate;
+  Eigen::Vector3d omega, f;
+  about.compensate(smp.dtheta_b / smp.dt, smp.dv_b / smp.dt, Eigen::Vector3d::Zero(), omega, f,
+                   t - 0.5 * smp.dt, &k);
+  smp.dtheta_b = omega * smp.dt;
+  smp.dv_b = f * smp.dt;
+}
+
 // Reads the log again and integrates each segment between consecutive dwells' middles.
 TurnRaw integrate_turns(const LibraryTurns& lt, const DwellTests& dwells, const TurnsContext& x,
                         Eigen::Index p, Eigen::Index m) {
@@ -479,6 +497,7 @@ TurnRaw integrate_turns(const LibraryTurns& lt, const DwellTests& dwells, const 
     const double t = smp.t - lt.session->time_offset;  // plan time
     const SampleTemperature temp = sample_temperature(smp, lt.reference_temperature_c, rate);
     if (t <= mids.front()) continue;
+    if (lt.about) compensate_sample(smp, *lt.about, t, temp);
     while (k < segs.size() && t > mids[k + 1]) ++k;
     if (k >= segs.size()) break;
     accumulate(segs[k], smp, t, x, temp);
@@ -523,21 +542,63 @@ Eigen::MatrixXd turns_covariance(const TurnRaw& r, const LibraryTurns& lt) {
   return R;
 }
 
+// The gyros' bias wander (bias instability, rate random walk: a MEMS unit's 10 deg/h over a
+// 100 s correlation time) integrated over each segment, added to the segments' attitude rows
+// (the first 3 of each segment's block in R): each segment as two pieces, from the dwell's middle
+// to the turn's middle at the dwell's attitude and on to the next dwell's middle at the next
+// one's; two pieces covary as their mean biases do (stage2_wander_covariance, the dwells' own
+// model of the wander) times both durations. Nothing for a profile without wander.
+void add_turns_wander(Eigen::MatrixXd& R, const TurnRaw& r, const LibraryTurns& lt,
+                      const DwellTests& dwells) {
+  const TriadNoise& g = lt.noise.gyro;
+  const std::vector<PlanDwell> d = dwells_in_order(dwells);
+  const auto S = static_cast<Eigen::Index>(r.durations.size());
+  if ((!(g.bias_instability > 0.0) && !(g.random_walk > 0.0)) || S == 0 ||
+      static_cast<Eigen::Index>(d.size()) != S + 1)
+    return;
+  const Eigen::Index stride = R.rows() / S;
+  std::vector<EquivalentInputs> pieces(2 * d.size() - 2);
+  for (std::size_t k = 0; k + 1 < d.size(); ++k) {
+    const double m = 0.5 * (d[k].t_end + d[k + 1].t_start);
+    const double a = 0.5 * (d[k].t_start + d[k].t_end),
+                 b = 0.5 * (d[k + 1].t_start + d[k + 1].t_end);
+    const std::pair<double, double> span[2] = {{a, m}, {m, b}};
+    for (int h = 0; h < 2; ++h) {
+      EquivalentInputs& in = pieces[2 * k + static_cast<std::size_t>(h)];
+      in.dwell.t_start = span[h].first;
+      in.dwell.t_end = span[h].second;
+      in.dwell.C_b_n_known = d[k + static_cast<std::size_t>(h)].C_b_n_known;
+      in.duration = span[h].second - span[h].first;
+    }
+  }
+  NoiseModel gyro_only;
+  gyro_only.gyro = g;
+  for (std::size_t p = 0; p < pieces.size(); ++p)
+    for (std::size_t q = p; q < pieces.size(); ++q) {
+      const Eigen::Matrix3d W = stage2_wander_covariance(pieces[p], pieces[q], gyro_only)
+                                    .block<3, 3>(ins_input::kGyro.index, ins_input::kGyro.index) *
+                                (pieces[p].duration * pieces[q].duration);
+      const Eigen::Index i = stride * static_cast<Eigen::Index>(p / 2),
+                         j = stride * static_cast<Eigen::Index>(q / 2);
+      R.block<3, 3>(i, j) += W;
+      if (i != j || p != q) R.block<3, 3>(j, i) += W.transpose();
+    }
+}
+
 // Appends the turns' whitened rows to the stacked system (each segment a block of 3 rows).
 TurnRaw append_turns(Stacked& s, const LibraryTurns& lt, const DwellTests& dwells,
                      const std::vector<int>& parameters, const std::vector<Column>& lib) {
   TurnsContext x;
-  if (lt.about) {
-    x.model = *lt.about;
-    x.about = lt.about;
-  }
+  if (lt.about) x.model = *lt.about;  // the samples are compensated with it (integrate_turns)
   x.columns = parameters;
   x.lib = &lib;
   x.omega_ie_n = Earth::wgs84().omega_ie_n(dwells.site().lat_rad);
   x.g_n = Earth::wgs84().gravity_n(dwells.site().lat_rad, dwells.site().h_m);
   TurnRaw r = integrate_turns(lt, dwells, x, s.A.cols(), s.B.cols());
   if (r.y.size() == 0) return r;
-  const Eigen::LLT<Eigen::MatrixXd> llt(turns_covariance(r, lt));
+  Eigen::MatrixXd R = turns_covariance(r, lt);
+  add_turns_wander(R, r, lt, dwells);
+  const Eigen::LLT<Eigen::MatrixXd> llt(R);
   const auto L = llt.matrixL();
   const Eigen::Index n0 = s.y.size(), n = r.y.size();
   s.A.conservativeResize(n0 + n, Eigen::NoChange);
