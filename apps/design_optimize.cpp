@@ -155,10 +155,13 @@ nlohmann::ordered_json search_json(const SearchResult& r, const SearchOptions& s
 }
 
 // The structure moves' account: the moves accepted with the worst ratio after each.
-std::string structure_text(const SearchResult& r) {
-  std::string out = "Structure moves (" + std::to_string(r.structure_evaluations) + " of at most " +
-                    std::to_string(r.structure_limit) +
-                    " covariance passes): " + std::to_string(r.structure.size()) + " accepted";
+std::string structure_text(const SearchResult& r, int requested) {
+  std::string out =
+      "Structure moves (" + std::to_string(r.structure_evaluations) + " covariance passes" +
+      (r.structure_limit < requested ? ", at most " + std::to_string(r.structure_limit) +
+                                           " by the cost of one pass at this budget"
+                                     : "") +
+      "): " + std::to_string(r.structure.size()) + " accepted";
   if (r.origin == "structure moves")
     out += ", worst sigma/target " + fmt("%.4f", r.excess.worst_ratio) + " at the search rate";
   out += r.origin == "structure moves" ? ", their plan is the best within the budget.\n"
@@ -339,7 +342,7 @@ int design_optimize(const DesignCliOptions& o) {
       "refinement, %.1f s after.\n\n",
       table.name.c_str(), r.evaluations, cpu, r.duration_before_refinement, p.duration);
   if (!r.structure.empty() || r.structure_evaluations > 0)
-    std::printf("%s", structure_text(r).c_str());
+    std::printf("%s", structure_text(r, so.structure_evaluations).c_str());
   if (r.origin != "beam" && r.origin != "structure moves")
     std::printf(
         "The best plan within the budget is %s, a given plan as it is or with its dwells "
