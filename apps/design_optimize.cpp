@@ -19,6 +19,7 @@
 #include "apps/design.hpp"
 #include "filter/design/anneal.hpp"
 #include "filter/design/bound.hpp"
+#include "filter/design/hand_plans.hpp"
 #include "filter/design/search.hpp"
 #include "models/coefficient_families.hpp"
 #include "models/units.hpp"
@@ -148,15 +149,20 @@ nlohmann::ordered_json search_json(const SearchResult& r, const SearchOptions& s
             {"origin", r.origin},
             {"seeds", seeds},
             {"structure_evaluations", r.structure_evaluations},
+            {"structure_limit", r.structure_limit},
             {"structure_moves", moves},
             {"path", path}}},
           {"comparison", cmp}};
 }
 
 // The structure moves' account: the moves accepted with the worst ratio after each.
-std::string structure_text(const SearchResult& r) {
-  std::string out = "Structure moves (" + std::to_string(r.structure_evaluations) +
-                    " covariance passes): " + std::to_string(r.structure.size()) + " accepted";
+std::string structure_text(const SearchResult& r, int requested) {
+  std::string out =
+      "Structure moves (" + std::to_string(r.structure_evaluations) + " covariance passes" +
+      (r.structure_limit < requested ? ", at most " + std::to_string(r.structure_limit) +
+                                           " by the cost of one pass at this budget"
+                                     : "") +
+      "): " + std::to_string(r.structure.size()) + " accepted";
   if (r.origin == "structure moves")
     out += ", worst sigma/target " + fmt("%.4f", r.excess.worst_ratio) + " at the search rate";
   out += r.origin == "structure moves" ? ", their plan is the best within the budget.\n"
@@ -164,6 +170,16 @@ std::string structure_text(const SearchResult& r) {
   for (const auto& [what, ratio] : r.structure)
     out += "  " + what + ": worst sigma/target " + fmt("%.3f", ratio) + "\n";
   return out + "\n";
+}
+
+// Whether `path` is the reference plan or a --compare plan (not a second seed).
+bool same_file_given(const std::string& path, const DesignCliOptions& o) {
+  std::error_code ec;
+  if (std::filesystem::equivalent(path, o.plan, ec)) return true;
+  return std::any_of(o.compare.begin(), o.compare.end(), [&](const std::string& f) {
+    std::error_code e;
+    return std::filesystem::equivalent(path, f, e);
+  });
 }
 
 // A plan needs about this many turns to observe the full model (docs/methods/design.md); a table
@@ -341,6 +357,10 @@ int design_optimize(const DesignCliOptions& o) {
   // Every plan given is a seed: the search is at least as good as each, scaled to the budget.
   so.seeds.push_back(reference);
   for (const auto& f : o.compare) so.seeds.push_back(Plan::load(f));
+  // And the searched plans bundled beside the reference plan (config/plans/searched-*.ini).
+  const std::filesystem::path plans_dir = std::filesystem::path(o.plan).parent_path();
+  for (Plan& p : searched_plans_in(plans_dir.empty() ? "." : plans_dir.string()))
+    if (!same_file_given(p.path, o)) so.seeds.push_back(std::move(p));
   const std::string work_bound =
       "plans up to " + fmt("%.0f", so.max_duration) + " s" +
       (so.budget_s > 0.0 ? ", budget " + fmt("%.0f", so.budget_s) + " s" : "") + ", beam " +
@@ -352,7 +372,8 @@ int design_optimize(const DesignCliOptions& o) {
     const SearchProgress progress(work_bound);
     return search_plan(ko, table, reference.site, SearchSpace{}, so);
   }();
-  const std::string moves_text = structure_text(r);  // before the annealing changes the origin
+  const std::string moves_text =
+      structure_text(r, so.structure_evaluations);  // before the annealing changes the origin
   const std::optional<AnnealReport> annealed = annealed_result(r, o, ko, table, reference.site, so);
   const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
   // A plan that misses a target is not written as the optimized plan.

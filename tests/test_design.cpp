@@ -582,7 +582,9 @@ TEST_CASE("Plan search: at least as good as every dwell-scaled hand plan, budget
   // The toolbox's mode and targets. At each budget the search's worst sigma / target is at most
   // that of rot19, seed8 and the toolbox's own 19-position plan (toolbox19, 982 s), as they are
   // and with their dwells scaled, at every budget of the sweep up to it: every 100 s from 200 s
-  // to 1000 s (about 40 s of CPU with the structure moves).
+  // to 1000 s; and at most the search's own at every shorter budget (monotone: each budget's plan
+  // and that plan with its dwells scaled up is carried as a seed of the next). About 50 s of CPU
+  // with the structure moves.
   const TableSpec table = TableSpec::load(test::source_path("config/tables/two-axis-20.ini"));
   const SensorProfile prof = SensorProfile::load(test::source_path(kFog));
   CalibratorOptions ko = calibrator_options_from_profile(prof);
@@ -612,9 +614,12 @@ TEST_CASE("Plan search: at least as good as every dwell-scaled hand plan, budget
       if (const auto s = dwell_scaled(seed, b, shortest_pause(table)))
         hand.emplace_back(build_motion(*s, s->site).duration(), worst(*s));
   }
-  for (double b : budgets) {
-    so.budget_s = b;
-    const SearchResult r = search_plan(ko, table, so.seeds.front().site, SearchSpace{}, so);
+  const std::vector<SearchResult> found =
+      search_budgets(ko, table, so.seeds.front().site, SearchSpace{}, so, budgets);
+  REQUIRE(found.size() == budgets.size());
+  for (std::size_t k = 0; k < budgets.size(); ++k) {
+    const double b = budgets[k];
+    const SearchResult& r = found[k];
     const double duration = build_motion(r.plan, r.plan.site).duration();
     CAPTURE(b, duration, r.origin, r.excess.worst_ratio, r.excess.worst_family);
     CHECK(duration <= b + 1e-6);
@@ -623,6 +628,18 @@ TEST_CASE("Plan search: at least as good as every dwell-scaled hand plan, budget
       if (t <= b + 1e-6) {
         CAPTURE(t, ratio);
         CHECK(r.excess.worst_ratio <= ratio * (1.0 + 1e-9));
+      }
+    for (std::size_t j = 0; j < k; ++j) {
+      CAPTURE(budgets[j], found[j].excess.worst_ratio);
+      CHECK(r.excess.worst_ratio <= found[j].excess.worst_ratio * (1.0 + 1e-6));
+    }
+    // And at most the shorter budget's plan with its dwells scaled up to this one (the time
+    // added only adds information; without the carry-up the search may miss it).
+    if (k > 0)
+      if (const auto up = dwell_scaled(found[k - 1].plan, b, shortest_pause(table))) {
+        const double ratio = worst(*up);
+        CAPTURE(budgets[k - 1], ratio);
+        CHECK(r.excess.worst_ratio <= ratio * (1.0 + 1e-6));
       }
     WARN("budget " << b << " s: " << r.origin << ", " << duration << " s, worst "
                    << r.excess.worst_ratio << " (" << r.excess.worst_family << ")");
@@ -652,6 +669,26 @@ TEST_CASE("Design: the toolbox's 19-position plan is rot19's turns with both dwe
   CHECK(toolbox.start.pitch == rot19.start.pitch);
   CHECK(toolbox.start.roll == rot19.start.roll);
   CHECK(toolbox.convention == rot19.convention);
+}
+
+TEST_CASE("Plan search: the bundled searched plans are seeds, renamed plans keep their content",
+          "[design][search]") {
+  // config/plans/searched-*.ini, in the order of their names; a directory without any: none.
+  const std::vector<Plan> found = searched_plans_in(test::source_path("config/plans"));
+  REQUIRE(found.size() >= 2);
+  for (std::size_t i = 0; i < found.size(); ++i) {
+    CAPTURE(found[i].path);
+    CHECK(found[i].name.rfind("searched-", 0) == 0);
+    if (i > 0) CHECK(found[i - 1].path < found[i].path);
+  }
+  CHECK(searched_plans_in(test::source_path("config/tables")).empty());
+  // A plan renamed (as the search carries a budget's plan up): the same motion, the new name.
+  const Plan rot19 = test::load_plan("rot19.ini");
+  const Plan r = renamed(rot19, "searched-592s");
+  CHECK(r.name == "searched-592s");
+  CHECK(Plan::parse("again.ini", r.text).name == "searched-592s");
+  CHECK(build_motion(r, r.site).duration() == Approx(build_motion(rot19, rot19.site).duration()));
+  CHECK(plan_dwells(r) == plan_dwells(rot19));
 }
 
 TEST_CASE("Plan search: a hand plan with its dwells scaled to a table time", "[design][search]") {

@@ -1,6 +1,7 @@
 // Plan design's structure moves (filter/design/structure_moves.hpp): every move gives a plan
 // file the table can run and the simulator plays, a split turn visits the same orientations, and
 // the search with the moves is never worse than without them (the toolbox's goal of 491 s).
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <set>
@@ -154,4 +155,22 @@ TEST_CASE("Structure moves: the search at 491 s is better with them than without
   WARN("491 s, 10 Hz: without the moves "
        << without.excess.worst_ratio << " (" << without.excess.worst_family << "), with 40 passes "
        << with.excess.worst_ratio << " (" << with.excess.worst_family << ")");
+}
+
+TEST_CASE("Structure moves: their passes scale with the cost of one pass", "[design][search]") {
+  // The rule is the samples of a plan of the budget at the search rate times the filter's states
+  // squared, shared out of a fixed work: twice the budget or the rate half the passes, twice the
+  // states a quarter; never more than asked, at least one; none asked, none.
+  const int n = 60;
+  const double cost_491 = 491.0 * 20.0 * n * n;
+  const int at_491 = structure_pass_limit(1000000, 491.0, 20.0, n);
+  CHECK(at_491 == static_cast<int>(std::floor(kStructureWork / cost_491)));
+  CHECK(structure_pass_limit(1000000, 982.0, 20.0, n) == static_cast<int>(at_491 / 2));
+  CHECK(structure_pass_limit(1000000, 491.0, 40.0, n) == static_cast<int>(at_491 / 2));
+  CHECK(structure_pass_limit(1000000, 491.0, 20.0, 2 * n) == static_cast<int>(at_491 / 4));
+  CHECK(structure_pass_limit(100, 491.0, 20.0, n) == std::min(100, at_491));
+  CHECK(structure_pass_limit(5, 1e7, 100.0, 1000) == 1);
+  CHECK(structure_pass_limit(0, 491.0, 20.0, n) == 0);
+  // The same arguments, the same passes (no clock in the rule).
+  CHECK(structure_pass_limit(2000, 700.0, 20.0, n) == structure_pass_limit(2000, 700.0, 20.0, n));
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
@@ -87,6 +88,25 @@ Plan with_dwells(const Plan& plan, const std::vector<double>& dwells) {
   if (dwells.size() != plan_dwells(plan).size())
     throw std::invalid_argument(plan.path + ": with_dwells: not one duration per dwell");
   return Plan::parse(plan.path, dwells_text(plan, dwells, plan.name));
+}
+
+Plan renamed(const Plan& plan, const std::string& name) {
+  return Plan::parse(plan.path, dwells_text(plan, plan_dwells(plan), name));
+}
+
+std::vector<Plan> searched_plans_in(const std::string& dir) {
+  std::vector<std::string> paths;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (e.is_regular_file() && name.rfind("searched-", 0) == 0 && e.path().extension() == ".ini")
+      paths.push_back(e.path().string());
+  }
+  std::sort(paths.begin(), paths.end());
+  std::vector<Plan> out;
+  out.reserve(paths.size());
+  for (const std::string& p : paths) out.push_back(Plan::load(p));
+  return out;
 }
 
 std::optional<Plan> dwell_scaled(const Plan& plan, double duration, double min_dwell) {

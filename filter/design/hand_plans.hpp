@@ -17,6 +17,13 @@ std::vector<double> plan_dwells(const Plan& plan);
 /// in plan_dwells' order. Throws std::invalid_argument for a count that differs.
 Plan with_dwells(const Plan& plan, const std::vector<double>& dwells);
 
+/// `plan` with its name set to `name` (the plan's text rewritten as with_dwells does).
+Plan renamed(const Plan& plan, const std::string& name);
+
+/// The searched plans bundled in `dir` (the files searched-*.ini, in the order of their names):
+/// seeds of design --optimize beside the hand plans. None when `dir` holds none.
+std::vector<Plan> searched_plans_in(const std::string& dir);
+
 /// `plan` with every dwell (the start dwell and the pauses of a rotation plan, the dwells of an
 /// orientation plan) times one factor, none below `min_dwell` (s), so that the whole lasts
 /// `duration` s (to 0.05 s); its moves and turns unchanged. The plan's own text with those

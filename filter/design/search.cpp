@@ -118,6 +118,12 @@ std::vector<Member> initial_beam(const SearchSpace& space, const std::vector<Tur
 
 bool meets(const Excess& e) { return e.J <= 0.0; }
 
+std::string fmt_seconds(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.0fs", s);
+  return buf;
+}
+
 // Turns removed, dwells shortened while the plan still meets every target.
 PlanGenome refine(PlanGenome g, const Context& c, int& evaluations) {
   auto ok = [&](const PlanGenome& trial) {
@@ -239,8 +245,15 @@ void restructure(SearchResult& r, const Context& c) {
   for (const Plan& seed : c.search.seeds)
     if (auto g = genome_of(seed, c.table)) starts.push_back(*g);
   const auto score = [&](const PlanGenome& g) { return Grower(g, c).score(c); };
-  const auto s = structure_search(starts, c.search.budget_s, c.table, c.site,
-                                  c.search.structure_evaluations, score);
+  if (starts.empty()) return;
+  // The passes by the cost of one: the filter's states from a pass over a start's first turn.
+  PlanGenome probe = starts.front();
+  probe.turns.resize(1);
+  const int states = Grower(probe, c).layout().size;
+  r.structure_limit = structure_pass_limit(c.search.structure_evaluations, c.search.budget_s,
+                                           c.search.rate_hz, states);
+  const auto s =
+      structure_search(starts, c.search.budget_s, c.table, c.site, r.structure_limit, score);
   if (!s) return;
   r.evaluations += s->evaluations;
   r.structure_evaluations = s->evaluations;
@@ -439,6 +452,23 @@ SearchResult search_plan(const CalibratorOptions& options, const TableSpec& tabl
   if (search.budget_s > 0.0 && search.structure_evaluations > 0) restructure(r, c);
   r.meets = meets(r.excess);
   return r;
+}
+
+std::vector<SearchResult> search_budgets(const CalibratorOptions& options, const TableSpec& table,
+                                         const Site& site, const SearchSpace& space,
+                                         SearchOptions search, std::vector<double> budgets) {
+  std::sort(budgets.begin(), budgets.end());
+  const std::size_t given = search.seeds.size();
+  std::vector<SearchResult> out;
+  for (double b : budgets) {
+    search.budget_s = b;
+    out.push_back(search_plan(options, table, site, space, search));
+    if (!search.carry_up) continue;
+    // The last budget's plan is at least as good as every shorter one's: it alone is carried.
+    search.seeds.resize(given);
+    search.seeds.push_back(renamed(out.back().plan, "searched-" + fmt_seconds(b)));
+  }
+  return out;
 }
 
 std::pair<PlanGenome, Excess> enumerate_plans(const CalibratorOptions& options,

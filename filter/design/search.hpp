@@ -51,8 +51,10 @@ struct SearchOptions {
   int improvement_passes = 60;
   /// With a budget: covariance passes the structure moves may spend after the seeds
   /// (filter/design/structure_moves.hpp), from the best plan so far, the beam's and each seed's
-  /// turns at the table's limits; 0: none.
+  /// turns at the table's limits; 0: none. At most structure_pass_limit's at the budget.
   int structure_evaluations = 0;
+  /// search_budgets: each budget's result is a seed of the next budget (carried up).
+  bool carry_up = true;
 };
 
 /// The shortest dwell after a turn the search uses on `table` (its settling, one update, the
@@ -101,6 +103,7 @@ struct SearchResult {
   /// The structure moves accepted (what, worst ratio after it) and the passes they spent.
   std::vector<std::pair<std::string, double>> structure;
   int structure_evaluations = 0;
+  int structure_limit = 0;  // the passes the moves were allowed (structure_pass_limit)
 };
 
 /// `--require`: a family the plan must determine gets the target kRequiredFraction of its prior
@@ -118,6 +121,15 @@ std::map<std::string, double> required_targets(std::map<std::string, double> tar
 /// The search. Throws std::invalid_argument for an empty space or no targets.
 SearchResult search_plan(const CalibratorOptions& options, const TableSpec& table, const Site& site,
                          const SearchSpace& space, const SearchOptions& search);
+
+/// The search at each of `budgets` (s), shortest first, in that order: with
+/// `search.carry_up`, the plan found at each budget is a seed of the next one (as it is and with
+/// its dwells scaled to the budget, named searched-<budget>s; a seed's plan as it is is a
+/// candidate), so the worst sigma / target never grows with the budget. One result per budget,
+/// in ascending order.
+std::vector<SearchResult> search_budgets(const CalibratorOptions& options, const TableSpec& table,
+                                         const Site& site, const SearchSpace& space,
+                                         SearchOptions search, std::vector<double> budgets);
 
 /// The excess of one genome by a full covariance pass (the search's rate).
 Excess evaluate_genome(const PlanGenome& genome, const CalibratorOptions& options,

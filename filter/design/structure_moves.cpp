@@ -285,6 +285,13 @@ std::vector<StructureMove> structure_moves(const PlanGenome& g, unsigned seed) {
   return global;
 }
 
+int structure_pass_limit(int requested, double budget, double rate_hz, int states) {
+  if (requested <= 0) return 0;
+  const double cost = std::max(1.0, budget * rate_hz) * std::max(1.0, double(states) * states);
+  const double affordable = std::floor(kStructureWork / cost);
+  return std::max(1, static_cast<int>(std::min(static_cast<double>(requested), affordable)));
+}
+
 std::optional<StructureResult> structure_search(
     const std::vector<PlanGenome>& starts, double budget, const TableSpec& table, const Site& site,
     int max_evaluations, const std::function<Excess(const PlanGenome&)>& score) {

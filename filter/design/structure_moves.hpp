@@ -62,6 +62,16 @@ struct StructureResult {
   std::vector<StructureStep> path;  // the moves accepted, in order
 };
 
+/// The structure moves' passes at a budget: `requested` at most, and no more than a fixed amount
+/// of work, kStructureWork, shared by passes whose cost is taken as that of one prediction: the
+/// samples of a plan of `budget` s at `rate_hz` times the square of the filter's `states`
+/// (propagating and updating the covariance). A deterministic rule (the same passes on every
+/// machine, so a result is reproducible), set so that design --optimize stays within 60 s of CPU
+/// at any budget up to 1000 s with nav-fog-extended (docs/methods/design.md "Structure moves").
+/// At least 1 when `requested` is positive.
+constexpr double kStructureWork = 3.2e10;  // samples x states^2, over all passes
+int structure_pass_limit(int requested, double budget, double rate_hz, int states);
+
 /// Local search over the structure within `budget` s from the best of `starts` (each fitted to
 /// the budget): moves tried in structure_moves' order, the first that lowers the worst sigma /
 /// target taken, then time moved between the dwells; ends at a plan no move improves or after
