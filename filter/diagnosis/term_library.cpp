@@ -542,21 +542,9 @@ Eigen::MatrixXd turns_covariance(const TurnRaw& r, const LibraryTurns& lt) {
   return R;
 }
 
-// The gyros' bias wander (bias instability, rate random walk: a MEMS unit's 10 deg/h over a
-// 100 s correlation time) integrated over each segment, added to the segments' attitude rows
-// (the first 3 of each segment's block in R): each segment as two pieces, from the dwell's middle
-// to the turn's middle at the dwell's attitude and on to the next dwell's middle at the next
-// one's; two pieces covary as their mean biases do (stage2_wander_covariance, the dwells' own
-// model of the wander) times both durations. Nothing for a profile without wander.
-void add_turns_wander(Eigen::MatrixXd& R, const TurnRaw& r, const LibraryTurns& lt,
-                      const DwellTests& dwells) {
-  const TriadNoise& g = lt.noise.gyro;
-  const std::vector<PlanDwell> d = dwells_in_order(dwells);
-  const auto S = static_cast<Eigen::Index>(r.durations.size());
-  if ((!(g.bias_instability > 0.0) && !(g.random_walk > 0.0)) || S == 0 ||
-      static_cast<Eigen::Index>(d.size()) != S + 1)
-    return;
-  const Eigen::Index stride = R.rows() / S;
+// The two pieces of each segment: from the dwell's middle to the turn's middle at the dwell's
+// attitude, and on to the next dwell's middle at the next one's.
+std::vector<EquivalentInputs> wander_pieces(const std::vector<PlanDwell>& d) {
   std::vector<EquivalentInputs> pieces(2 * d.size() - 2);
   for (std::size_t k = 0; k + 1 < d.size(); ++k) {
     const double m = 0.5 * (d[k].t_end + d[k + 1].t_start);
@@ -571,18 +559,61 @@ void add_turns_wander(Eigen::MatrixXd& R, const TurnRaw& r, const LibraryTurns& 
       in.duration = span[h].second - span[h].first;
     }
   }
+  return pieces;
+}
+
+// How each segment's rows respond to its two pieces' mean gyro biases beta (NED): the attitude
+// rows to D1 beta1 + D2 beta2 (the pieces' durations); the velocity rows over the turn (T, split
+// at its middle, h = T/2; psi grows as beta1 (t - t0), then beta1 h + beta2 (t - m)) to
+// -[f_n x] integral(psi) = [g_n x] (1.5 h^2 beta1 + 0.5 h^2 beta2), the specific force -g_n.
+Eigen::MatrixXd wander_response(const TurnRaw& r, const std::vector<EquivalentInputs>& pieces,
+                                const Eigen::Vector3d& g_n, Eigen::Index stride) {
+  const auto S = static_cast<Eigen::Index>(r.durations.size());
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(stride * S, 6 * S);
+  const Eigen::Matrix3d K = skew(g_n);
+  for (Eigen::Index s = 0; s < S; ++s) {
+    const auto p = static_cast<std::size_t>(2 * s);
+    G.block<3, 3>(stride * s, 6 * s).diagonal().setConstant(pieces[p].duration);
+    G.block<3, 3>(stride * s, 6 * s + 3).diagonal().setConstant(pieces[p + 1].duration);
+    if (stride < kTurnRows) continue;
+    const double h = 0.5 * r.windows[static_cast<std::size_t>(s)];
+    G.block<3, 3>(stride * s + 3, 6 * s) = 1.5 * h * h * K;
+    G.block<3, 3>(stride * s + 3, 6 * s + 3) = 0.5 * h * h * K;
+  }
+  return G;
+}
+
+// The gyros' bias wander (bias instability, rate random walk: a MEMS unit's 10 deg/h over a
+// 100 s correlation time) integrated over each segment, added to the segments' rows: the pieces'
+// mean biases covary as in the dwells' own model of the wander (stage2_wander_covariance), and
+// reach the attitude rows and the velocity rows through wander_response. Nothing for a profile
+// without wander.
+void add_turns_wander(Eigen::MatrixXd& R, const TurnRaw& r, const LibraryTurns& lt,
+                      const DwellTests& dwells) {
+  const TriadNoise& g = lt.noise.gyro;
+  const std::vector<PlanDwell> d = dwells_in_order(dwells);
+  const auto S = static_cast<Eigen::Index>(r.durations.size());
+  if ((!(g.bias_instability > 0.0) && !(g.random_walk > 0.0)) || S == 0 ||
+      static_cast<Eigen::Index>(d.size()) != S + 1)
+    return;
+  const Eigen::Index stride = R.rows() / S;
+  const std::vector<EquivalentInputs> pieces = wander_pieces(d);
   NoiseModel gyro_only;
   gyro_only.gyro = g;
-  for (std::size_t p = 0; p < pieces.size(); ++p)
-    for (std::size_t q = p; q < pieces.size(); ++q) {
-      const Eigen::Matrix3d W = stage2_wander_covariance(pieces[p], pieces[q], gyro_only)
-                                    .block<3, 3>(ins_input::kGyro.index, ins_input::kGyro.index) *
-                                (pieces[p].duration * pieces[q].duration);
-      const Eigen::Index i = stride * static_cast<Eigen::Index>(p / 2),
-                         j = stride * static_cast<Eigen::Index>(q / 2);
-      R.block<3, 3>(i, j) += W;
-      if (i != j || p != q) R.block<3, 3>(j, i) += W.transpose();
+  const auto P = static_cast<Eigen::Index>(pieces.size());
+  Eigen::MatrixXd B(3 * P, 3 * P);
+  for (Eigen::Index p = 0; p < P; ++p)
+    for (Eigen::Index q = p; q < P; ++q) {
+      const Eigen::Matrix3d W =
+          stage2_wander_covariance(pieces[static_cast<std::size_t>(p)],
+                                   pieces[static_cast<std::size_t>(q)], gyro_only)
+              .block<3, 3>(ins_input::kGyro.index, ins_input::kGyro.index);
+      B.block<3, 3>(3 * p, 3 * q) = W;
+      B.block<3, 3>(3 * q, 3 * p) = W.transpose();
     }
+  const Eigen::MatrixXd G =
+      wander_response(r, pieces, Eigen::Vector3d(0.0, 0.0, r.gravity), stride);
+  R += G * B * G.transpose();
 }
 
 // Appends the turns' whitened rows to the stacked system (each segment a block of 3 rows).
