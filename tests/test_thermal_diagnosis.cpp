@@ -659,13 +659,13 @@ TEST_CASE("Thermal diagnosis: a ramp with every thermal family hidden names a fa
   CAPTURE(round1);
   REQUIRE(!round1.empty());
   CHECK(std::find(all.begin(), all.end(), round1) != all.end());
-  // Honest sigmas (issue 33): the model is still rejected at the stop (the cap leaves candidates,
-  // the turns' attitude residual rejects), so the sigmas are said not to hold, and they carry the
+  // Honest sigmas (issue 33): the model is still rejected at the stop (its one finding refused,
+  // the turns' attitude residual rejecting), so the sigmas are said not to hold, and they carry the
   // largest scale of the rejecting data, the turns' among them.
   const ResidualCheck& c = r.d.check;
   CAPTURE(c.sigmas_note, c.turns_chi2, c.turns_dof, c.sigma_scale);
   CHECK_FALSE(c.sigmas_hold);
-  CHECK(c.sigmas_note.find("findings cap") != std::string::npos);
+  CHECK(c.sigmas_note.find("turns' attitude residual rejects") != std::string::npos);
   REQUIRE(c.turns_tested);
   CHECK_FALSE(c.turns_hold);
   CHECK(c.turns_sigma_scale == Approx(std::sqrt(c.turns_chi2 / c.turns_dof)));
