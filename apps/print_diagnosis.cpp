@@ -23,6 +23,9 @@ void print_verdict(const TableDiagnosis& d) {
   if (c.filter)
     std::printf("; filter NIS per dof %.3f%s", c.nis_per_dof,
                 c.filter_holds ? "" : " REJECTS the noise model");
+  if (c.turns_tested)
+    std::printf("; turns' attitude residual chi2 %.4g on %.4g%s", c.turns_chi2, c.turns_dof,
+                c.turns_hold ? "" : " REJECTS");
   std::printf("\n");
   if (c.filter) print_innovation_check(c.innovations);
   if (d.unexplained.present) {
@@ -39,12 +42,14 @@ void print_verdict(const TableDiagnosis& d) {
                     t.text().c_str(), lib->heldout_before, lib->heldout_after);
       if (!lib->how_to_add.empty()) std::printf("   How: %s\n", lib->how_to_add.c_str());
     }
-    if (c.dwells_sigma_scale > 1.0 || c.filter_sigma_scale > 1.0)
+    if (c.sigma_scale > 1.0)
       std::printf(
-          "   The sigmas below are scaled by the unexplained residual (dwells x%.2f, filter "
-          "x%.2f)\n",
-          c.dwells_sigma_scale, c.filter_sigma_scale);
+          "   The sigmas below are scaled by the unexplained residual: x%.2f, the largest of "
+          "dwells x%.2f, held-out dwells x%.2f, filter x%.2f, turns x%.2f\n",
+          c.sigma_scale, c.dwells_sigma_scale, c.heldout_sigma_scale, c.filter_sigma_scale,
+          c.turns_sigma_scale);
   }
+  if (!c.sigmas_hold) std::printf("Sigmas do not hold: %s\n", c.sigmas_note.c_str());
   for (const auto& s : d.stops) std::printf("Stop: %s\n", s.c_str());
 }
 

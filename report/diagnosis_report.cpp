@@ -83,7 +83,16 @@ void add_verdict(json& j, const TableDiagnosis& d) {
                          {"filter_holds", c.filter_holds},
                          {"innovations", innovation_check_json(c.innovations)},
                          {"dwells_sigma_scale", c.dwells_sigma_scale},
-                         {"filter_sigma_scale", c.filter_sigma_scale}};
+                         {"filter_sigma_scale", c.filter_sigma_scale},
+                         {"heldout_sigma_scale", c.heldout_sigma_scale},
+                         {"turns_tested", c.turns_tested},
+                         {"turns_chi2", c.turns_chi2},
+                         {"turns_dof", c.turns_dof},
+                         {"turns_hold", c.turns_hold},
+                         {"turns_sigma_scale", c.turns_sigma_scale},
+                         {"sigma_scale", c.sigma_scale},
+                         {"sigmas_hold", c.sigmas_hold},
+                         {"sigmas_note", c.sigmas_note}};
   json rejected = json::array();
   for (const auto& r : d.rejected)
     rejected.push_back({{"family", r.finding.family},
@@ -178,6 +187,7 @@ void add_story_fields(json& j, const TableFinding& f) {
     j["heldout_turns_after"] = heldout_turns_json(f.turns_after);
   }
   if (!f.library_alternative.empty()) j["library_alternative"] = f.library_alternative;
+  if (!f.time_temperature.empty()) j["time_temperature"] = f.time_temperature;
 }
 
 }  // namespace
@@ -192,7 +202,9 @@ std::string finding_title(const TableFinding& f) {
   return t + " (ambiguous on this plan's dwells; the model extended with " + f.family +
          (f.picked_by == "user"    ? ", the user's pick)"
           : f.picked_by == "turns" ? ", the turns' pick)"
-                                   : ", the dwells' best fit)");
+          : f.picked_by == "temperature first (ramp)"
+              ? ", temperature first: time and temperature rise together)"
+              : ", the dwells' best fit)");
 }
 
 std::string finding_summary(const TableFinding& f) {
@@ -214,6 +226,7 @@ std::string finding_summary(const TableFinding& f) {
       << " -> " << fixed(f.turns_after->velocity / 1e-3, 3) << " mm/s";
   if (!f.library_alternative.empty())
     m << "; or, not separable on this plan: " << f.library_alternative;
+  if (!f.time_temperature.empty()) m << "; time against temperature: " << f.time_temperature;
   return m.str();
 }
 
@@ -366,7 +379,9 @@ std::string diagnosis_markdown(const TableDiagnosis& d, const std::string& sessi
     m << "\n\n**Unexplained** (no family of the catalog explains it; the sigmas are scaled by the "
          "residual: dwells x"
       << fixed(c.dwells_sigma_scale, 2) << ", filter x" << fixed(c.filter_sigma_scale, 2)
-      << "):\n\n";
+      << ", held-out dwells x" << fixed(c.heldout_sigma_scale, 2) << ", turns x"
+      << fixed(c.turns_sigma_scale, 2) << "; the largest, x" << fixed(c.sigma_scale, 2)
+      << ", applies):\n\n";
     for (const auto& s : d.unexplained.signature) m << "- " << s << "\n";
     if (d.unexplained.library)
       for (const auto& t : d.unexplained.library->terms)

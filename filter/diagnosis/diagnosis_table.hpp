@@ -110,6 +110,9 @@ struct TableFinding : TestVerdict {
   /// with the model before the finding) in alternative_term.
   std::string library_alternative;
   std::optional<LibraryTerm> alternative_term;
+  /// A bias drift in time against the same bias's degree-1 temperature term (a session whose
+  /// temperature varies): the held-out dwells' verdict between them (CandidateTest), else "".
+  std::string time_temperature;
 };
 
 /// The final model's residual against its noise model: whether the findings leave the dwells and
@@ -136,6 +139,24 @@ struct ResidualCheck {
   bool filter_holds = true;         // the innovations consistent with the noise model
   double dwells_sigma_scale = 1.0;  // sqrt(chi2 / dof) where the dwells do not hold, else 1
   double filter_sigma_scale = 1.0;  // sqrt(NIS per dof) where the filter does not hold, else 1
+  /// sqrt(held-out chi2 / inputs) where the held-out dwells do not hold, else 1.
+  double heldout_sigma_scale = 1.0;
+  /// The turns' attitude residual (the term library's test, LibraryFit) with the final model:
+  /// sqrt(chi2 / dof) where it rejects, else 1. turns_tested false: no session to read.
+  bool turns_tested = false;
+  double turns_chi2 = 0.0, turns_dof = 0.0;
+  bool turns_hold = true;
+  double turns_sigma_scale = 1.0;
+  /// The factor every reported sigma of a finding carries: the largest of the four scales (an
+  /// incomplete model aliases what it lacks into every estimate, whichever data reject it; on an
+  /// all-hidden ramp the dwells held while the turns rejected, and the magnitudes were 2.7-130
+  /// sigma off, issue 33).
+  double sigma_scale = 1.0;
+  /// False when the model is still rejected at the stop (any of the data above, a finding the
+  /// held-out data refused, or the findings cap with a candidate still significant): the scaled
+  /// sigmas are then a lower bound, not a confidence interval; `sigmas_note` says why.
+  bool sigmas_hold = true;
+  std::string sigmas_note;
   bool holds() const { return dwells_hold && heldout_hold && filter_holds; }
 };
 
