@@ -72,6 +72,32 @@ TEST_CASE("Autocorrelation sums: streaming, the stored series' autocorrelations 
   CHECK(constant.ljung_box_q(4) == 0.0);
 }
 
+// An AR(1) series x_k = phi x_(k-1) + e_k has the integrated autocorrelation time
+// (1 + phi) / (1 - phi); its estimate's relative sigma is about sqrt(2 (2 M + 1) / n), M the
+// summation window (about 5 tau here: Sokal's estimate), so 4 of those bound the check.
+TEST_CASE("Autocorrelation time: AR(1) series at (1 + phi) / (1 - phi), white noise at 1",
+          "[innovation]") {
+  const auto ar1 = [](double phi, std::size_t n, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> e(0.0, 1.0);
+    std::vector<double> x(n);
+    double v = 0.0;
+    for (auto& xk : x) xk = v = phi * v + e(rng);
+    return x;
+  };
+  for (const double phi : {0.5, 0.8}) {
+    const std::size_t n = 50000;
+    const double tau = (1.0 + phi) / (1.0 - phi);
+    const double rel_sigma = std::sqrt(2.0 * (2.0 * 5.0 * tau + 1.0) / static_cast<double>(n));
+    const double got = autocorrelation_time(ar1(phi, n, 7u));
+    INFO("phi " << phi << ": tau " << got << " against " << tau);
+    CHECK(std::abs(got / tau - 1.0) < 4.0 * rel_sigma);
+  }
+  // White noise, and a negatively correlated series (true 1/3): at least 1 by definition.
+  CHECK(autocorrelation_time(ar1(0.0, 50000, 8u)) == Approx(1.0).margin(0.05));
+  CHECK(autocorrelation_time(ar1(-0.5, 50000, 9u)) == Approx(1.0));
+}
+
 TEST_CASE("Innovation check: white channels pass, an AR(1) channel and a too-wide one fail",
           "[innovations]") {
   // 3000 updates per channel; 8 tests (5 NIS, the whiteness of the 3 dwell velocity channels),

@@ -1,6 +1,7 @@
 #include "filter/noise/autocorrelation.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace sinscal {
@@ -63,6 +64,33 @@ double AutocorrelationSums::ljung_box_q(int h) const {
     q += r * r / (n - k);
   }
   return n * (n + 2.0) * q;
+}
+
+double autocorrelation_time(const std::vector<double>& x) {
+  const std::size_t n = x.size();
+  if (n < 8) return 1.0;
+  double mean = 0.0;
+  for (const double v : x) mean += v;
+  mean /= static_cast<double>(n);
+  const auto autocovariance = [&](std::size_t lag) {
+    double s = 0.0;
+    for (std::size_t k = 0; k + lag < n; ++k) s += (x[k] - mean) * (x[k + lag] - mean);
+    return s / static_cast<double>(n);
+  };
+  const double c0 = autocovariance(0);
+  if (!(c0 > 0.0)) return 1.0;
+  // Pairs rho(2m - 1) + rho(2m), m = 1, 2, ..., summed while positive (Geyer's initial positive
+  // sequence), when the first is beyond 2 sigma of white noise's (each autocorrelation's sigma
+  // 1 / sqrt(n)): white noise gives 1, not 1 plus its noise's positive pairs.
+  const double noise = 2.0 * std::sqrt(2.0 / static_cast<double>(n));
+  const std::size_t max_lag = std::min<std::size_t>(n / 4, 2000);  // bounded cost
+  double tau = 1.0;
+  for (std::size_t lag = 1; lag + 1 <= max_lag; lag += 2) {
+    const double pair = (autocovariance(lag) + autocovariance(lag + 1)) / c0;
+    if (!(pair > (lag == 1 ? noise : 0.0))) break;
+    tau += 2.0 * pair;
+  }
+  return tau;
 }
 
 }  // namespace sinscal

@@ -12,6 +12,13 @@
 
 namespace sinscal {
 
+/// The integrated autocorrelation time (in samples, at least 1) of `x`: 1 + 2 sum of its
+/// autocorrelations, summed in pairs (lags 2m - 1 and 2m) while a pair is positive (Geyer's
+/// initial positive sequence), when the first pair is beyond 2 sigma of white noise's (white
+/// noise: 1); lags up to a quarter of the samples and at most 2000.
+/// The rate table weighs each segment mean by it (var tau / n).
+double autocorrelation_time(const std::vector<double>& x);
+
 class AutocorrelationSums {
  public:
   /// Autocorrelations up to `lags` (at least 1).

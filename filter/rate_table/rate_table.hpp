@@ -68,12 +68,6 @@ struct SegmentMean {
   Eigen::Vector3d tau_omega = Eigen::Vector3d::Ones(), tau_f = Eigen::Vector3d::Ones();
 };
 
-/// The integrated autocorrelation time (in samples, at least 1) of `x`: 1 + 2 sum of its
-/// autocorrelations, summed in pairs (lags 2m - 1 and 2m) while a pair is positive (Geyer's
-/// initial positive sequence), when the first pair is beyond 2 sigma of white noise's (white
-/// noise: 1); lags up to a quarter of the samples and at most 2000.
-double autocorrelation_time(const std::vector<double>& x);
-
 struct RateTableOptions {
   double nominal_rate_hz = 100.0;  // readings per second, for the segments' expected lengths
   double static_threshold = 3.0 * M_PI / 180.0;  // rad/s: a mean rate above is motion
