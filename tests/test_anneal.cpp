@@ -14,6 +14,7 @@
 #include "models/config.hpp"
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"
+#include "plan_playback.hpp"
 #include "rig/imu_sim.hpp"
 #include "rig/table_spec.hpp"
 
@@ -60,18 +61,6 @@ int body_axis_along(const PlanGenome& g, std::size_t turns, const Eigen::Vector3
   for (int i = 0; i < 3; ++i)
     if (std::abs(std::abs(n_b[i]) - 1.0) < 1e-9) return n_b[i] > 0.0 ? i : -1 - i;
   return 99;
-}
-
-int samples_played(const Plan& p, double rate_hz) {
-  SimulatorOptions so;
-  so.rate_hz = rate_hz;
-  so.noise = false;
-  const Motion motion = build_motion(p, p.site);  // the simulator keeps a reference
-  ImuSimulator sim(motion, ImuErrorModel{}, NoiseModel{}, so);
-  ImuSample s;
-  int n = 0;
-  while (sim.next(s)) ++n;
-  return n;
 }
 
 }  // namespace

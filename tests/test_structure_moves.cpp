@@ -13,6 +13,7 @@
 #include "models/config.hpp"
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"
+#include "plan_playback.hpp"
 #include "rig/imu_sim.hpp"
 #include "rig/table_spec.hpp"
 
@@ -26,18 +27,6 @@ const char* kFog = "config/sensors/nav-fog-extended.ini";
 Eigen::Matrix3d final_attitude(const Plan& p) {
   const Motion m = build_motion(p, p.site);
   return m.at(m.duration()).C_b_n;
-}
-
-int samples_played(const Plan& p, double rate_hz) {
-  SimulatorOptions so;
-  so.rate_hz = rate_hz;
-  so.noise = false;
-  const Motion motion = build_motion(p, p.site);  // the simulator keeps a reference
-  ImuSimulator sim(motion, ImuErrorModel{}, NoiseModel{}, so);
-  ImuSample s;
-  int n = 0;
-  while (sim.next(s)) ++n;
-  return n;
 }
 
 }  // namespace
