@@ -4,18 +4,7 @@
 set -u
 bin=$1; src=$2; work=$3
 rm -rf "$work"; mkdir -p "$work"
-pass=0; fail=0; skipped=0
-# skip NAME WHY: a check that needs an optional program which is not installed
-# (tests/optional-packages); the script then exits with 77, which ctest reports as skipped.
-skip() { skipped=$((skipped + 1)); echo "SKIPPED: $1 ($2)"; }
-check() {  # check NAME CONDITION...
-  local name=$1; shift
-  if [ "$1" = python3 ] && ! command -v python3 > /dev/null; then
-    skip "$name" "python3 is not installed"; return
-  fi
-  if "$@"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAILED: $name"; fi
-}
-contains() { grep -q -- "$2" "$1"; }
+. "$src/tests/cli/check.sh"
 
 "$bin" --help > "$work/help.txt"; check "help exits 0" test $? -eq 0
 "$bin" simulate --help > "$work/simhelp.txt"; check "simulate --help exits 0" test $? -eq 0
@@ -490,6 +479,4 @@ check "... every estimate within its sigmas of the truth" contains "$work/late.t
 check "... along the plan's motion the gate refuses it (exit 2)" test $? -eq 2
 check "... naming the gate" contains "$work/late-plan.err" "plausibility gate"
 
-echo "$pass passed, $fail failed, $skipped skipped"
-[ "$fail" -eq 0 ] || exit 1
-[ "$skipped" -eq 0 ] || exit 77
+finish

@@ -6,21 +6,7 @@
 set -u
 bin=$1; src=$2; work=$3
 rm -rf "$work"; mkdir -p "$work"
-pass=0; fail=0; skipped=0
-# skip NAME WHY: a check that needs an optional program which is not installed
-# (tests/optional-packages); the script then exits with 77, which ctest reports as skipped.
-skip() { skipped=$((skipped + 1)); echo "SKIPPED: $1 ($2)"; }
-check() {  # check NAME CONDITION...
-  local name=$1; shift
-  if [ "$1" = python3 ] && ! command -v python3 > /dev/null; then
-    skip "$name" "python3 is not installed"; return
-  fi
-  if "$@"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAILED: $name"; fi
-}
-contains() { grep -q -- "$2" "$1"; }
-# The number after "key": in a JSON file (the first occurrence).
-json_number() { grep -o "\"$2\": [-0-9.e+]*" "$1" | head -n 1 | sed 's/.*: //'; }
-within() { awk -v x="$1" -v lo="$2" -v hi="$3" 'BEGIN { exit !(x >= lo && x <= hi) }'; }
+. "$src/tests/cli/check.sh"
 
 measured=$src/config/measured
 data=$src/data
@@ -226,6 +212,4 @@ check "six-face diagnose exits 0" test $? -eq 0
 check "... states the g-sensitivity verdict with its detection limit" grep -qE '^Wald statistic [0-9.]+ on 9 dof, p = [0-9.e-]+: not detected at alpha 0.01: below the detection limit of [0-9.]+ deg/h/g per term' "$work/sf-diag.txt"
 check "... writes K with sigmas" python3 -c "import json,sys; g=json.load(open('$work/sf-diag/diagnosis.json'))['g_sensitivity']; sys.exit(not (len(g['K']) == 3 and all(s > 0 for row in g['K_sigma'] for s in row) and g['detected'] is False))"
 
-echo "$pass passed, $fail failed, $skipped skipped"
-[ "$fail" -eq 0 ] || exit 1
-[ "$skipped" -eq 0 ] || exit 77
+finish

@@ -6,20 +6,7 @@
 set -u
 bin=$1; src=$2; work=$3
 rm -rf "$work"; mkdir -p "$work"
-pass=0; fail=0; skipped=0
-# skip NAME WHY: a check that needs an optional program which is not installed
-# (tests/optional-packages); the script then exits with 77, which ctest reports as skipped.
-skip() { skipped=$((skipped + 1)); echo "SKIPPED: $1 ($2)"; }
-check() {  # check NAME CONDITION...
-  local name=$1; shift
-  if { [ "$1" = python3 ] || [ "$1" = json ]; } && ! command -v python3 > /dev/null; then
-    skip "$name" "python3 is not installed"; return
-  fi
-  if "$@"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAILED: $name"; fi
-}
-contains() { grep -q -- "$2" "$1"; }
-# json FILE EXPR: the Python expression on the result `r` is true.
-json() { python3 -c "import json,sys; r=json.load(open('$1')); sys.exit(not ($2))"; }
+. "$src/tests/cli/check.sh"
 
 # The README's session: rot19, nav-fog-extended, the table's base where the plan says.
 "$bin" simulate --plan "$src/config/plans/rot19.ini" --sensor "$src/config/sensors/nav-fog-extended.ini" \
@@ -60,6 +47,4 @@ check "--base with the closed form exits 1" test $? -eq 1
 check "... kf only" contains "$work/cf.err" "--base acts in --method kf only"
 check "no result written on a usage error" test ! -e "$work/x.json"
 
-echo "$pass passed, $fail failed, $skipped skipped"
-[ "$fail" -eq 0 ] || exit 1
-[ "$skipped" -eq 0 ] || exit 77
+finish

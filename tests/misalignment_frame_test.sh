@@ -7,18 +7,7 @@
 set -u
 bin=$1; src=$2; work=$3
 rm -rf "$work"; mkdir -p "$work"
-pass=0; fail=0; skipped=0
-skip() { skipped=$((skipped + 1)); echo "SKIPPED: $1 ($2)"; }
-check() {  # check NAME CONDITION...
-  local name=$1; shift
-  if { [ "$1" = python3 ] || [ "$1" = json ]; } && ! command -v python3 > /dev/null; then
-    skip "$name" "python3 is not installed"; return
-  fi
-  if "$@"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAILED: $name"; fi
-}
-contains() { grep -q -- "$2" "$1"; }
-# json FILE EXPR: the Python expression on the document `r` is true.
-json() { python3 -c "import json,sys; r=json.load(open('$1')); sys.exit(not ($2))"; }
+. "$src/tests/cli/check.sh"
 fog=$src/config/sensors/nav-fog.ini
 
 "$bin" simulate --plan "$src/config/plans/rot19.ini" --sensor "$fog" --out "$work/r19" --rate 10 \
@@ -135,7 +124,4 @@ check "... design.json states it" json "$work/design/design.json" "r['misalignme
 check "design refuses the table frame without attitude updates" test $? -eq 1
 check "... with the cause" contains "$work/design.err" "not observable without table-attitude updates"
 
-echo "misalignment frame: $pass passed, $fail failed, $skipped skipped"
-[ "$fail" -eq 0 ] || exit 1
-[ "$skipped" -eq 0 ] || exit 77
-exit 0
+finish "misalignment frame"

@@ -9,14 +9,7 @@
 set -u
 bin=$1; src=$2; work=$3
 rm -rf "$work"; mkdir -p "$work"; work=$(cd "$work" && pwd)
-pass=0; fail=0; skipped=0
-skip() { skipped=$((skipped + 1)); echo "SKIPPED: $1"; }
-check() {  # check NAME CONDITION...
-  local name=$1; shift
-  if "$@"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAILED: $name"; fi
-}
-contains() { grep -q -- "$2" "$1"; }
-lacks() { ! grep -q -- "$2" "$1"; }
+. "$src/tests/cli/check.sh"
 chromium=$(command -v chromium || true)
 
 # --- Kalman filter on rot19 with its monitor: the certificate, its PDF --------------------------
@@ -176,6 +169,4 @@ check "the Xsens page has the noise" contains "$work/xsens.html" 'Noise at rest'
 check "the Xsens page hashes both logs" test "$(grep -c '>unchanged<' "$work/xsens.html")" -ge 2
 check "the Xsens page says the convergence plot is not for this method" lacks "$work/xsens.html" '<h2>Convergence'
 
-echo "report tests: $pass passed, $fail failed, $skipped skipped"
-[ "$fail" -eq 0 ] || exit 1
-[ "$skipped" -eq 0 ] || exit 77
+finish "report tests"
