@@ -4,6 +4,7 @@
 // predicted by the fit without it: filter/diagnosis/handheld_diagnosis.hpp) better than the model
 // before it, by more than the held-out chi-square's 99 % point of the finding's components: a
 // name the held-out data contradict, or do not support, turns it red. docs/measured/README.md.
+#include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <catch2/catch.hpp>
 
