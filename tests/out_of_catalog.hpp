@@ -5,10 +5,12 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -102,6 +104,35 @@ inline void append_unanticipated_effects(std::vector<OpenWorldEffect>& e, double
                "", 0, "", 0.0});
 }
 
+/// More effects the library does not anticipate (issue 33, session 43): a gyro that saturates
+/// just below the table's turn rate (rot19's turns peak at 11.46 deg/s), sample-timing jitter (each
+/// increment spans dt (1 + e), e white, 100 ppm RMS: 5 us at 20 Hz), a gyro scale factor that
+/// depends on the specific force across it, and a gyro bias transient (30 s, no temperature)
+/// starting at two thirds of mid-session.
+inline void append_more_unanticipated_effects(std::vector<OpenWorldEffect>& e, double mid_s) {
+  const double dph = units::deg_per_h, dps = units::deg_per_s;
+  e.push_back({"gyro y clipped at 11.4 deg/s",
+               [dps](double, auto&, auto& w) { w(1) = std::clamp(w(1), -11.4 * dps, 11.4 * dps); },
+               "", 0, "", 0.0});
+  e.push_back({"sample timing jitter 100 ppm RMS",
+               [rng = std::mt19937(33), n = std::normal_distribution<double>(0.0, 100e-6)](
+                   double, auto& f, auto& w) mutable {
+                 const double k = 1.0 + n(rng);
+                 f *= k;
+                 w *= k;
+               },
+               "", 0, "", 0.0});
+  e.push_back({"gyro x scale += 100 ppm/g f_z",
+               [](double, auto& f, auto& w) { w(0) += 100e-6 * w(0) * f(2) / kG; }, "", 0, "",
+               0.0});
+  const double t0 = 2.0 * mid_s / 3.0;
+  e.push_back({"gyro y bias transient 0.1 deg/h for 30 s",
+               [dph, t0](double t, auto&, auto& w) {
+                 if (t > t0 && t <= t0 + 30.0) w(1) += 0.1 * dph;
+               },
+               "", 0, "", 0.0});
+}
+
 /// The effects of the open-world matrix (issue 33); the bias step at log time mid_s (s).
 inline std::vector<OpenWorldEffect> open_world_effects(double mid_s) {
   const double ug = units::ug, dph = units::deg_per_h, g2 = kG * kG;
@@ -136,6 +167,7 @@ inline std::vector<OpenWorldEffect> open_world_effects(double mid_s) {
                [ug](double t, auto& f, auto&) { f(2) += 20.0 * ug * (t / 600.0) * (t / 600.0); },
                "accel", 2, "t^2", 20.0 * 36.0});
   append_unanticipated_effects(e, mid_s);
+  append_more_unanticipated_effects(e, mid_s);
   return e;
 }
 

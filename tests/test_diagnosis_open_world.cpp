@@ -92,6 +92,12 @@ void print_seed(std::uint64_t seed, const DiagnosisOutcome& o, int term) {
       std::printf("    library: %s\n", t.text().c_str());
 }
 
+// The matrix's sensor profile: SINSCAL_OPEN_WORLD_PROFILE, or nav-fog.ini.
+std::string open_world_profile() {
+  const char* p = std::getenv("SINSCAL_OPEN_WORLD_PROFILE");
+  return p ? p : "nav-fog.ini";
+}
+
 OpenWorldScore run_effect(const std::string& plan, std::size_t effect, int seeds,
                           std::uint64_t seed0, double scale) {
   OpenWorldScore s;
@@ -101,7 +107,7 @@ OpenWorldScore run_effect(const std::string& plan, std::size_t effect, int seeds
     DiagnosisOutcome o;
     try {
       const HiddenCase c =
-          open_world_case(plan, "nav-fog.ini", effect, seed, kOpenWorldRate, scale);
+          open_world_case(plan, open_world_profile(), effect, seed, kOpenWorldRate, scale);
       o = diagnose_hidden(c, {});
     } catch (const std::exception& e) {
       ++s.errors;
