@@ -21,6 +21,7 @@ SessionSummary calibrate_rate_table_session(const CalibrateOptions& o,
   ro.nominal_rate_hz = session.rate_hz;
   ro.table_sigma = o.table_sigma * units::arcsec;
   ro.cross_asymmetry = o.cross_asymmetry;
+  ro.gyro_drift = o.gyro_drift;
   const auto segments = rate_segments(session.plan, session.site);
   // Bad readings (a NaN field, a damaged line) stop the run, or with --on-bad-sample skip are
   // left out of the means, counted and the first named.

@@ -126,6 +126,7 @@ SegmentMean mean_of(const std::vector<RateReading>& r, std::size_t a, std::size_
 // across a rate segment's axis that its unknown start angle leaves).
 struct MeanRow {
   bool has_f = false;
+  double t = 0.0;  // s: the segment's middle reading at the nominal rate
   Eigen::Vector3d x_w, x_f, y_w, y_f, f_for_gyro;
   Eigen::Matrix3d cov_w, cov_f;
 };
@@ -146,6 +147,7 @@ MeanRow row_of(const RateSegment& s, const SegmentMean& m, const Eigen::Vector3d
   const double n = static_cast<double>(m.count);
   r.y_w = m.omega;
   r.y_f = m.f;
+  r.t = 0.5 * static_cast<double>(m.first + m.last - 1) / o.nominal_rate_hz;
   // The mean's variance: var tau / n, the readings' variance about their own mean corrected by
   // (n - 1) / (n - tau) for what the mean took out of it (n / tau: the effective sample count).
   // A floor far below any sensor's noise (noise-free simulations).
@@ -209,7 +211,8 @@ void add_gyro_asymmetries(bool cross, const AddParam& add) {
             [j](const MeanRow& r) { return std::abs(r.x_w(j)); }, false);
 }
 
-std::vector<Param> candidate_params(bool gyro_rates, bool cross) {
+std::vector<Param> candidate_params(bool gyro_rates, const RateTableOptions& opt) {
+  const bool cross = opt.cross_asymmetry, drift = opt.gyro_drift;
   using V6 = Eigen::Matrix<double, 6, 1>;
   std::vector<Param> p;
   auto add = [&](const std::string& name, int row, std::function<double(const MeanRow&)> v,
@@ -226,6 +229,8 @@ std::vector<Param> candidate_params(bool gyro_rates, bool cross) {
     auto x = [t](const MeanRow& r) -> const Eigen::Vector3d& { return t == 0 ? r.x_w : r.x_f; };
     for (int i = 0; i < 3; ++i)
       add(tr + "bias." + kAxis[i], o + i, [](const MeanRow&) { return 1.0; });
+    for (int i = 0; t == 0 && drift && i < 3; ++i)
+      add(tr + "bias_drift." + kAxis[i], i, [](const MeanRow& r) { return r.t; });
     if (t == 0 && !gyro_rates) continue;
     for (int i = 0; i < 3; ++i)
       add(tr + "scale." + kAxis[i], o + i, [x, i](const MeanRow& r) { return x(r)(i); });
@@ -336,8 +341,8 @@ std::vector<std::size_t> determined(const Eigen::MatrixXd& A) {
 }
 
 // A triad's base terms (bias, scale, misalignment) must all be determined, or its other terms
-// would absorb the missing ones: else only what needs none of them stays (the gyros' bias and
-// g-sensitivity; nothing of the accelerometers').
+// would absorb the missing ones: else only what needs none of them stays (the gyros' bias, its
+// drift and the g-sensitivity; nothing of the accelerometers').
 void drop_incomplete(const std::vector<Param>& params, std::vector<std::size_t>& keep) {
   for (const char* prefix : {"gyro.", "accel."}) {
     const std::string tr = prefix;
@@ -353,6 +358,7 @@ void drop_incomplete(const std::vector<Param>& params, std::vector<std::size_t>&
                                 const std::string& n = params[k].name;
                                 return n.rfind(tr, 0) == 0 &&
                                        !(tr == "gyro." && (n.rfind("gyro.bias.", 0) == 0 ||
+                                                           n.rfind("gyro.bias_drift.", 0) == 0 ||
                                                            n.rfind("gyro.g_sens", 0) == 0));
                               }),
                keep.end());
@@ -448,7 +454,7 @@ RateTableResult rate_table_calibrate(const std::vector<RateSegment>& segments,
     commanded.push_back(row_of(segments[i], means[i], Eigen::Vector3d::Zero(), -down, options));
     ++(segments[i].kind == RateSegment::Kind::Static ? res.static_segments : res.rate_segments);
   }
-  const auto params = candidate_params(res.rate_segments > 0, options.cross_asymmetry);
+  const auto params = candidate_params(res.rate_segments > 0, options);
   auto keep = determined(whitened(commanded, params).A);
   drop_incomplete(params, keep);
   // A triad without coefficients has no rows (the accelerometers; the gyros keep their biases).

@@ -82,6 +82,11 @@ struct RateTableOptions {
   /// asymmetry is along it), taken with the scale asymmetries before the g-sensitivity, which a
   /// single gravity direction cannot tell from them (calibrate --cross-asymmetry).
   bool cross_asymmetry = false;
+  /// The gyros' bias drift over the log (gyro.bias_drift.i, rad/s^2): each segment's mean at its
+  /// middle reading's time at the nominal rate (index / nominal_rate_hz; the log's own time is not
+  /// read). A BMI160 warming up on a tumble drifts by 0.01-0.04 deg/s over its 7 rests, several
+  /// times its means' noise (calibrate --gyro-drift).
+  bool gyro_drift = false;
 };
 
 /// Finds the segments in the readings in order (the k-th run that matches the k-th segment; a
