@@ -355,3 +355,53 @@ TEST_CASE("Rate table: gyro offsets while turning across the axis (--cross-asymm
   }
   CHECK(cross == 6);
 }
+
+namespace {
+// The tumble's fit: its rests found in the readings (no time), with or without the gyros' drift.
+RateTableResult tumble_fit(const Session& s, bool gyro_drift) {
+  const auto segments = rate_segments(s.plan, s.site);
+  RateTableOptions ro;
+  ro.nominal_rate_hz = s.rate_hz;
+  ro.gyro_drift = gyro_drift;
+  const auto means = find_segments(read_rate_readings(s.log), segments, ro);
+  return rate_table_calibrate(segments, means, s.site, 0.0, ro);
+}
+}  // namespace
+
+TEST_CASE("Rate table: a tumble whose gyro biases drift over the log (--gyro-drift)",
+          "[rate_table][apophis][plausibility]") {
+  // The APOPHIS tumbles' gyro rests drift over the log (board 2's gyro x: 0.163, 0.153, 0.152,
+  // 0.137, 0.133, 0.131, 0.135 deg/s face by face), 5-20 times their means' sigma: the gyros' fit
+  // (bias and g-sensitivity) was refused at chi2/dof 8.7-13.3. Generated: a tumble of 8 rests of
+  // the logs' structure (no time, 12.5-18.75 Hz) with board 2's drift. Without the drift term the
+  // gate refuses the gyros; with it the gate passes, and the drift, the biases (at the log's
+  // start) and the g-sensitivity (none generated) are within 4 sigma of the truth.
+  const test::ApophisLike spec = test::apophis_tumble();
+  const std::string dir = test::temp_dir("apophis_like_tumble");
+  const Session s = Session::load(test::write_apophis_like(dir, spec));
+  const PlausibilityLimits limits = PlausibilityLimits::from_profile(nullptr);
+  const PlausibilityCheck without = check_rate_table_fit(tumble_fit(s, false), limits, "log.csv");
+  INFO(without.detail);
+  CHECK_FALSE(without.passed);
+  CHECK_THAT(without.detail, Catch::Contains("the gyros' chi2 per dof"));
+  const RateTableResult r = tumble_fit(s, true);
+  const PlausibilityCheck with = check_rate_table_fit(r, limits, "log.csv");
+  INFO(with.detail);
+  CHECK(with.passed);
+  REQUIRE(r.triad_fits.front().dof >= 6);
+  int checked = 0;
+  for (const auto& c : r.coefficients) {
+    if (c.name.rfind("gyro.", 0) != 0) continue;
+    const int axis = c.name.back() - 'x';
+    const double truth = c.name.rfind("gyro.bias.", 0) == 0         ? spec.gyro_bias(axis)
+                         : c.name.rfind("gyro.bias_drift.", 0) == 0 ? spec.gyro_drift(axis)
+                                                                    : 0.0;
+    CAPTURE(c.name, c.value, c.sigma, truth);
+    CHECK(std::abs(c.value - truth) < 4.0 * c.sigma);
+    checked += c.name.rfind("gyro.bias_drift.", 0) == 0 ? 1 : 0;
+  }
+  CHECK(checked == 3);
+  // The drift is resolved: x's at least 10 sigma from zero.
+  for (const auto& c : r.coefficients)
+    if (c.name == "gyro.bias_drift.x") CHECK(std::abs(c.value) > 10.0 * c.sigma);
+}
