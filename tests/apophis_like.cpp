@@ -151,6 +151,19 @@ ApophisLike apophis_rate_test() {
   return spec;
 }
 
+ApophisLike apophis_rate_test_short() {
+  ApophisLike spec = apophis_rate_test();
+  for (auto& p : spec.phases)
+    if (p.rest > 0.0) p.rest = 10.0;
+  spec.toggle_flip = 0.05;
+  const auto replace = [&spec](const std::string& from, const std::string& to) {
+    spec.plan_text.replace(spec.plan_text.find(from), from.size(), to);
+  };
+  replace("dwell = 30 s", "dwell = 10 s");
+  replace("pauses = 0 30 0 30 0 30 s", "pauses = 0 10 0 10 0 10 s");
+  return spec;
+}
+
 namespace {
 // The orientation plan of a tumble's rests: each rest's generated attitude as heading, pitch and
 // roll (NED-FRD), on a three-axis table.

@@ -73,6 +73,11 @@ std::string bmi160_profile_text();
 /// (0.3 deg/s).
 ApophisLike apophis_rate_test();
 
+/// apophis_rate_test() with 10 s rests and runs of 20 readings at one level (each output switching
+/// on 5 % of the readings: an autocorrelation time of about 14 readings with the white noise),
+/// rests of about 150 readings, only about 10 times that long.
+ApophisLike apophis_rate_test_short();
+
 /// A six-face tumble of the APOPHIS tumble logs' structure on a three-axis table: 40 s rests at
 /// z up, two x faces, z down, z up, two y faces and z up again (90 and 180 deg moves at 10 deg/s
 /// about body y and x), readings at 12.5-18.75 Hz (15 Hz on average) without time, white noise

@@ -1,8 +1,7 @@
 // Writes a generated session of the APOPHIS logs' structure (tests/apophis_like.hpp) for the
 // bad-input corpus (tests/bad_input_test.sh): apophis_like_writer DIR rate-test | rate-test-short
 // | z-turns | tumble [SEED] (Monte Carlos of the rate test and the tumble:
-// docs/measured/apophis/README.md). rate-test-short: the rate test with 10 s rests and runs of 20
-// readings at one level (rests only about 7 times their outputs' correlation long).
+// docs/measured/apophis/README.md).
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -11,24 +10,12 @@
 
 namespace {
 
-void replace_all(std::string& text, const std::string& from, const std::string& to) {
-  for (auto at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size()))
-    text.replace(at, from.size(), to);
-}
-
 sinscal::test::ApophisLike spec_of(const std::string& kind) {
   using namespace sinscal::test;
   if (kind == "z-turns") return apophis_z_turns();
   if (kind == "tumble") return apophis_tumble();
-  ApophisLike spec = apophis_rate_test();
-  if (kind == "rate-test-short") {
-    for (auto& p : spec.phases)
-      if (p.rest > 0.0) p.rest = 10.0;
-    spec.toggle_flip = 0.05;
-    replace_all(spec.plan_text, "dwell = 30 s", "dwell = 10 s");
-    replace_all(spec.plan_text, "pauses = 0 30 0 30 0 30 s", "pauses = 0 10 0 10 0 10 s");
-  }
-  return spec;
+  if (kind == "rate-test-short") return apophis_rate_test_short();
+  return apophis_rate_test();
 }
 
 }  // namespace

@@ -405,3 +405,49 @@ TEST_CASE("Rate table: a tumble whose gyro biases drift over the log (--gyro-dri
   for (const auto& c : r.coefficients)
     if (c.name == "gyro.bias_drift.x") CHECK(std::abs(c.value) > 10.0 * c.sigma);
 }
+
+TEST_CASE("Rate table: short segments' autocorrelation times floored by the log's pooled time",
+          "[rate_table][apophis]") {
+  // Outputs toggling in runs of 20 readings over white noise (apophis_rate_test_short): each
+  // gyro's true integrated autocorrelation time is (s^2 (1 + r) / (1 - r) + w^2) / (s^2 + w^2),
+  // s = half the 1.02 deg/s step, r = 1 - 2 x 0.05 per reading, w = 0.3 deg/s: 14.4 readings. A
+  // 10 s rest (about 150 readings) alone gives too short a time (its own mean takes part of the
+  // correlation out): every segment's time is at least the readings-weighted mean over the log's
+  // segments, and that mean is within 4 of its sigmas of the truth (Sokal's variance of the
+  // estimate, 2 (2 M + 1) / N tau^2, window M = 3 tau, N readings).
+  const test::ApophisLike spec = test::apophis_rate_test_short();
+  const std::string dir = test::temp_dir("apophis_like_rate_test_short");
+  const Session s = Session::load(test::write_apophis_like(dir, spec));
+  const auto segments = rate_segments(s.plan, s.site);
+  RateTableOptions ro;
+  ro.nominal_rate_hz = s.rate_hz;
+  const auto means = find_segments(read_rate_readings(s.log), segments, ro);
+  const double half = 0.5 * spec.gyro_toggle(0), white = spec.gyro_white;
+  const double r = 1.0 - 2.0 * spec.toggle_flip;
+  const double truth =
+      (half * half * (1.0 + r) / (1.0 - r) + white * white) / (half * half + white * white);
+  double readings = 0.0;
+  for (const auto& m : means) readings += static_cast<double>(m.count);
+  const double sigma = truth * std::sqrt(2.0 * (2.0 * 3.0 * truth + 1.0) / readings);
+  for (int i = 0; i < 3; ++i) {
+    double pooled = 0.0, shortest = 1e9;
+    for (const auto& m : means) {
+      pooled += static_cast<double>(m.count) * m.tau_omega(i) / readings;
+      shortest = std::min(shortest, m.tau_omega(i));
+    }
+    CAPTURE(i, truth, sigma, pooled, shortest);
+    CHECK(std::abs(pooled - truth) < 4.0 * sigma);
+    CHECK(shortest > truth - 4.0 * sigma);
+  }
+  // The floor itself: a 150-reading segment at 5 and a 600-reading one at 14 give the short one
+  // the mean, 0.2 x 5 + 0.8 x 14 = 12.2; the long one and white outputs (1) keep theirs.
+  std::vector<SegmentMean> pair(2);
+  pair[0].count = 150;
+  pair[0].tau_omega.setConstant(5.0);
+  pair[1].count = 600;
+  pair[1].tau_omega.setConstant(14.0);
+  floor_by_pooled(pair);
+  CHECK(pair[0].tau_omega.x() == Approx(12.2));
+  CHECK(pair[1].tau_omega.x() == Approx(14.0));
+  CHECK(pair[0].tau_f.x() == Approx(1.0));
+}

@@ -119,27 +119,6 @@ SegmentMean mean_of(const std::vector<RateReading>& r, std::size_t a, std::size_
   return m;
 }
 
-// A short segment's autocorrelation time comes out short: its own mean takes out part of the
-// correlation, and its few lags leave the sum's tail unseen (a segment only a few times its
-// outputs' correlation long: generated toggling, 10 s rests, runs of 20 readings). Each output's
-// time is floored by the readings-weighted mean of that output's times over every segment of the
-// log (the same sensor; the long segments dominate it). White outputs keep 1.
-void floor_by_pooled(std::vector<SegmentMean>& means) {
-  Eigen::Vector3d sum_w = Eigen::Vector3d::Zero(), sum_f = Eigen::Vector3d::Zero();
-  double count = 0.0;
-  for (const auto& m : means) {
-    const auto n = static_cast<double>(m.count);
-    sum_w += n * m.tau_omega;
-    sum_f += n * m.tau_f;
-    count += n;
-  }
-  if (!(count > 0.0)) return;
-  for (auto& m : means) {
-    m.tau_omega = m.tau_omega.cwiseMax(sum_w / count);
-    m.tau_f = m.tau_f.cwiseMax(sum_f / count);
-  }
-}
-
 // ---- the least squares --------------------------------------------------------------------
 
 // The known inputs of a segment's mean: the gyros' (Earth rate included) and the accelerometers'
@@ -418,6 +397,22 @@ std::vector<RateReading> read_rate_readings(
   }
   if (out.empty()) throw LogError(log.file, reader.line(), "no readings");
   return out;
+}
+
+void floor_by_pooled(std::vector<SegmentMean>& means) {
+  Eigen::Vector3d sum_w = Eigen::Vector3d::Zero(), sum_f = Eigen::Vector3d::Zero();
+  double count = 0.0;
+  for (const auto& m : means) {
+    const auto n = static_cast<double>(m.count);
+    sum_w += n * m.tau_omega;
+    sum_f += n * m.tau_f;
+    count += n;
+  }
+  if (!(count > 0.0)) return;
+  for (auto& m : means) {
+    m.tau_omega = m.tau_omega.cwiseMax(sum_w / count);
+    m.tau_f = m.tau_f.cwiseMax(sum_f / count);
+  }
 }
 
 std::vector<SegmentMean> find_segments(const std::vector<RateReading>& readings,

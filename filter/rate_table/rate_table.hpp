@@ -97,6 +97,12 @@ std::vector<SegmentMean> find_segments(const std::vector<RateReading>& readings,
                                        const std::vector<RateSegment>& segments,
                                        const RateTableOptions& options);
 
+/// Each output's autocorrelation time floored by its readings-weighted mean over all `means` (the
+/// same sensor; the long segments dominate it): a segment only a few times its outputs'
+/// correlation long gives too short a time (its own mean takes part of the correlation out, its
+/// few lags leave the tail unseen). White outputs keep 1. find_segments applies it.
+void floor_by_pooled(std::vector<SegmentMean>& means);
+
 struct RateCoefficient {
   std::string name;  // catalog name (e.g. "gyro.scale.x") or rate-table only: gyro.k2.*,
                      // gyro.cross_asym.*, accel.k3.*
