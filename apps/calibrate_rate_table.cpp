@@ -47,6 +47,8 @@ SessionSummary calibrate_rate_table_session(const CalibrateOptions& o,
   PlausibilityReport gate;
   gate.checks.push_back(
       check_rate_table_fit(r, PlausibilityLimits::from_profile(nullptr), session.log.file));
+  if (!gate.checks.back().passed)  // the segment the fit misses most, in its own sigmas
+    gate.checks.back().detail += "; the largest residual: " + largest_residual(r, segments);
   enforce(gate, o.force);
   const ResultCoefficients coefficients = result_coefficients(r);
   auto sections = result_sections(r, segments);

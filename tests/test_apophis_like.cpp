@@ -380,10 +380,14 @@ TEST_CASE("Rate table: a tumble whose gyro biases drift over the log (--gyro-dri
   const std::string dir = test::temp_dir("apophis_like_tumble");
   const Session s = Session::load(test::write_apophis_like(dir, spec));
   const PlausibilityLimits limits = PlausibilityLimits::from_profile(nullptr);
-  const PlausibilityCheck without = check_rate_table_fit(tumble_fit(s, false), limits, "log.csv");
+  const RateTableResult no_drift = tumble_fit(s, false);
+  const PlausibilityCheck without = check_rate_table_fit(no_drift, limits, "log.csv");
   INFO(without.detail);
   CHECK_FALSE(without.passed);
   CHECK_THAT(without.detail, Catch::Contains("the gyros' chi2 per dof"));
+  // The refusal's largest residual is the drifting gyro x (the generated drift is largest there).
+  CHECK_THAT(largest_residual(no_drift, rate_segments(s.plan, s.site)),
+             Catch::Contains(": gyro x "));
   const RateTableResult r = tumble_fit(s, true);
   const PlausibilityCheck with = check_rate_table_fit(r, limits, "log.csv");
   INFO(with.detail);

@@ -4,7 +4,9 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
+#include <limits>
 #include <utility>
 
 #include "filter/noise/autocorrelation.hpp"
@@ -322,6 +324,26 @@ std::vector<RateTableResult::TriadFit> triad_fits(const std::vector<MeanRow>& ro
   return out;
 }
 
+// The whitened residuals (whitened() order) per segment: gyro rows, then accelerometer rows where
+// the segment has them (NaN otherwise).
+std::vector<Eigen::Matrix<double, 6, 1>> per_segment(const std::vector<MeanRow>& rows,
+                                                     const Eigen::VectorXd& residual, bool accel) {
+  std::vector<Eigen::Matrix<double, 6, 1>> out;
+  Eigen::Index at = 0;
+  for (const auto& r : rows) {
+    Eigen::Matrix<double, 6, 1> z;
+    z.setConstant(std::numeric_limits<double>::quiet_NaN());
+    z.head<3>() = residual.segment<3>(at);
+    at += 3;
+    if (r.has_f && accel) {
+      z.tail<3>() = residual.segment<3>(at);
+      at += 3;
+    }
+    out.push_back(z);
+  }
+  return out;
+}
+
 // The candidates taken in order while each adds to the rank (columns scaled to unit norm).
 std::vector<std::size_t> determined(const Eigen::MatrixXd& A) {
   std::vector<std::size_t> keep;
@@ -415,6 +437,22 @@ void floor_by_pooled(std::vector<SegmentMean>& means) {
   }
 }
 
+std::string largest_residual(const RateTableResult& r, const std::vector<RateSegment>& segments) {
+  double worst = 0.0;
+  std::string named;
+  for (std::size_t k = 0; k < r.residual_sigma.size() && k < segments.size(); ++k)
+    for (int i = 0; i < 6; ++i) {
+      const double z = r.residual_sigma[k](i);
+      if (!(std::abs(z) > worst)) continue;
+      worst = std::abs(z);
+      char text[64];
+      std::snprintf(text, sizeof text, "%s %s %+.1f sigma", i < 3 ? "gyro" : "accelerometer",
+                    kAxis[i % 3], z);
+      named = "segment " + std::to_string(k + 1) + " (" + segments[k].label + "): " + text;
+    }
+  return named;
+}
+
 std::vector<SegmentMean> find_segments(const std::vector<RateReading>& readings,
                                        const std::vector<RateSegment>& segments,
                                        const RateTableOptions& o) {
@@ -490,6 +528,7 @@ RateTableResult rate_table_calibrate(const std::vector<RateSegment>& segments,
   res.chi2 = (A * x - sys.b).squaredNorm();
   res.dof = static_cast<int>(A.rows() - A.cols());
   res.triad_fits = triad_fits(rows, A * x - sys.b, params, keep, accel);
+  res.residual_sigma = per_segment(rows, sys.b - A * x, accel);  // data less the fit
   std::vector<bool> used(params.size(), false);
   for (std::size_t k = 0; k < keep.size(); ++k) {
     const auto e = static_cast<Eigen::Index>(k);

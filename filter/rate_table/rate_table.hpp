@@ -124,7 +124,14 @@ struct RateTableResult {
   std::vector<TriadFit> triad_fits;
   std::size_t static_segments = 0, rate_segments = 0;
   std::vector<SegmentMean> means;
+  /// Each segment's residuals in its own sigmas (whitened, the data less the fit: gyro x y z, accelerometer x y z; NaN
+  /// where a segment has no row: the accelerometers of a rate segment, or of a fit without them).
+  std::vector<Eigen::Matrix<double, 6, 1>> residual_sigma;
 };
+
+/// The largest whitened residual of a fit, named: "segment 7 (label): gyro y -5.9 sigma" (empty
+/// without residuals). What a refused fit's user looks at first.
+std::string largest_residual(const RateTableResult& r, const std::vector<RateSegment>& segments);
 
 /// The calibration from the segments' means at `site` (gravity: its normal gravity, or
 /// `gravity` m/s^2 when positive). Throws RateTableError when nothing can be estimated.
