@@ -124,8 +124,9 @@ struct RateTableResult {
   std::vector<TriadFit> triad_fits;
   std::size_t static_segments = 0, rate_segments = 0;
   std::vector<SegmentMean> means;
-  /// Each segment's residuals in its own sigmas (whitened, the data less the fit: gyro x y z, accelerometer x y z; NaN
-  /// where a segment has no row: the accelerometers of a rate segment, or of a fit without them).
+  /// Each segment's residuals in its own sigmas (whitened, the data less the fit: gyro x y z,
+  /// accelerometer x y z; NaN where a segment has no row: the accelerometers of a rate segment, or
+  /// of a fit without them).
   std::vector<Eigen::Matrix<double, 6, 1>> residual_sigma;
 };
 
