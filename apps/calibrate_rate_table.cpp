@@ -21,6 +21,7 @@ SessionSummary calibrate_rate_table_session(const CalibrateOptions& o,
   ro.nominal_rate_hz = session.rate_hz;
   ro.table_sigma = o.table_sigma * units::arcsec;
   ro.cross_asymmetry = o.cross_asymmetry;
+  ro.gyro_drift = o.gyro_drift;
   const auto segments = rate_segments(session.plan, session.site);
   // Bad readings (a NaN field, a damaged line) stop the run, or with --on-bad-sample skip are
   // left out of the means, counted and the first named.
@@ -46,6 +47,8 @@ SessionSummary calibrate_rate_table_session(const CalibrateOptions& o,
   PlausibilityReport gate;
   gate.checks.push_back(
       check_rate_table_fit(r, PlausibilityLimits::from_profile(nullptr), session.log.file));
+  if (!gate.checks.back().passed)  // the segment the fit misses most, in its own sigmas
+    gate.checks.back().detail += "; the largest residual: " + largest_residual(r, segments);
   enforce(gate, o.force);
   const ResultCoefficients coefficients = result_coefficients(r);
   auto sections = result_sections(r, segments);

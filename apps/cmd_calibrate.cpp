@@ -30,6 +30,9 @@ void add_options(po::options_description& d, CalibrateOptions& o) {
       ("cross-asymmetry", po::bool_switch(&o.cross_asymmetry),
        "rate-table: the gyros' response to |rate| across each turn's axis in the model "
        "(gyro.cross_asym.ij: offsets while turning that depend on the turn's direction)")
+      ("gyro-drift", po::bool_switch(&o.gyro_drift),
+       "rate-table: the gyros' bias drift over the log in the model (gyro.bias_drift.i, with each "
+       "segment at its readings' time at the session's nominal rate)")
       ("misalignment-frame", po::value(&o.misalignment_frame),
        "kf, closed-form: the frame of the misalignments: table (relative to the table's platform; "
        "the default with table-attitude updates) | triad (within the triads, the accelerometer "
@@ -99,6 +102,9 @@ void check_method_options(const po::variables_map& vm, CalibrateOptions& o) {
   // clang-format on
   if (o.cross_asymmetry && o.method != Method::RateTable)
     throw UsageError("--cross-asymmetry acts in --method rate-table only, not in --method " +
+                     name_of(o.method));
+  if (o.gyro_drift && o.method != Method::RateTable)
+    throw UsageError("--gyro-drift acts in --method rate-table only, not in --method " +
                      name_of(o.method));
   misalignment_frame_option(o);  // the table methods only; a known name
   check_table_free_options(vm, o, {closed_form_only, kf_only, {"table-sigma"}});

@@ -1,5 +1,6 @@
 #include "report/rate_table_result.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
@@ -54,6 +55,14 @@ nlohmann::ordered_json result_sections(const RateTableResult& r,
                     {"readings", {m.first, m.last}},
                     {"mean_rate_deg_s", {w.x(), w.y(), w.z()}},
                     {"mean_specific_force_mps2", {f.x(), f.y(), f.z()}}});
+    if (i < r.residual_sigma.size()) {  // null where the segment has no row
+      nlohmann::ordered_json z = nlohmann::ordered_json::array();
+      for (int k = 0; k < 6; ++k)
+        z.push_back(std::isfinite(r.residual_sigma[i](k))
+                        ? nlohmann::ordered_json(r.residual_sigma[i](k))
+                        : nlohmann::ordered_json());
+      segs.back()["residual_sigma"] = z;
+    }
   }
   extra["method"] = "rate-table";
   extra["rate_table"] = {{"chi2", r.chi2},
@@ -95,13 +104,13 @@ std::string rate_table_text(const RateTableResult& r, const std::vector<RateSegm
     out +=
         "The means scatter beyond their noise (chi2/dof above 3): the model or the plan does "
         "not describe the data (an effect outside the model, a table rate or attitude off its "
-        "command); the sigmas understate the errors.\n";
+        "command); the sigmas understate the errors. The largest residual: " +
+        largest_residual(r, segments) + ".\n";
   if (!r.undetermined.empty()) {
     out += "Not determined by these segments (not estimated):";
     for (const auto& u : r.undetermined) out += " " + u;
     out += "\n";
   }
-  (void)segments;
   return out;
 }
 

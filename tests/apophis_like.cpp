@@ -1,11 +1,13 @@
 #include "apophis_like.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <random>
 
 #include "models/attitude.hpp"
+#include "models/earth.hpp"
 #include "models/units.hpp"
 
 namespace sinscal::test {
@@ -66,7 +68,9 @@ std::string write_apophis_like(const std::string& dir, const ApophisLike& spec) 
   for (double t = 0.0;; t += interval(rng)) {
     const auto k = static_cast<std::size_t>(t / kStep);
     if (k >= truth.omega_b.size()) break;
-    Eigen::Vector3d w = truth.omega_b[k] + gyro_bias, f = truth.C_b_n[k].transpose() * f_n;
+    Eigen::Vector3d w = truth.omega_b[k] + gyro_bias + spec.gyro_drift * t +
+                        truth.C_b_n[k].transpose() * spec.omega_ie_n;
+    Eigen::Vector3d f = truth.C_b_n[k].transpose() * f_n;
     w += spec.gyro_cross_asym * truth.omega_b[k].cwiseAbs();
     f += accel_bias;
     for (int i = 0; i < 3; ++i) {
@@ -144,6 +148,70 @@ ApophisLike apophis_rate_test() {
   spec.gyro_white = 0.3 * units::deg_per_s;
   spec.plan_text = kRateTestPlan;
   spec.seed = 3;
+  return spec;
+}
+
+ApophisLike apophis_rate_test_short() {
+  ApophisLike spec = apophis_rate_test();
+  for (auto& p : spec.phases)
+    if (p.rest > 0.0) p.rest = 10.0;
+  spec.toggle_flip = 0.05;
+  const auto replace = [&spec](const std::string& from, const std::string& to) {
+    spec.plan_text.replace(spec.plan_text.find(from), from.size(), to);
+  };
+  replace("dwell = 30 s", "dwell = 10 s");
+  replace("pauses = 0 30 0 30 0 30 s", "pauses = 0 10 0 10 0 10 s");
+  return spec;
+}
+
+namespace {
+// The orientation plan of a tumble's rests: each rest's generated attitude as heading, pitch and
+// roll (NED-FRD), on a three-axis table.
+std::string tumble_plan_text(const ApophisLike& spec, double lat_deg, double dwell) {
+  std::string text =
+      "[plan]\nname = apophis-like-tumble\ntype = orientations\nconvention = ned-frd\n"
+      "move_rate = 10 deg/s\nmove_acceleration = 10 deg/s^2\n\n[table]\naxes = 3\n\n[site]\n"
+      "latitude = " +
+      std::to_string(lat_deg) + " deg\n";
+  const Truth truth = truth_of(spec);  // the attitude in the middle of each rest, as generated
+  std::size_t at = 0;
+  int k = 0;
+  for (const auto& p : spec.phases) {
+    const double seconds = p.rest > 0.0 ? p.rest : 2.0 * p.rate / p.accel + p.hold;
+    const std::size_t middle = at + static_cast<std::size_t>(0.5 * seconds / kStep);
+    at += static_cast<std::size_t>(std::round(seconds / kStep));
+    if (!(p.rest > 0.0)) continue;
+    const Eigen::Matrix3d& C = truth.C_b_n[std::min(middle, truth.C_b_n.size() - 1)];
+    const EulerAngles e = euler_from_C_b_n(AngleConvention::NedFrd, C);
+    char block[200];
+    std::snprintf(block, sizeof block,
+                  "\n[orientation.%d]\nheading = %.9f deg\npitch = %.9f deg\nroll = %.9f "
+                  "deg\ndwell = %.0f s\n",
+                  ++k, e.heading / units::deg, e.pitch / units::deg, e.roll / units::deg, dwell);
+    text += block;
+  }
+  return text;
+}
+}  // namespace
+
+ApophisLike apophis_tumble() {
+  ApophisLike spec;
+  const double rate = 10.0 * units::deg_per_s, accel = 10.0 * units::deg_per_s, dwell = 40.0;
+  const auto move = [&](const Eigen::Vector3d& axis, double angle_deg) {
+    return turn_phase(axis, rate, accel, angle_deg * units::deg / rate - rate / accel);
+  };
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitX(), y = Eigen::Vector3d::UnitY();
+  spec.phases = {rest_phase(dwell), move(y, 90), rest_phase(dwell), move(y, 90),
+                 rest_phase(dwell), move(y, 90), rest_phase(dwell), move(y, 90),
+                 rest_phase(dwell), move(x, 90), rest_phase(dwell), move(x, 180),
+                 rest_phase(dwell), move(x, 90), rest_phase(dwell)};
+  spec.min_hz = 12.5;  // a mean interval of 1/15 s: the readings' index at 15 Hz is their time
+  spec.max_hz = 18.75;
+  spec.toggling = false;
+  spec.gyro_drift = Eigen::Vector3d(-0.0104, 0.0, -0.0022) * units::deg_per_s / 100.0;
+  const double lat_deg = 28.6;
+  spec.omega_ie_n = Earth::wgs84().omega_ie_n(lat_deg * units::deg);
+  spec.plan_text = tumble_plan_text(spec, lat_deg, dwell);
   return spec;
 }
 

@@ -51,6 +51,11 @@ struct ApophisLike {
   /// Gyro i's output per |rate| about body axis j (i != j): an offset while turning across the
   /// axis that depends on the turn's direction, as the APOPHIS rate logs show (0: none).
   Eigen::Matrix3d gyro_cross_asym = Eigen::Matrix3d::Zero();
+  /// The gyros' bias drift (rad/s^2) over the true time from the log's start, as the APOPHIS
+  /// tumbles' rests show (0: none).
+  Eigen::Vector3d gyro_drift = Eigen::Vector3d::Zero();
+  /// The Earth rate in the navigation frame (rad/s, NED) the gyros sense (0: none).
+  Eigen::Vector3d omega_ie_n = Eigen::Vector3d::Zero();
   unsigned seed = 1;
   std::string plan_text;    // plan.ini
   std::string sensor_text;  // sensor.ini (empty: none in the session)
@@ -67,6 +72,19 @@ std::string bmi160_profile_text();
 /// (each switching on 10 % of the readings), white noise as the log's across the turning axis
 /// (0.3 deg/s).
 ApophisLike apophis_rate_test();
+
+/// apophis_rate_test() with 10 s rests and runs of 20 readings at one level (each output switching
+/// on 5 % of the readings: an autocorrelation time of about 14 readings with the white noise),
+/// rests of about 150 readings, only about 10 times that long.
+ApophisLike apophis_rate_test_short();
+
+/// A six-face tumble of the APOPHIS tumble logs' structure on a three-axis table: 40 s rests at
+/// z up, two x faces, z down, z up, two y faces and z up again (90 and 180 deg moves at 10 deg/s
+/// about body y and x), readings at 12.5-18.75 Hz (15 Hz on average) without time, white noise
+/// as the logs' (gyro 0.05 deg/s, accelerometer 1 mg per reading), the Earth rate at 28.6 deg
+/// latitude, and the gyros' bias drifting as board 2's (x -0.0104, z -0.0022 deg/s per 100 s).
+/// Its plan (orientations, from the generated attitudes) is in plan_text.
+ApophisLike apophis_tumble();
 
 /// Board 1's rate test about z (8 s at rest, -z and +z at 25 deg/s for 40 s each, 15 s at rest)
 /// at the data sheet's white noise, with the BMI160 profile: turns that move no gravity.

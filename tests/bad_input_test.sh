@@ -1029,6 +1029,15 @@ apnew apophis-like-rate-test-swapped-gyro-axes rate-test; set_key "$d/session.in
 fixed 2 "log.csv: segment|not found in the log|rate of 25" apcal --method rate-table
 apnew apophis-like-cross-asymmetry-kf z-turns
 fixed 1 "--cross-asymmetry acts in --method rate-table only, not in --method kf" apcal --method kf --cross-asymmetry
+# A tumble whose gyro biases drift over the log (board 2's drift, no time column): the gyros' fit
+# is refused naming them; --gyro-drift models the drift and passes; the option is the rate
+# table's only.
+apnew apophis-like-tumble-drift-refused tumble
+fixed 2 "rate-table fit|log.csv: the gyros' chi2 per dof" apcal --method rate-table
+apnew apophis-like-tumble-gyro-drift tumble
+control 0 "" apcal --method rate-table --gyro-drift
+apnew apophis-like-gyro-drift-kf tumble
+fixed 1 "--gyro-drift acts in --method rate-table only, not in --method kf" apcal --method kf --gyro-drift
 apnew apophis-like-z-turns-kf z-turns
 fixed 2 "turn timing|log.csv: the log's time cannot be checked|none of the 1 turns|--method rate-table" apcal --method kf
 apnew apophis-like-z-turns-closed-form z-turns

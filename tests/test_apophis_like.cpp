@@ -355,3 +355,103 @@ TEST_CASE("Rate table: gyro offsets while turning across the axis (--cross-asymm
   }
   CHECK(cross == 6);
 }
+
+namespace {
+// The tumble's fit: its rests found in the readings (no time), with or without the gyros' drift.
+RateTableResult tumble_fit(const Session& s, bool gyro_drift) {
+  const auto segments = rate_segments(s.plan, s.site);
+  RateTableOptions ro;
+  ro.nominal_rate_hz = s.rate_hz;
+  ro.gyro_drift = gyro_drift;
+  const auto means = find_segments(read_rate_readings(s.log), segments, ro);
+  return rate_table_calibrate(segments, means, s.site, 0.0, ro);
+}
+}  // namespace
+
+TEST_CASE("Rate table: a tumble whose gyro biases drift over the log (--gyro-drift)",
+          "[rate_table][apophis][plausibility]") {
+  // The APOPHIS tumbles' gyro rests drift over the log (board 2's gyro x: 0.163, 0.153, 0.152,
+  // 0.137, 0.133, 0.131, 0.135 deg/s face by face), 5-20 times their means' sigma: the gyros' fit
+  // (bias and g-sensitivity) was refused at chi2/dof 8.7-13.3. Generated: a tumble of 8 rests of
+  // the logs' structure (no time, 12.5-18.75 Hz) with board 2's drift. Without the drift term the
+  // gate refuses the gyros; with it the gate passes, and the drift, the biases (at the log's
+  // start) and the g-sensitivity (none generated) are within 4 sigma of the truth.
+  const test::ApophisLike spec = test::apophis_tumble();
+  const std::string dir = test::temp_dir("apophis_like_tumble");
+  const Session s = Session::load(test::write_apophis_like(dir, spec));
+  const PlausibilityLimits limits = PlausibilityLimits::from_profile(nullptr);
+  const RateTableResult no_drift = tumble_fit(s, false);
+  const PlausibilityCheck without = check_rate_table_fit(no_drift, limits, "log.csv");
+  INFO(without.detail);
+  CHECK_FALSE(without.passed);
+  CHECK_THAT(without.detail, Catch::Contains("the gyros' chi2 per dof"));
+  // The refusal's largest residual is the drifting gyro x (the generated drift is largest there).
+  CHECK_THAT(largest_residual(no_drift, rate_segments(s.plan, s.site)),
+             Catch::Contains(": gyro x "));
+  const RateTableResult r = tumble_fit(s, true);
+  const PlausibilityCheck with = check_rate_table_fit(r, limits, "log.csv");
+  INFO(with.detail);
+  CHECK(with.passed);
+  REQUIRE(r.triad_fits.front().dof >= 6);
+  int checked = 0;
+  for (const auto& c : r.coefficients) {
+    if (c.name.rfind("gyro.", 0) != 0) continue;
+    const int axis = c.name.back() - 'x';
+    const double truth = c.name.rfind("gyro.bias.", 0) == 0         ? spec.gyro_bias(axis)
+                         : c.name.rfind("gyro.bias_drift.", 0) == 0 ? spec.gyro_drift(axis)
+                                                                    : 0.0;
+    CAPTURE(c.name, c.value, c.sigma, truth);
+    CHECK(std::abs(c.value - truth) < 4.0 * c.sigma);
+    checked += c.name.rfind("gyro.bias_drift.", 0) == 0 ? 1 : 0;
+  }
+  CHECK(checked == 3);
+  // The drift is resolved: x's at least 10 sigma from zero.
+  for (const auto& c : r.coefficients)
+    if (c.name == "gyro.bias_drift.x") CHECK(std::abs(c.value) > 10.0 * c.sigma);
+}
+
+TEST_CASE("Rate table: short segments' autocorrelation times floored by the log's pooled time",
+          "[rate_table][apophis]") {
+  // Outputs toggling in runs of 20 readings over white noise (apophis_rate_test_short): each
+  // gyro's true integrated autocorrelation time is (s^2 (1 + r) / (1 - r) + w^2) / (s^2 + w^2),
+  // s = half the 1.02 deg/s step, r = 1 - 2 x 0.05 per reading, w = 0.3 deg/s: 14.4 readings. A
+  // 10 s rest (about 150 readings) alone gives too short a time (its own mean takes part of the
+  // correlation out): every segment's time is at least the readings-weighted mean over the log's
+  // segments, and that mean is within 4 of its sigmas of the truth (Sokal's variance of the
+  // estimate, 2 (2 M + 1) / N tau^2, window M = 3 tau, N readings).
+  const test::ApophisLike spec = test::apophis_rate_test_short();
+  const std::string dir = test::temp_dir("apophis_like_rate_test_short");
+  const Session s = Session::load(test::write_apophis_like(dir, spec));
+  const auto segments = rate_segments(s.plan, s.site);
+  RateTableOptions ro;
+  ro.nominal_rate_hz = s.rate_hz;
+  const auto means = find_segments(read_rate_readings(s.log), segments, ro);
+  const double half = 0.5 * spec.gyro_toggle(0), white = spec.gyro_white;
+  const double r = 1.0 - 2.0 * spec.toggle_flip;
+  const double truth =
+      (half * half * (1.0 + r) / (1.0 - r) + white * white) / (half * half + white * white);
+  double readings = 0.0;
+  for (const auto& m : means) readings += static_cast<double>(m.count);
+  const double sigma = truth * std::sqrt(2.0 * (2.0 * 3.0 * truth + 1.0) / readings);
+  for (int i = 0; i < 3; ++i) {
+    double pooled = 0.0, shortest = 1e9;
+    for (const auto& m : means) {
+      pooled += static_cast<double>(m.count) * m.tau_omega(i) / readings;
+      shortest = std::min(shortest, m.tau_omega(i));
+    }
+    CAPTURE(i, truth, sigma, pooled, shortest);
+    CHECK(std::abs(pooled - truth) < 4.0 * sigma);
+    CHECK(shortest > truth - 4.0 * sigma);
+  }
+  // The floor itself: a 150-reading segment at 5 and a 600-reading one at 14 give the short one
+  // the mean, 0.2 x 5 + 0.8 x 14 = 12.2; the long one and white outputs (1) keep theirs.
+  std::vector<SegmentMean> pair(2);
+  pair[0].count = 150;
+  pair[0].tau_omega.setConstant(5.0);
+  pair[1].count = 600;
+  pair[1].tau_omega.setConstant(14.0);
+  floor_by_pooled(pair);
+  CHECK(pair[0].tau_omega.x() == Approx(12.2));
+  CHECK(pair[1].tau_omega.x() == Approx(14.0));
+  CHECK(pair[0].tau_f.x() == Approx(1.0));
+}

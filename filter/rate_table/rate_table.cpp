@@ -4,7 +4,9 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
+#include <limits>
 #include <utility>
 
 #include "filter/noise/autocorrelation.hpp"
@@ -126,6 +128,7 @@ SegmentMean mean_of(const std::vector<RateReading>& r, std::size_t a, std::size_
 // across a rate segment's axis that its unknown start angle leaves).
 struct MeanRow {
   bool has_f = false;
+  double t = 0.0;  // s: the segment's middle reading at the nominal rate
   Eigen::Vector3d x_w, x_f, y_w, y_f, f_for_gyro;
   Eigen::Matrix3d cov_w, cov_f;
 };
@@ -146,6 +149,7 @@ MeanRow row_of(const RateSegment& s, const SegmentMean& m, const Eigen::Vector3d
   const double n = static_cast<double>(m.count);
   r.y_w = m.omega;
   r.y_f = m.f;
+  r.t = 0.5 * static_cast<double>(m.first + m.last - 1) / o.nominal_rate_hz;
   // The mean's variance: var tau / n, the readings' variance about their own mean corrected by
   // (n - 1) / (n - tau) for what the mean took out of it (n / tau: the effective sample count).
   // A floor far below any sensor's noise (noise-free simulations).
@@ -209,7 +213,8 @@ void add_gyro_asymmetries(bool cross, const AddParam& add) {
             [j](const MeanRow& r) { return std::abs(r.x_w(j)); }, false);
 }
 
-std::vector<Param> candidate_params(bool gyro_rates, bool cross) {
+std::vector<Param> candidate_params(bool gyro_rates, const RateTableOptions& opt) {
+  const bool cross = opt.cross_asymmetry, drift = opt.gyro_drift;
   using V6 = Eigen::Matrix<double, 6, 1>;
   std::vector<Param> p;
   auto add = [&](const std::string& name, int row, std::function<double(const MeanRow&)> v,
@@ -226,6 +231,8 @@ std::vector<Param> candidate_params(bool gyro_rates, bool cross) {
     auto x = [t](const MeanRow& r) -> const Eigen::Vector3d& { return t == 0 ? r.x_w : r.x_f; };
     for (int i = 0; i < 3; ++i)
       add(tr + "bias." + kAxis[i], o + i, [](const MeanRow&) { return 1.0; });
+    for (int i = 0; t == 0 && drift && i < 3; ++i)
+      add(tr + "bias_drift." + kAxis[i], i, [](const MeanRow& r) { return r.t; });
     if (t == 0 && !gyro_rates) continue;
     for (int i = 0; i < 3; ++i)
       add(tr + "scale." + kAxis[i], o + i, [x, i](const MeanRow& r) { return x(r)(i); });
@@ -317,6 +324,26 @@ std::vector<RateTableResult::TriadFit> triad_fits(const std::vector<MeanRow>& ro
   return out;
 }
 
+// The whitened residuals (whitened() order) per segment: gyro rows, then accelerometer rows where
+// the segment has them (NaN otherwise).
+std::vector<Eigen::Matrix<double, 6, 1>> per_segment(const std::vector<MeanRow>& rows,
+                                                     const Eigen::VectorXd& residual, bool accel) {
+  std::vector<Eigen::Matrix<double, 6, 1>> out;
+  Eigen::Index at = 0;
+  for (const auto& r : rows) {
+    Eigen::Matrix<double, 6, 1> z;
+    z.setConstant(std::numeric_limits<double>::quiet_NaN());
+    z.head<3>() = residual.segment<3>(at);
+    at += 3;
+    if (r.has_f && accel) {
+      z.tail<3>() = residual.segment<3>(at);
+      at += 3;
+    }
+    out.push_back(z);
+  }
+  return out;
+}
+
 // The candidates taken in order while each adds to the rank (columns scaled to unit norm).
 std::vector<std::size_t> determined(const Eigen::MatrixXd& A) {
   std::vector<std::size_t> keep;
@@ -336,8 +363,8 @@ std::vector<std::size_t> determined(const Eigen::MatrixXd& A) {
 }
 
 // A triad's base terms (bias, scale, misalignment) must all be determined, or its other terms
-// would absorb the missing ones: else only what needs none of them stays (the gyros' bias and
-// g-sensitivity; nothing of the accelerometers').
+// would absorb the missing ones: else only what needs none of them stays (the gyros' bias, its
+// drift and the g-sensitivity; nothing of the accelerometers').
 void drop_incomplete(const std::vector<Param>& params, std::vector<std::size_t>& keep) {
   for (const char* prefix : {"gyro.", "accel."}) {
     const std::string tr = prefix;
@@ -353,6 +380,7 @@ void drop_incomplete(const std::vector<Param>& params, std::vector<std::size_t>&
                                 const std::string& n = params[k].name;
                                 return n.rfind(tr, 0) == 0 &&
                                        !(tr == "gyro." && (n.rfind("gyro.bias.", 0) == 0 ||
+                                                           n.rfind("gyro.bias_drift.", 0) == 0 ||
                                                            n.rfind("gyro.g_sens", 0) == 0));
                               }),
                keep.end());
@@ -393,6 +421,38 @@ std::vector<RateReading> read_rate_readings(
   return out;
 }
 
+void floor_by_pooled(std::vector<SegmentMean>& means) {
+  Eigen::Vector3d sum_w = Eigen::Vector3d::Zero(), sum_f = Eigen::Vector3d::Zero();
+  double count = 0.0;
+  for (const auto& m : means) {
+    const auto n = static_cast<double>(m.count);
+    sum_w += n * m.tau_omega;
+    sum_f += n * m.tau_f;
+    count += n;
+  }
+  if (!(count > 0.0)) return;
+  for (auto& m : means) {
+    m.tau_omega = m.tau_omega.cwiseMax(sum_w / count);
+    m.tau_f = m.tau_f.cwiseMax(sum_f / count);
+  }
+}
+
+std::string largest_residual(const RateTableResult& r, const std::vector<RateSegment>& segments) {
+  double worst = 0.0;
+  std::string named;
+  for (std::size_t k = 0; k < r.residual_sigma.size() && k < segments.size(); ++k)
+    for (int i = 0; i < 6; ++i) {
+      const double z = r.residual_sigma[k](i);
+      if (!(std::abs(z) > worst)) continue;
+      worst = std::abs(z);
+      char text[64];
+      std::snprintf(text, sizeof text, "%s %s %+.1f sigma", i < 3 ? "gyro" : "accelerometer",
+                    kAxis[i % 3], z);
+      named = "segment " + std::to_string(k + 1) + " (" + segments[k].label + "): " + text;
+    }
+  return named;
+}
+
 std::vector<SegmentMean> find_segments(const std::vector<RateReading>& readings,
                                        const std::vector<RateSegment>& segments,
                                        const RateTableOptions& o) {
@@ -426,6 +486,7 @@ std::vector<SegmentMean> find_segments(const std::vector<RateReading>& readings,
              ? std::string("rest")
              : "rate of " + std::to_string(segments[p].rate / units::deg) + " deg/s") +
         " long enough (the plan's order, rates and durations, or the log's gyro unit or axes)");
+  floor_by_pooled(out);
   return out;
 }
 
@@ -448,7 +509,7 @@ RateTableResult rate_table_calibrate(const std::vector<RateSegment>& segments,
     commanded.push_back(row_of(segments[i], means[i], Eigen::Vector3d::Zero(), -down, options));
     ++(segments[i].kind == RateSegment::Kind::Static ? res.static_segments : res.rate_segments);
   }
-  const auto params = candidate_params(res.rate_segments > 0, options.cross_asymmetry);
+  const auto params = candidate_params(res.rate_segments > 0, options);
   auto keep = determined(whitened(commanded, params).A);
   drop_incomplete(params, keep);
   // A triad without coefficients has no rows (the accelerometers; the gyros keep their biases).
@@ -467,6 +528,7 @@ RateTableResult rate_table_calibrate(const std::vector<RateSegment>& segments,
   res.chi2 = (A * x - sys.b).squaredNorm();
   res.dof = static_cast<int>(A.rows() - A.cols());
   res.triad_fits = triad_fits(rows, A * x - sys.b, params, keep, accel);
+  res.residual_sigma = per_segment(rows, sys.b - A * x, accel);  // data less the fit
   std::vector<bool> used(params.size(), false);
   for (std::size_t k = 0; k < keep.size(); ++k) {
     const auto e = static_cast<Eigen::Index>(k);

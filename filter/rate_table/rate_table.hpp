@@ -82,6 +82,11 @@ struct RateTableOptions {
   /// asymmetry is along it), taken with the scale asymmetries before the g-sensitivity, which a
   /// single gravity direction cannot tell from them (calibrate --cross-asymmetry).
   bool cross_asymmetry = false;
+  /// The gyros' bias drift over the log (gyro.bias_drift.i, rad/s^2): each segment's mean at its
+  /// middle reading's time at the nominal rate (index / nominal_rate_hz; the log's own time is not
+  /// read). A BMI160 warming up on a tumble drifts by 0.01-0.04 deg/s over its 7 rests, several
+  /// times its means' noise (calibrate --gyro-drift).
+  bool gyro_drift = false;
 };
 
 /// Finds the segments in the readings in order (the k-th run that matches the k-th segment; a
@@ -91,6 +96,12 @@ struct RateTableOptions {
 std::vector<SegmentMean> find_segments(const std::vector<RateReading>& readings,
                                        const std::vector<RateSegment>& segments,
                                        const RateTableOptions& options);
+
+/// Each output's autocorrelation time floored by its readings-weighted mean over all `means` (the
+/// same sensor; the long segments dominate it): a segment only a few times its outputs'
+/// correlation long gives too short a time (its own mean takes part of the correlation out, its
+/// few lags leave the tail unseen). White outputs keep 1. find_segments applies it.
+void floor_by_pooled(std::vector<SegmentMean>& means);
 
 struct RateCoefficient {
   std::string name;  // catalog name (e.g. "gyro.scale.x") or rate-table only: gyro.k2.*,
@@ -113,7 +124,15 @@ struct RateTableResult {
   std::vector<TriadFit> triad_fits;
   std::size_t static_segments = 0, rate_segments = 0;
   std::vector<SegmentMean> means;
+  /// Each segment's residuals in its own sigmas (whitened, the data less the fit: gyro x y z,
+  /// accelerometer x y z; NaN where a segment has no row: the accelerometers of a rate segment, or
+  /// of a fit without them).
+  std::vector<Eigen::Matrix<double, 6, 1>> residual_sigma;
 };
+
+/// The largest whitened residual of a fit, named: "segment 7 (label): gyro y -5.9 sigma" (empty
+/// without residuals). What a refused fit's user looks at first.
+std::string largest_residual(const RateTableResult& r, const std::vector<RateSegment>& segments);
 
 /// The calibration from the segments' means at `site` (gravity: its normal gravity, or
 /// `gravity` m/s^2 when positive). Throws RateTableError when nothing can be estimated.
