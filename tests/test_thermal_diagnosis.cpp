@@ -438,7 +438,9 @@ RampDiagnosis ramp_table_diagnosis(const std::string& dir, const std::vector<std
   const TableAttitudeError table{kDefaultTableAttitudeSigma};
   TurnModel model = turn_model_of(session, profile, table.sigma);
   model.run_filter = run_filter;
-  const auto about = linearize(model, 0);
+  // The measure case's SINSCAL_RAMP_PASSES (as --passes; unset: 0, the automatic choice).
+  const char* e_passes = std::getenv("SINSCAL_RAMP_PASSES");
+  const auto about = linearize(model, e_passes ? std::atoi(e_passes) : 0);
   const ClosedFormReport cal =
       run_closed_form(session, default_stage1(&profile), table, !about, about ? &*about : nullptr);
   TableDiagnosisOptions to;
@@ -733,7 +735,7 @@ TEST_CASE("Thermal diagnosis: a true temperature slope on a ramp is named, alone
   CHECK(set.front() == "gyro.bias_temp1");
 }
 
-TEST_CASE("Thermal diagnosis: a linearized ramp's turns are compensated as its dwells, at T0",
+TEST_CASE("Thermal diagnosis: a linearized ramp's turns are compensated at T0 as its dwells are",
           "[thermal][diagnosis][long]") {
   // accel.bias_temp1 hidden on a ramp (up to 400 ug over the ramp): the first filter run's NIS
   // asks for the linearization about the filter's 3 passes, whose model holds the profile's
@@ -762,8 +764,9 @@ TEST_CASE("Thermal diagnosis: a linearized ramp's turns are compensated as its d
   }
 }
 
-TEST_CASE("Thermal diagnosis: measure ramps (env SINSCAL_RAMP_CASE, _SEEDS, _FILTER, _HZ, _HIDDEN)",
-          "[thermal][diagnosis][measure][.]") {
+TEST_CASE(
+    "Thermal diagnosis: measure ramps (env SINSCAL_RAMP_CASE _SEEDS _FILTER _HZ _HIDDEN _PASSES)",
+    "[thermal][diagnosis][measure][.]") {
   const char* e_case = std::getenv("SINSCAL_RAMP_CASE");
   const std::string which = e_case ? e_case : "all";
   const char* e_seeds = std::getenv("SINSCAL_RAMP_SEEDS");
@@ -823,6 +826,9 @@ TEST_CASE("Thermal diagnosis: measure ramps (env SINSCAL_RAMP_CASE, _SEEDS, _FIL
       std::printf("  library turns %.4g / %.4g (q %.4g) reject %d\n",
                   r.d.unexplained.library->turns_chi2, r.d.unexplained.library->turns_dof,
                   r.d.unexplained.library->turns_quantile, r.d.unexplained.library->turns_reject);
+    if (r.d.unexplained.library)
+      for (const auto& t : r.d.unexplained.library->terms)
+        std::printf("  library term %s\n", t.text().c_str());
     for (const auto& f : r.d.findings) {
       std::printf("  %d %s (%s) p %.3g amb:", f.round, f.family.c_str(),
                   f.source == TableFinding::Source::Dwells ? "dwells" : "turns", f.p_value);
