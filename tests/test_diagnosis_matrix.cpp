@@ -53,8 +53,10 @@ ProfileLine profile_line(const std::string& family, double lo_si, double hi_si) 
 }
 
 // The family's detection sigma on the plan and profile (SI): the median sigma of its components
-// in the dwells' fit with it added (families with a static signature), else in the filter run
-// with it switched on (the effects of the turns), on a clean session.
+// in the dwells' fit with it added to the diagnosis's dwells' model (the base and the profile's
+// extended families; families with a static signature), else in the filter run with it switched
+// on (the effects of the turns, and families the profile's own take on the dwells), on a clean
+// session. SINSCAL_MATRIX_VERBOSE prints it and its source.
 double detection_sigma(const std::string& plan, const std::string& profile,
                        const std::string& family) {
   static std::map<std::string, double> cache;
