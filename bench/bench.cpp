@@ -409,6 +409,8 @@ double bench_kalman_stages(const Plan& rot, const Motion& rot_motion,
 int main(int argc, char** argv) {
   const std::string src = argc > 1 ? argv[1] : ".";
   if (argc > 2 && std::string(argv[2]) == "design") return bench_design(src) > 0.0 ? 0 : 1;
+  if (argc > 2 && std::string(argv[2]) == "diagnosis")  // rot19's diagnosis alone (aim 5 s CPU)
+    return bench_kalman_diagnosis(src) > 0.0 ? 0 : 1;
   const Plan plan = Plan::load(src + "/config/plans/seed8.ini");
   const SensorProfile profile = SensorProfile::load(src + "/config/sensors/nav-fog-extended.ini");
   const Motion motion = build_motion(plan, plan.site);

@@ -176,6 +176,7 @@ void add_story_fields(json& j, const TableFinding& f) {
   j["title"] = finding_title(f);
   j["ambiguous_with"] = f.ambiguous_with;
   if (!f.picked_by.empty()) j["picked_by"] = f.picked_by;
+  if (!f.pick_note.empty()) j["pick_note"] = f.pick_note;
   j["separated_by"] = f.separated_by;
   j["coefficients"] = finding_coefficients_json(f);
   j["combinations"] = combinations_json(f);
@@ -307,7 +308,8 @@ void markdown_finding(std::ostringstream& m, const TableFinding& f, int number) 
           : f.picked_by == "catalog" ? "the catalog's family: the library term predicts the "
                                        "held-out dwells and turns as well, the data cannot choose"
                                      : "the best fit; `--prefer FAMILY` picks another")
-      << "); later rounds test the rest against it. What separates them: " << f.family << ": "
+      << ")" << (f.pick_note.empty() ? "" : "; " + f.pick_note)
+      << "; later rounds test the rest against it. What separates them: " << f.family << ": "
       << f.separated_by.front();
     for (std::size_t i = 0; i < f.ambiguous_with.size(); ++i)
       m << "; " << f.ambiguous_with[i] << ": " << f.separated_by[i + 1];

@@ -88,6 +88,9 @@ struct TableFinding : TestVerdict {
   /// dwells' best fit; "user": DiagnosisOptions::prefer).
   std::vector<std::string> ambiguous_with;
   std::string picked_by;
+  /// picked_by "turns" with the runner-up's held-out turns within the chi-square quantile of one
+  /// dof at 1 - alpha: "close: ..." with both figures (the turns do not choose), else "".
+  std::string pick_note;
   /// What separates each family of the set from the base coefficients (the family table):
   /// `family` first, then each of ambiguous_with.
   std::vector<std::string> separated_by;
