@@ -11,7 +11,6 @@
 #include "apps/handheld_gate.hpp"
 #include "apps/print.hpp"
 #include "filter/kalman/motion_from_data.hpp"
-#include "filter/plausibility/gravity_cycles.hpp"
 #include "filter/plausibility/plausibility.hpp"
 #include "filter/plausibility/rest_plausibility.hpp"
 #include "filter/plausibility/turn_timing.hpp"
@@ -64,9 +63,11 @@ void print_timing_assumption(const PlausibilityReport& report) {
       std::fprintf(stderr, "Assumption: %s\n", c.detail.c_str());
 }
 
+}  // namespace
+
 // The turns between rests against a log's nominal rate (no time column), with the gyro errors
 // the profile allows (its scale and misalignment ranges; without a profile, consumer MEMS).
-TurnTimingOptions turn_timing_options(const SensorProfile* profile) {
+PlausibilityCheck turn_timing_check(const Session& session, const SensorProfile* profile) {
   TurnTimingOptions t;
   if (profile) {
     auto largest = [&](const std::string& family) {
@@ -79,20 +80,7 @@ TurnTimingOptions turn_timing_options(const SensorProfile* profile) {
     t.accel_direction =
         largest("accel.bias") / units::g0 + largest("accel.scale") + largest("accel.misalignment");
   }
-  return t;
-}
-}  // namespace
-
-PlausibilityCheck turn_timing_check(const Session& session, const SensorProfile* profile) {
-  return check_turn_timing(turn_timings(session.log, turn_timing_options(profile)), session.log);
-}
-
-std::vector<PlausibilityCheck> timing_checks(const Session& session, const SensorProfile* profile) {
-  const TurnTimingOptions t = turn_timing_options(profile);
-  const std::vector<TurnTiming> turns = turn_timings(session.log, t);
-  return {check_turn_timing(turns, session.log),
-          check_gravity_cycle_intervals(gravity_cycle_intervals(session.log, turns), session.log,
-                                        t.relative)};
+  return check_turn_timing(turn_timings(session.log, t), session.log);
 }
 
 namespace {
@@ -120,8 +108,7 @@ PlausibilityReport plausibility_gate(const CalibrateOptions& o, const Session& s
     report = check_plausibility(session, l, dwells_from_plan);
   }
   // Without a time column the turns between rests show whether the nominal rate holds.
-  if (l.assumed_rate_hz > 0.0)
-    for (const PlausibilityCheck& c : timing_checks(session, profile)) report.checks.push_back(c);
+  if (l.assumed_rate_hz > 0.0) report.checks.push_back(turn_timing_check(session, profile));
   enforce(report, o.force);
   print_timing_assumption(report);
   return report;

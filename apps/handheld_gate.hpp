@@ -20,8 +20,5 @@ TableFreeRun gated_table_free_run(const Session& session, TableFreeRunOptions op
 /// turn_timing.hpp), with the gyro errors the session's profile allows (null: consumer MEMS);
 /// apps/calibrate_run.cpp.
 PlausibilityCheck turn_timing_check(const Session& session, const SensorProfile* profile);
-/// It and the readings' intervals measured from gravity's cycles
-/// (filter/plausibility/gravity_cycles.hpp), from one search of the log's turns.
-std::vector<PlausibilityCheck> timing_checks(const Session& session, const SensorProfile* profile);
 
 }  // namespace sinscal::cli
