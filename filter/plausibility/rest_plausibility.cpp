@@ -478,7 +478,6 @@ PlausibilityReport check_handheld(const LogFormat& log, const std::vector<ImuRea
   PlausibilityReport report = check_rests(rests, g, l, input);
   report.checks.push_back(check_same_files(log));
   if (report.checks.back().passed) report.checks.back() = check_same_signal(readings, l, input);
-  return report;
   report.checks.push_back(check_reading_intervals(log, readings, input));
   return report;
 }
