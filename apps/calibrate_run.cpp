@@ -215,10 +215,14 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
     throw std::runtime_error(session.log.file +
                              ": the filter's estimates are not finite numbers (nothing written)" +
                              (kr.diverged.empty() ? std::string() : ": " + kr.diverged));
-  // The filter's linear range: a pass far from what it linearized about is refused (exit 2).
-  gate.checks.push_back(check_kf_linearization(
-      kr.linearization, o.passes, kr.passes.empty() ? 1 : kr.passes.back().pass, session.log.file));
-  enforce(gate, o.force);
+  // The filter's linear range: a pass far from what it linearized about is refused (exit 2). A
+  // run that diverged or stopped has its own verdict.
+  if (kr.diverged.empty() && kr.stopped.empty()) {
+    gate.checks.push_back(check_kf_linearization(kr.linearization, o.passes,
+                                                 kr.passes.empty() ? 1 : kr.passes.back().pass,
+                                                 session.log.file));
+    enforce(gate, o.force);
+  }
   const ResultCoefficients coefficients = result_coefficients(kr);
   auto sections = result_sections(kr);
   record_gate(sections, gate);
