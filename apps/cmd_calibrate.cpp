@@ -69,7 +69,7 @@ void add_options(po::options_description& d, CalibrateOptions& o) {
        "kf: the motion the filter linearizes along: data (the plan's turns as the log shows "
        "them: start-time offset, smoothed, lagging or overshooting turns) | plan (the plan's "
        "commanded trapezoids)")
-      ("passes", po::value(&o.passes)->default_value(0),
+      ("passes", po::value(&o.passes)->default_value(1),
        "kf: passes over the log, each from the previous pass's coefficients (large errors: MEMS); "
        "0: automatic, another pass while the last ran beyond its linear range (at most 3)")
       ("static-from", po::value(&o.static_from)->default_value(CalibratorOptions::StaticFrom::Plan,

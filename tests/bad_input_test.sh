@@ -221,12 +221,12 @@ new control-closed-form; s8; control 0 "" cf
 new closed-form-consumer-accel-range; c8
 fixed 2 "closed-form linear range|the accelerometers' equivalent inputs drive the navigator's velocity" cf --channels north,east
 new control-closed-form-consumer; c8; control 0 "" cf
-# The Kalman filter on the consumer unit (issue 34): one pass linearized about zero neglects the
-# products of 5 % scale factors and 1 deg misalignments beyond a tenth of their sigmas; refused,
-# named. The automatic passes (the default) run until it holds.
+# The Kalman filter on the consumer unit (issue 34): one pass (the default) linearized about zero
+# neglects the products of 5 % scale factors and 1 deg misalignments beyond their sigmas; refused,
+# named. The automatic passes (--passes 0) run until it holds.
 new kf-consumer-one-pass; c8
-fixed 2 "kf linear range|imu.csv: the filter's pass 1 (--passes 1)|run more passes" kf --passes 1
-new control-kf-consumer-automatic-passes; c8; control 0 "" kf
+fixed 2 "kf linear range|imu.csv: the filter's pass 1 (--passes 1)|--passes 0" kf
+new control-kf-consumer-automatic-passes; c8; control 0 "" kf --passes 0
 # The Kalman filter on a log noisier than its profile says (densities 10-20x): the divergence
 # names the noise at rest as its cause (the APOPHIS BMI160 table log, issue 34).
 new kf-noise-beyond-profile; s8

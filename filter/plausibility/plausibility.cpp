@@ -468,20 +468,27 @@ PlausibilityCheck speed_range(const ClosedFormReport& r, const std::string& inpu
 }
 }  // namespace
 
+namespace {
+// The share beyond which a run's last pass is refused: its estimate may be off by a sigma of the
+// linearization's own (the automatic passes stop at kLinearizationShare, a tenth).
+constexpr double kLinearizationRefusal = 1.0;
+}  // namespace
+
 PlausibilityCheck check_kf_linearization(const PassLinearization& last, int passes, int passes_run,
                                          const std::string& input) {
   PlausibilityCheck c{"kf linear range", true, ""};
-  if (last.within()) return c;
+  if (!(last.share > kLinearizationRefusal)) return c;
   c.passed = false;
   c.detail = input + ": the filter's pass " + std::to_string(passes_run) + " (" +
              (passes == 0 ? "automatic passes, at most " + std::to_string(kMaxAutomaticPasses)
                           : "--passes " + std::to_string(passes)) +
              ") ran far from the coefficients it linearized about: its neglected second-order " +
-             "term reaches " + last.text() + ", beyond " + number(kLinearizationShare, 2) +
+             "term reaches " + last.text() + ", beyond " + number(kLinearizationRefusal, 2) +
              " sigma: the sensor's errors are too large for one linearization (consumer MEMS); " +
              (passes == 0 && passes_run < kMaxAutomaticPasses
                   ? std::string("several passes need the log, not --stream")
-                  : std::string("run more passes (--passes N), each about the previous estimate"));
+                  : std::string("run the automatic passes (--passes 0) or more passes (--passes "
+                                "N), each about the previous estimate"));
   return c;
 }
 

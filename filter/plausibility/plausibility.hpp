@@ -174,7 +174,8 @@ PlausibilityCheck check_stage1_fit(const std::vector<EquivalentInputs>& stage1,
 /// the accelerometers' bias, scale and misalignment, an accelerometer error the model lacks).
 PlausibilityCheck check_linear_range(const ClosedFormReport& r, const std::string& input);
 /// The Kalman filter's linear range: its last pass (of `passes`; 0: automatic) may not leave the
-/// second-order term of its linearization beyond kLinearizationShare of a sigma
+/// second-order term of its linearization beyond a whole sigma (the automatic passes stop below
+/// kLinearizationShare, a tenth)
 /// (filter/kalman/pass_linearization.hpp); the cause named is the coefficients the pass moved
 /// far from the model it linearized about, and the remedy more passes.
 PlausibilityCheck check_kf_linearization(const PassLinearization& last, int passes, int passes_run,
