@@ -34,7 +34,7 @@ struct CalibrateOptions {
   bool no_table_angles = false, no_zero_velocity = false, no_position = false;
   bool no_motion_zero_velocity = false, stream = false;
   bool force = false;  // run even when the plausibility gate fails (recorded in the result)
-  int passes = 1;
+  int passes = 1;      // 0: automatic (filter/kalman/pass_linearization.hpp)
   std::string base = "estimated";  // the table base: estimated | known (the plan's)
   std::string motion = "data";     // kf: the linearization motion: data | plan
   std::string terms;

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "apps/calibrate.hpp"
+#include "apps/handheld_gate.hpp"
 #include "apps/print.hpp"
 #include "filter/kalman/motion_from_data.hpp"
 #include "filter/plausibility/plausibility.hpp"
@@ -62,6 +63,8 @@ void print_timing_assumption(const PlausibilityReport& report) {
       std::fprintf(stderr, "Assumption: %s\n", c.detail.c_str());
 }
 
+}  // namespace
+
 // The turns between rests against a log's nominal rate (no time column), with the gyro errors
 // the profile allows (its scale and misalignment ranges; without a profile, consumer MEMS).
 PlausibilityCheck turn_timing_check(const Session& session, const SensorProfile* profile) {
@@ -79,6 +82,8 @@ PlausibilityCheck turn_timing_check(const Session& session, const SensorProfile*
   }
   return check_turn_timing(turn_timings(session.log, t), session.log);
 }
+
+namespace {
 
 // The plausibility gate (filter/plausibility/plausibility.hpp) before any estimate: a failure stops
 // with the checks' messages (exit 2) unless --force, which runs anyway and records them in the
@@ -165,7 +170,7 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
     } catch (const std::runtime_error&) {
       motion.reset();  // the gate and the filter read the log again and say what is wrong
     }
-  const PlausibilityReport gate =
+  PlausibilityReport gate =
       plausibility_gate(o, session, PlausibilityLimits::from_profile(&profile), &profile,
                         motion ? &*motion : nullptr);
   KalmanRunOptions run;
@@ -210,6 +215,14 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
     throw std::runtime_error(session.log.file +
                              ": the filter's estimates are not finite numbers (nothing written)" +
                              (kr.diverged.empty() ? std::string() : ": " + kr.diverged));
+  // The filter's linear range: a pass far from what it linearized about is refused (exit 2). A
+  // run that diverged or stopped has its own verdict.
+  if (kr.diverged.empty() && kr.stopped.empty()) {
+    gate.checks.push_back(check_kf_linearization(kr.linearization, o.passes,
+                                                 kr.passes.empty() ? 1 : kr.passes.back().pass,
+                                                 session.log.file));
+    enforce(gate, o.force);
+  }
   const ResultCoefficients coefficients = result_coefficients(kr);
   auto sections = result_sections(kr);
   record_gate(sections, gate);
@@ -342,7 +355,7 @@ void check_kf_values(const CalibrateOptions& o) {
     throw UsageError(
         "--static-window must be positive, --static-min at least the window, "
         "--static-rate-threshold positive");
-  if (o.passes < 1 || o.passes > 20) throw UsageError("--passes must be 1 to 20");
+  if (o.passes < 0 || o.passes > 20) throw UsageError("--passes must be 0 (automatic) to 20");
   if (o.motion != "data" && o.motion != "plan")
     throw UsageError("--motion must be data or plan, not '" + o.motion + "'");
   if (o.passes > 1 && o.stream) throw UsageError("--passes reads the log again: not with --stream");

@@ -26,6 +26,9 @@ TableFreeRun gated_table_free_run(const Session& session, TableFreeRunOptions ro
                          ? r.options.gravity
                          : Earth::wgs84().gravity_n(r.site.lat_rad, r.site.h_m).norm();
     gate = check_handheld(session.log, r.readings, r.detection.poses, g, limits, r.log);
+    // The fit integrates the turns: a log without time has its nominal rate checked by them.
+    if (integrating_limits(PlausibilityLimits{}, session.log).assumed_rate_hz > 0.0)
+      gate.checks.push_back(turn_timing_check(session, profile ? &*profile : nullptr));
     enforce(gate, force);
   };
   TableFreeRun run = run_table_free(session, ro);

@@ -73,7 +73,8 @@ void add_options(po::options_description& d, CalibrateOptions& o) {
        "them: start-time offset, smoothed, lagging or overshooting turns) | plan (the plan's "
        "commanded trapezoids)")
       ("passes", po::value(&o.passes)->default_value(1),
-       "kf: passes over the log, each from the previous pass's coefficients (large errors: MEMS)")
+       "kf: passes over the log, each from the previous pass's coefficients (large errors: MEMS); "
+       "0: automatic, another pass while the last ran beyond its linear range (at most 3)")
       ("static-from", po::value(&o.static_from)->default_value(CalibratorOptions::StaticFrom::Plan,
        "plan"), "kf: where the static dwells are: plan (its timing, shifted by the session's "
        "time_offset) | data (detected; the k-th static interval is the plan's k-th dwell)")

@@ -283,10 +283,17 @@ nlohmann::ordered_json result_sections(const KalmanRun& r) {
       nlohmann::ordered_json e = {{"pass", p.pass}, {"nis_per_dof", p.nis_per_dof}};
       if (p.largest_change_over_sigma)
         e["largest_change_over_sigma"] = *p.largest_change_over_sigma;
+      e["linearization_share"] = p.linearization_share;
       passes.push_back(e);
     }
     d["passes"] = passes;
   }
+  const PassLinearization& l = r.linearization;  // filter/kalman/pass_linearization.hpp
+  d["linearization"] = {{"share", l.share},
+                        {"coefficient", l.coefficient},
+                        {"epsilon", l.epsilon},
+                        {"epsilon_coefficient", l.epsilon_coefficient},
+                        {"bound", kLinearizationShare}};
   return d;
 }
 

@@ -63,7 +63,7 @@ std::string write_apophis_like(const std::string& dir, const ApophisLike& spec) 
   const Eigen::Vector3d& accel_bias = spec.accel_bias;
   const Eigen::Vector3d f_n(0.0, 0.0, -units::g0);
   std::ofstream log(dir + "/log.csv");
-  log << "ax,ay,az,gx,gy,gz\n";
+  log << (spec.time_column ? "t,ax,ay,az,gx,gy,gz\n" : "ax,ay,az,gx,gy,gz\n");
   bool high[3] = {false, false, false};
   for (double t = 0.0;; t += interval(rng)) {
     const auto k = static_cast<std::size_t>(t / kStep);
@@ -86,21 +86,31 @@ std::string write_apophis_like(const std::string& dir, const ApophisLike& spec) 
       for (int i = 0; i < 3; ++i) w(i) += high[i] ? spec.gyro_toggle(i) : 0.0;
       f.y() += high[1] ? 0.018 * units::g0 : 0.0;
     }
+    if (spec.time_column) {
+      char stamp[40];
+      std::snprintf(stamp, sizeof stamp, "%.6f,", t);
+      log << stamp;
+    }
     char line[200];
     std::snprintf(line, sizeof line, "%.7f,%.7f,%.7f,%.6f,%.6f,%.6f\n", f.x() / units::g0,
                   f.y() / units::g0, f.z() / units::g0, w.x() / units::deg_per_s,
                   w.y() / units::deg_per_s, w.z() / units::deg_per_s);
     log << line;
   }
-  std::ofstream(dir + "/plan.ini") << spec.plan_text;
   std::ofstream session(dir + "/session.ini");
-  session << "[session]\nname = apophis-like\nrate = 15 Hz\nplan = plan.ini\n";
+  session << "[session]\nname = apophis-like\nrate = 15 Hz\n";
+  if (!spec.plan_text.empty()) {
+    std::ofstream(dir + "/plan.ini") << spec.plan_text;
+    session << "plan = plan.ini\n";
+  }
   if (!spec.sensor_text.empty()) {
     std::ofstream(dir + "/sensor.ini") << spec.sensor_text;
     session << "sensor = sensor.ini\n";
   }
-  session << "\n[log]\nfile = log.csv\nformat = custom\nheader_lines = 1\n"
-             "columns = ax ay az gx gy gz\ngyro = rate\ngyro_unit = deg/s\naccel = rate\n"
+  if (spec.plan_text.empty()) session << "\n[site]\ngravity = 9.80665 m/s^2\n";
+  session << "\n[log]\nfile = log.csv\nformat = custom\nheader_lines = 1\ncolumns = "
+          << (spec.time_column ? "t " : "")
+          << "ax ay az gx gy gz\ngyro = rate\ngyro_unit = deg/s\naccel = rate\n"
              "accel_unit = g\n";
   return dir + "/session.ini";
 }
@@ -225,6 +235,28 @@ ApophisLike apophis_z_turns() {
   spec.accel_white = 180.0 * units::ug * std::sqrt(15.0);
   spec.plan_text = kZTurnsPlan;
   spec.sensor_text = bmi160_profile_text();
+  return spec;
+}
+
+ApophisLike apophis_hand_tumble(bool time_column) {
+  ApophisLike spec;
+  const double rate = 45.0 * units::deg_per_s, accel = 45.0 * units::deg_per_s;
+  const double hold = M_PI / 2.0 / rate - rate / accel;  // 90 deg
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitX(), y = Eigen::Vector3d::UnitY();
+  spec.phases.push_back(rest_phase(6.0));
+  for (int k = 0; k < 14; ++k) {
+    spec.phases.push_back(turn_phase((k / 3) % 2 == 0 ? x : y, rate, accel, hold));
+    spec.phases.push_back(rest_phase(6.0));
+  }
+  spec.toggling = false;
+  spec.gyro_bias = Eigen::Vector3d(0.2, -0.1, 0.15) * units::deg_per_s;
+  spec.accel_bias = Eigen::Vector3d(0.01, -0.02, 0.015) * units::g0;
+  spec.time_column = time_column;
+  if (!time_column) {
+    spec.min_hz = 9.0;
+    spec.max_hz = 12.0;
+  }
+  spec.seed = 5;
   return spec;
 }
 

@@ -57,8 +57,9 @@ struct ApophisLike {
   /// The Earth rate in the navigation frame (rad/s, NED) the gyros sense (0: none).
   Eigen::Vector3d omega_ie_n = Eigen::Vector3d::Zero();
   unsigned seed = 1;
-  std::string plan_text;    // plan.ini
-  std::string sensor_text;  // sensor.ini (empty: none in the session)
+  std::string plan_text;     // plan.ini (empty: none; a hand-held session with [site] gravity)
+  std::string sensor_text;   // sensor.ini (empty: none in the session)
+  bool time_column = false;  // a first column t: each reading's true time (s)
 };
 
 /// Writes the session into `dir`; returns the path of its session.ini.
@@ -89,5 +90,12 @@ ApophisLike apophis_tumble();
 /// Board 1's rate test about z (8 s at rest, -z and +z at 25 deg/s for 40 s each, 15 s at rest)
 /// at the data sheet's white noise, with the BMI160 profile: turns that move no gravity.
 ApophisLike apophis_z_turns();
+
+/// A hand-held tumble of the APOPHIS logs' timing (issue 34, item 4): 15 rests of 6 s joined by
+/// 90 deg turns at 45 deg/s about body x and y, no plan (`[site] gravity`), white noise only.
+/// `time_column`: with the readings' true times (12-18 Hz: the irregular time the table-free fit
+/// must refuse); without: readings at 9-12 Hz while the session states 15 Hz (the turns' timing
+/// against gravity shows it).
+ApophisLike apophis_hand_tumble(bool time_column);
 
 }  // namespace sinscal::test

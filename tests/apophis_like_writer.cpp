@@ -1,7 +1,7 @@
 // Writes a generated session of the APOPHIS logs' structure (tests/apophis_like.hpp) for the
 // bad-input corpus (tests/bad_input_test.sh): apophis_like_writer DIR rate-test | rate-test-short
-// | z-turns | tumble [SEED] (Monte Carlos of the rate test and the tumble:
-// docs/measured/apophis/README.md).
+// | z-turns | tumble | hand-tumble | hand-tumble-timed [SEED] (Monte Carlos of the rate test and
+// the tumble: docs/measured/apophis/README.md).
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -10,11 +10,20 @@
 
 namespace {
 
+bool known_kind(const std::string& kind) {
+  for (const char* k :
+       {"rate-test", "rate-test-short", "z-turns", "tumble", "hand-tumble", "hand-tumble-timed"})
+    if (kind == k) return true;
+  return false;
+}
+
 sinscal::test::ApophisLike spec_of(const std::string& kind) {
   using namespace sinscal::test;
   if (kind == "z-turns") return apophis_z_turns();
   if (kind == "tumble") return apophis_tumble();
   if (kind == "rate-test-short") return apophis_rate_test_short();
+  if (kind == "hand-tumble" || kind == "hand-tumble-timed")
+    return apophis_hand_tumble(kind == "hand-tumble-timed");
   return apophis_rate_test();
 }
 
@@ -22,12 +31,13 @@ sinscal::test::ApophisLike spec_of(const std::string& kind) {
 
 int main(int argc, char** argv) {
   if (argc != 3 && argc != 4) {
-    std::fprintf(
-        stderr, "usage: apophis_like_writer DIR rate-test|rate-test-short|z-turns|tumble [SEED]\n");
+    std::fprintf(stderr,
+                 "usage: apophis_like_writer DIR "
+                 "rate-test|rate-test-short|z-turns|tumble|hand-tumble|hand-tumble-timed [SEED]\n");
     return 1;
   }
   const std::string kind = argv[2];
-  if (kind != "rate-test" && kind != "rate-test-short" && kind != "z-turns" && kind != "tumble") {
+  if (!known_kind(kind)) {
     std::fprintf(stderr, "apophis_like_writer: unknown kind '%s'\n", argv[2]);
     return 1;
   }

@@ -566,6 +566,71 @@ void report_in_frame(KalmanRun& r, const KalmanRunOptions& run) {
   r.above_target = above_target(r.estimates, run.sigma_targets);
 }
 
+// How far a pass ran from the model it started from (pass_linearization.hpp).
+PassLinearization linearization_of(const KalmanRun& r, const CalibratorOptions& started) {
+  return pass_linearization(r.estimates, r.model.vector(),
+                            started.initial_model.value_or(ImuErrorModel{}).vector());
+}
+
+// The options of one pass of several: earlier passes of a fixed count run quiet, without the
+// alarm (their linearization is what the later passes improve); automatic passes, any of which
+// may be the last, with the alarm, their monitor records held for the end.
+KalmanRunOptions pass_options(const KalmanRunOptions& run, bool last,
+                              std::vector<MonitorRecord>& held) {
+  KalmanRunOptions o = run;
+  if (run.passes == 0) {
+    if (run.monitor) o.monitor = [&held](const MonitorRecord& m) { held.push_back(m); };
+    return o;
+  }
+  if (last) return o;
+  o.monitor = nullptr;
+  o.monitor_interval = 0.0;
+  o.nis_alarm_z = std::numeric_limits<double>::infinity();
+  return o;
+}
+
+// Several passes over the session's log, each from the previous pass's coefficients: a fixed
+// count, or automatic (KalmanRunOptions::passes 0).
+KalmanRun run_passes(const Session& session, const CalibratorOptions& options,
+                     const KalmanRunOptions& run) {
+  const bool automatic = run.passes == 0;
+  const int most = automatic ? kMaxAutomaticPasses : run.passes;
+  CalibratorOptions o = options;
+  std::vector<KalmanRun::Pass> passes;
+  std::vector<MonitorRecord> held;
+  KalmanRun previous;
+  for (int pass = 1; pass <= most; ++pass) {
+    held.clear();
+    bool last = pass == most;
+    KalmanRun r = run_pass(session, o, nullptr, pass_options(run, last, held));
+    r.linearization = linearization_of(r, o);
+    KalmanRun::Pass p{pass, r.nis_per_dof, std::nullopt, r.linearization.share};
+    if (pass > 1) p.largest_change_over_sigma = largest_change(r, previous);
+    passes.push_back(p);
+    last = last || (automatic && r.linearization.within());
+    if (last || !r.stopped.empty() || !r.diverged.empty()) {  // bad input, an interruption
+      // An earlier pass of a fixed count runs without the alarm: its stop is said to be its own.
+      const std::string which = "pass " + std::to_string(pass) + " of " + std::to_string(most) +
+                                " (without the divergence alarm): ";
+      if (!last && !automatic && !r.stopped.empty() && !r.interrupted)
+        r.stopped = which + r.stopped;
+      if (!last && !automatic && !r.diverged.empty()) r.diverged = which + r.diverged;
+      if (automatic && run.monitor)
+        for (const MonitorRecord& m : held) run.monitor(m);
+      r.passes = passes;
+      r.passes_requested = run.passes;
+      return r;
+    }
+    // The coefficients carry over; the base starts again where the first pass did (a pass
+    // far off, MEMS, leaves it anywhere, and its prior is wide enough). Carrying the base over
+    // too was measured worse: MEMS rot19, seeds 1-6, the third pass moved 0.15-0.29 sigma with
+    // it, 0.009-0.029 without (docs/accuracy.md "Several passes (MEMS)").
+    o.initial_model = r.model;
+    previous = std::move(r);
+  }
+  return previous;  // not reached
+}
+
 }  // namespace
 
 std::vector<CoefficientEstimate> estimates_in_reported_frame(const Calibrator& kf,
@@ -632,40 +697,13 @@ KalmanRun run_kalman(const Session& session, const CalibratorOptions& given, Sam
     report_in_frame(r, run);
     return r;
   };
-  if (run.passes <= 1) return with_installation(run_pass(session, options, source, run));
-  if (source) throw std::invalid_argument("several passes need the session's log, not a stream");
-  // Earlier passes: quiet, no alarm (their linearization is what the later passes improve).
-  KalmanRunOptions quiet = run;
-  quiet.monitor = nullptr;
-  quiet.monitor_interval = 0.0;
-  quiet.nis_alarm_z = std::numeric_limits<double>::infinity();
-  CalibratorOptions o = options;
-  std::vector<KalmanRun::Pass> passes;
-  KalmanRun previous;
-  for (int pass = 1; pass <= run.passes; ++pass) {
-    const bool last = pass == run.passes;
-    KalmanRun r = run_pass(session, o, nullptr, last ? run : quiet);
-    KalmanRun::Pass p{pass, r.nis_per_dof, std::nullopt};
-    if (pass > 1) p.largest_change_over_sigma = largest_change(r, previous);
-    passes.push_back(p);
-    if (last || !r.stopped.empty() || !r.diverged.empty()) {  // bad input, an interruption
-      // An earlier pass runs without the divergence alarm: its stop is said to be its own.
-      const std::string which = "pass " + std::to_string(pass) + " of " +
-                                std::to_string(run.passes) + " (without the divergence alarm): ";
-      if (!last && !r.stopped.empty() && !r.interrupted) r.stopped = which + r.stopped;
-      if (!last && !r.diverged.empty()) r.diverged = which + r.diverged;
-      r.passes = passes;
-      r.passes_requested = run.passes;
-      return with_installation(std::move(r));
-    }
-    // The coefficients carry over; the base starts again where the first pass did (a pass
-    // far off, MEMS, leaves it anywhere, and its prior is wide enough). Carrying the base over
-    // too was measured worse: MEMS rot19, seeds 1-6, the third pass moved 0.15-0.29 sigma with
-    // it, 0.009-0.029 without (docs/accuracy.md "Several passes (MEMS)").
-    o.initial_model = r.model;
-    previous = std::move(r);
+  if (run.passes == 1 || (run.passes == 0 && source)) {
+    KalmanRun r = run_pass(session, options, source, run);
+    r.linearization = linearization_of(r, options);
+    return with_installation(std::move(r));
   }
-  return previous;  // not reached
+  if (source) throw std::invalid_argument("several passes need the session's log, not a stream");
+  return with_installation(run_passes(session, options, run));
 }
 
 }  // namespace sinscal

@@ -16,6 +16,7 @@
 #include "filter/installation/stream_alignment.hpp"
 #include "filter/kalman/kalman_calibrator.hpp"
 #include "filter/kalman/motion_from_data.hpp"
+#include "filter/kalman/pass_linearization.hpp"
 #include "rig/io/log_io.hpp"
 #include "rig/session.hpp"
 
@@ -44,6 +45,10 @@ struct KalmanRunOptions {
   /// Passes over the log (batch only): each starts from the previous pass's coefficients, with
   /// the profile's prior sigmas, so the last is linearized about a close estimate (large errors:
   /// MEMS). The monitor, the divergence alarm and the verdicts are those of the last pass.
+  /// 0: automatic: one pass, and another while the last left its linearization's second-order
+  /// term beyond kLinearizationShare of a sigma (pass_linearization.hpp), at most
+  /// kMaxAutomaticPasses; every pass with the divergence alarm, the monitor's records given for
+  /// the last only (at its end). With a stream: one pass.
   int passes = 1;
   /// Align from the plan's dwells before the first pass (filter/installation/installation.hpp;
   /// not for dwells found in the data, whose timing is not the plan's): from the log, all its
@@ -134,9 +139,12 @@ struct KalmanRun {
     int pass = 0;
     double nis_per_dof = 0.0;
     std::optional<double> largest_change_over_sigma;  // from the second pass on
+    double linearization_share = 0.0;                 // PassLinearization::share
   };
   std::vector<Pass> passes;  // several passes only
-  int passes_requested = 1;
+  int passes_requested = 1;  // 0: automatic
+  /// The last pass's distance from the model it linearized about (every run).
+  PassLinearization linearization;
   InstallationResult installation;
   /// The motion found in the data (batch runs along the plan's motion).
   std::optional<DataMotion> motion;

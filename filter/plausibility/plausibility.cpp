@@ -9,6 +9,7 @@
 #include "filter/closed_form/closed_form.hpp"
 #include "filter/installation/installation.hpp"
 #include "filter/kalman/kalman_calibrator.hpp"
+#include "filter/kalman/pass_linearization.hpp"
 #include "filter/rate_table/rate_table.hpp"
 #include "models/sensor_profile.hpp"
 #include "models/units.hpp"
@@ -374,6 +375,18 @@ PlausibilityReport check_plausibility(LogReader& reader, const std::string& inpu
   return report;
 }
 
+IntervalSpread interval_spread(const std::vector<double>& intervals) {
+  IntervalWatch watch;
+  ImuSample s;
+  std::size_t count = 1;
+  for (const double dt : intervals) {
+    if (!(dt > 0.0)) continue;
+    s.dt = dt;
+    watch.see(s, ++count);
+  }
+  return watch.spread();
+}
+
 PlausibilityLimits integrating_limits(PlausibilityLimits l, const LogFormat& log) {
   l.max_interval_spread = PlausibilityLimits::kIntegratingIntervalSpread;
   const bool timed = log.kind == LogFormat::Kind::NovAtel ||
@@ -454,6 +467,30 @@ PlausibilityCheck speed_range(const ClosedFormReport& r, const std::string& inpu
   return c;
 }
 }  // namespace
+
+namespace {
+// The share beyond which a run's last pass is refused: its estimate may be off by a sigma of the
+// linearization's own (the automatic passes stop at kLinearizationShare, a tenth).
+constexpr double kLinearizationRefusal = 1.0;
+}  // namespace
+
+PlausibilityCheck check_kf_linearization(const PassLinearization& last, int passes, int passes_run,
+                                         const std::string& input) {
+  PlausibilityCheck c{"kf linear range", true, ""};
+  if (!(last.share > kLinearizationRefusal)) return c;
+  c.passed = false;
+  c.detail = input + ": the filter's pass " + std::to_string(passes_run) + " (" +
+             (passes == 0 ? "automatic passes, at most " + std::to_string(kMaxAutomaticPasses)
+                          : "--passes " + std::to_string(passes)) +
+             ") ran far from the coefficients it linearized about: its neglected second-order " +
+             "term reaches " + last.text() + ", beyond " + number(kLinearizationRefusal, 2) +
+             " sigma: the sensor's errors are too large for one linearization (consumer MEMS); " +
+             (passes == 0 && passes_run < kMaxAutomaticPasses
+                  ? std::string("several passes need the log, not --stream")
+                  : std::string("run the automatic passes (--passes 0) or more passes (--passes "
+                                "N), each about the previous estimate"));
+  return c;
+}
 
 PlausibilityCheck check_linear_range(const ClosedFormReport& r, const std::string& input) {
   PlausibilityCheck c{"closed-form linear range", true, ""};

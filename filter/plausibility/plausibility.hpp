@@ -22,6 +22,7 @@ struct Session;
 struct EquivalentInputs;
 struct ClosedFormReport;
 struct RateTableResult;
+struct PassLinearization;
 
 /// What a static dwell may show and still be plausible. SI units.
 struct PlausibilityLimits {
@@ -154,6 +155,9 @@ struct IntervalSpread {
     return median > 0.0 ? std::max(0.0, high - low - 2.0 * resolution) / median : 0.0;
   }
 };
+/// The spread of sample intervals held in memory (s, each positive; others are skipped), with the
+/// timestamps' grid found as the log pass finds it.
+IntervalSpread interval_spread(const std::vector<double>& intervals);
 /// The "sample intervals" check: refuses a spread above `limits.max_interval_spread` (a pass
 /// without a time column names the assumed rate in its detail).
 PlausibilityCheck check_interval_spread(const IntervalSpread& s, const PlausibilityLimits& limits,
@@ -169,6 +173,13 @@ PlausibilityCheck check_stage1_fit(const std::vector<EquivalentInputs>& stage1,
 /// its accelerometer inputs drive the velocity beyond the range (after the relinearization about
 /// the accelerometers' bias, scale and misalignment, an accelerometer error the model lacks).
 PlausibilityCheck check_linear_range(const ClosedFormReport& r, const std::string& input);
+/// The Kalman filter's linear range: its last pass (of `passes`; 0: automatic) may not leave the
+/// second-order term of its linearization beyond a whole sigma (the automatic passes stop below
+/// kLinearizationShare, a tenth)
+/// (filter/kalman/pass_linearization.hpp); the cause named is the coefficients the pass moved
+/// far from the model it linearized about, and the remedy more passes.
+PlausibilityCheck check_kf_linearization(const PassLinearization& last, int passes, int passes_run,
+                                         const std::string& input);
 /// The closed form's stage 2: its residual chi2 (dof = inputs - rank) against the chi-square
 /// quantile at the normal tail of `limits.stage2_fit_z`: above it the dwells do not fit one set
 /// of the model's coefficients.

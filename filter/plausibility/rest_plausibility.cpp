@@ -449,6 +449,22 @@ PlausibilityCheck check_fit(double chi2_per_dof, const RestLimits& l, const std:
   return c;
 }
 
+PlausibilityCheck check_reading_intervals(const LogFormat& log,
+                                          const std::vector<ImuReading>& readings,
+                                          const std::string& input) {
+  std::vector<double> dt;
+  dt.reserve(readings.size());
+  for (std::size_t i = 1; i < readings.size(); ++i) dt.push_back(readings[i].t - readings[i - 1].t);
+  PlausibilityCheck c = check_interval_spread(interval_spread(dt),
+                                              integrating_limits(PlausibilityLimits{}, log), input);
+  // The table methods' remedy (the rate table's means) is not this record's.
+  const std::string table_remedy = "use --method rate-table (means only) or a log";
+  const std::size_t at = c.detail.find(table_remedy);
+  if (at != std::string::npos)
+    c.detail.replace(at, table_remedy.size(), "the table-free fit integrates its turns: use a log");
+  return c;
+}
+
 PlausibilityReport check_handheld(const LogFormat& log, const std::vector<ImuReading>& readings,
                                   const std::vector<Pose>& poses, double g, const RestLimits& l,
                                   const std::string& input) {
@@ -462,6 +478,7 @@ PlausibilityReport check_handheld(const LogFormat& log, const std::vector<ImuRea
   PlausibilityReport report = check_rests(rests, g, l, input);
   report.checks.push_back(check_same_files(log));
   if (report.checks.back().passed) report.checks.back() = check_same_signal(readings, l, input);
+  report.checks.push_back(check_reading_intervals(log, readings, input));
   return report;
 }
 

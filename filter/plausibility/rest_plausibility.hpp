@@ -117,8 +117,17 @@ PlausibilityCheck check_handheld_fit(const TableFreeResult& result, const RestLi
 PlausibilityCheck check_fit(double chi2_per_dof, const RestLimits& limits, const std::string& input,
                             const std::string& what);
 
+/// The "sample intervals" check of a record in memory (the table-free fit integrates its turns):
+/// the readings' intervals against the integrating methods' tolerated spread
+/// (PlausibilityLimits::kIntegratingIntervalSpread); without a time column it passes, naming the
+/// assumed rate (the turns' timing is checked against gravity: turn_timing.hpp).
+PlausibilityCheck check_reading_intervals(const LogFormat& log,
+                                          const std::vector<ImuReading>& readings,
+                                          const std::string& input);
+
 /// The whole gate of a hand-held record before its fit (table-free): its poses as rests (`poses`
-/// index `readings`, rates SI), its two triads one signal or not, the same file twice.
+/// index `readings`, rates SI), its two triads one signal or not, the same file twice, its sample
+/// intervals (check_reading_intervals).
 PlausibilityReport check_handheld(const LogFormat& log, const std::vector<ImuReading>& readings,
                                   const std::vector<Pose>& poses, double g,
                                   const RestLimits& limits, const std::string& input);
