@@ -43,10 +43,12 @@ bool thermal_acts_in_turns(const std::string& family) {
 // with them. Without them the turns' residual holds the named family's effect: with the library's
 // rate columns taken along the table's motion (no longer diluted by the gyro noise) a named MEMS
 // gyro.scale_asym left its turns "unexplained" along omega_i^2 (issue 33: 10 of 10 rot19 seeds).
+// A finding stated with a library term as its alternative (the plan cannot tell them apart) stays
+// out, so that the library reports the term.
 std::vector<int> with_turn_findings(std::vector<int> confirmed,
                                     const std::vector<TableFinding>& findings) {
   for (const auto& f : findings)
-    if (f.source == TableFinding::Source::Turns)
+    if (f.source == TableFinding::Source::Turns && !f.alternative_term)
       for (int c : f.components)
         if (std::find(confirmed.begin(), confirmed.end(), c) == confirmed.end())
           confirmed.push_back(c);
