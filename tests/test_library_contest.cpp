@@ -21,21 +21,24 @@ constexpr double kContestRate = 20.0;  // Hz, as the open-world matrix
 // A term injected into the log, given the log time of the plan's middle (s).
 using TermAt = std::function<ExtraTerm(double mid_s)>;
 
-// The contest of gyro.bias_drift against the library on a clean rot19 nav-fog session (seed)
-// with `term_at` injected into its log, set up as the table diagnosis sets up its dwells and turns
-// (the dwells' model with the bias wander and the session grade's priors, the turns with the
-// table's attitude sigma).
-HeldoutContest drift_contest(std::uint64_t seed, const TermAt& term_at) {
-  HiddenCase c = hidden_case("library_contest", "rot19.ini", "nav-fog.ini", {}, seed, kContestRate);
-  const double mid =
-      c.session.time_offset + 0.5 * PlanTimeline::of(c.session.plan, c.session.site).duration;
-  inject_into_log(c.session.dir + "/imu.csv", kContestRate, term_at(mid));
-  c.session = Session::load(c.session.path);
+// The dwells and turns of a case set up as the table diagnosis sets them up (the dwells' model
+// with the bias wander and the session grade's priors, with `turn_families` also the families the
+// turns' model has on, as dwells_model does; the turns with the table's attitude sigma), handed to
+// `use(dwells, parameters, turns)`.
+template <class Use>
+auto with_library_inputs(const HiddenCase& c, bool turn_families, const Use& use) {
   const CaseCalibration cc = calibrate_case(c);
   const TurnModel& model = cc.model;
   const ClosedFormReport& cal = cc.calibration;
   Stage2Options base = cal.stage2_options;
   base.bias_wander = model.base.noise;
+  const auto& cat = coefficient_catalog();
+  for (std::size_t k = 0; k < cat.size() && turn_families; ++k) {
+    const int j = static_cast<int>(k);
+    if (!coefficient_family_info(cat[k].family).base && model.base.layout.on(cat[k].family) &&
+        std::find(base.parameters.begin(), base.parameters.end(), j) == base.parameters.end())
+      base.parameters.push_back(j);
+  }
   DiagnosisOptions o;
   o.prior_sigma = grade_priors(model.base);
   const DwellTests dwells(cal.stage1, c.session.site, base, o);
@@ -44,11 +47,26 @@ HeldoutContest drift_contest(std::uint64_t seed, const TermAt& term_at) {
   lt.attitude_sigma = model.base.attitude_sigma;
   lt.noise = model.base.noise;
   lt.about = model.base.initial_model ? &*model.base.initial_model : nullptr;
+  return use(dwells, base.parameters, lt);
+}
+
+// The contest of gyro.bias_drift against the library on a clean rot19 nav-fog session (seed)
+// with `term_at` injected into its log.
+HeldoutContest drift_contest(std::uint64_t seed, const TermAt& term_at) {
+  HiddenCase c = hidden_case("library_contest", "rot19.ini", "nav-fog.ini", {}, seed, kContestRate);
+  const double mid =
+      c.session.time_offset + 0.5 * PlanTimeline::of(c.session.plan, c.session.site).duration;
+  inject_into_log(c.session.dir + "/imu.csv", kContestRate, term_at(mid));
+  c.session = Session::load(c.session.path);
   std::vector<int> drift;
   const auto& cat = coefficient_catalog();
   for (std::size_t k = 0; k < cat.size(); ++k)
     if (cat[k].family == "gyro.bias_drift") drift.push_back(static_cast<int>(k));
-  return contest_family(dwells, base.parameters, drift, 0.01, &lt);
+  return with_library_inputs(
+      c, false,
+      [&](const DwellTests& dwells, const std::vector<int>& parameters, const LibraryTurns& lt) {
+        return contest_family(dwells, parameters, drift, 0.01, &lt);
+      });
 }
 
 std::string summary(const HeldoutContest& c) {
@@ -107,4 +125,44 @@ TEST_CASE("Library contest: the table diagnosis refuses the drift for a bias ste
   CHECK(r.finding.family == "gyro.bias_drift");
   CHECK(r.reason.find("step after") != std::string::npos);
   CHECK(r.reason.find("predicts the held-out dwells and turns better") != std::string::npos);
+}
+
+// The library's rate columns on the turns are functions of the table's known motion, not of the
+// gyros' outputs (errors in variables): on clean MEMS rot19 sessions the turns' residual along
+// gyro i's omega_i |omega_i| is then N(0, 1) at most per seed and axis, zero on average. Built from
+// the outputs, whose angle random walk and bias wander the residual integrates too, the columns
+// (after the scale factor is projected out, the same rate profile every turn) are mostly that
+// noise, and the residual along them averages -2.3 (issue 33: 3 of 4 clean rot19 sessions that
+// came out "unexplained" were this term, z^2 16.3-21.8 against 15.5). The mean over the seeds of
+// each seed's mean over the three axes: its sigma is at most 1 / sqrt(seeds), whatever the axes'
+// correlation; the limit is 4 of those sigmas.
+TEST_CASE("Library turns: clean MEMS rot19 rate terms are unbiased",
+          "[diagnosis][library_contest]") {
+  constexpr int kSeeds = 10;
+  double sum = 0.0;
+  std::string all;
+  for (int k = 0; k < kSeeds; ++k) {
+    const HiddenCase c = hidden_case("library_turns_mems", "rot19.ini", "mems.ini", {},
+                                     29000 + static_cast<std::uint64_t>(k), kContestRate);
+    const LibraryFit f = with_library_inputs(
+        c, true,
+        [](const DwellTests& dwells, const std::vector<int>& parameters, const LibraryTurns& lt) {
+          return fit_term_library(dwells, parameters, 0.01, &lt, false);
+        });
+    int axes = 0;
+    double seed_sum = 0.0;
+    for (const auto& [name, z] : f.turns_term_z)
+      for (const char* a : {"x", "y", "z"})
+        if (name ==
+            std::string("gyro ") + a + ": omega_" + a + " |omega_" + a + "| (library term)") {
+          ++axes;
+          seed_sum += z;
+          all += " " + std::to_string(z);
+        }
+    REQUIRE(axes == 3);
+    sum += seed_sum / 3.0;
+  }
+  const double mean = sum / kSeeds;
+  INFO("mean z " << mean << ", each:" << all);
+  CHECK(std::abs(mean) < 4.0 / std::sqrt(static_cast<double>(kSeeds)));
 }

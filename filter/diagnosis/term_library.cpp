@@ -7,12 +7,14 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 
 #include "filter/strapdown/ins_error_model.hpp"
 #include "models/attitude.hpp"
 #include "models/earth.hpp"
 #include "models/units.hpp"
 #include "rig/io/log_io.hpp"
+#include "rig/plan.hpp"
 #include "rig/thermal.hpp"
 
 namespace sinscal {
@@ -323,6 +325,10 @@ struct TurnsContext {
   const std::vector<Column>* lib = nullptr;
   Eigen::Vector3d omega_ie_n = Eigen::Vector3d::Zero();
   Eigen::Vector3d g_n = Eigen::Vector3d::Zero();  // normal gravity, NED
+  /// The table's known motion in plan time (the plan's, rig/plan.hpp build_motion): the columns'
+  /// rates and specific force where the outputs follow it (reference_kinematics); null: the
+  /// outputs'.
+  std::shared_ptr<const Motion> reference;
 };
 
 // A sample's temperatures against the model's reference (deg C) and the gyros' rate of change
@@ -368,6 +374,32 @@ KinematicSample kinematics(const ImuSample& smp, double t, const SampleTemperatu
   return ks;
 }
 
+// The sample's outputs beyond this from the table's known motion: not the same motion (a table
+// that lags its plan, a log whose time is off, a pass of a repeated plan), the outputs' own.
+constexpr double kReferenceRateGap = 1.0 * units::deg_per_s;
+constexpr double kReferenceForceGap = 0.05 * units::g0;
+
+// The inputs the columns are functions of (the model's Jacobian and the library's terms): the
+// table's known motion at the sample's middle where the compensated outputs follow it, else the
+// outputs. The outputs carry the sensors' noise (a MEMS gyro's angle random walk and bias
+// wander), which the residual integrates too: columns made of them are errors in variables.
+// With the scale factor projected out (one rate profile: omega |omega| integrates to a multiple
+// of the angle), what is left of a rate term's column is mostly that noise, 2 |omega| n, and its
+// residual along it is biased (issue 33: z of omega_i |omega_i| at -2.3 on average over clean
+// MEMS rot19 seeds, on each gyro axis; 0 without the gyro noise).
+KinematicSample reference_kinematics(const KinematicSample& ks, const TurnsContext& x) {
+  if (!x.reference) return ks;
+  const KinematicState ref = x.reference->at(ks.t);
+  if ((ref.imu.omega_ib_b - ks.omega_ib_b).norm() > kReferenceRateGap ||
+      (ref.imu.f_ib_b - ks.f_ib_b).norm() > kReferenceForceGap)
+    return ks;
+  KinematicSample k = ks;
+  k.omega_ib_b = ref.imu.omega_ib_b;
+  k.omega_dot_ib_b = ref.imu.omega_dot_ib_b;
+  k.f_ib_b = ref.imu.f_ib_b;
+  return k;
+}
+
 // The velocity rows' share of one sample inside the turn's window: the accelerometers' columns
 // rotated to NED, the gyros' (their attitude since the window began, psi) crossed with the
 // specific force: d(C_pred f) = C df - [f_n x] psi.
@@ -411,7 +443,7 @@ void accumulate(Segment& g, const ImuSample& smp, double t, const TurnsContext& 
                 const SampleTemperature& temp) {
   const double dt = smp.dt;
   if (!(dt > 0.0)) return;
-  const KinematicSample ks = kinematics(smp, t, temp, g);
+  const KinematicSample ks = reference_kinematics(kinematics(smp, t, temp, g), x);
   ImuErrorModel::JacobianColumns J;
   x.model.jacobian(ks, -ks.omega_ib_b.cross(ks.f_ib_b), x.columns, J);
   const auto p = static_cast<Eigen::Index>(x.columns.size());
@@ -635,6 +667,8 @@ TurnRaw append_turns(Stacked& s, const LibraryTurns& lt, const DwellTests& dwell
   x.lib = &lib;
   x.omega_ie_n = Earth::wgs84().omega_ie_n(dwells.site().lat_rad);
   x.g_n = Earth::wgs84().gravity_n(dwells.site().lat_rad, dwells.site().h_m);
+  if (lt.session->has_plan)
+    x.reference = std::make_shared<const Motion>(build_motion(lt.session->plan, lt.session->site));
   TurnRaw r = integrate_turns(lt, dwells, x, s.A.cols(), s.B.cols());
   if (r.y.size() == 0) return r;
   Eigen::MatrixXd R = turns_covariance(r, lt);
@@ -822,6 +856,8 @@ void largest_turn_term(const Stacked& s, const std::vector<Column>& lib, Library
     if (!(n2 > 1e-12 * std::max(1.0, y.squaredNorm()))) continue;
     ++tried;
     const double z2 = b.dot(y) * b.dot(y) / n2;
+    out.turns_term_z.emplace_back(lib[static_cast<std::size_t>(j)].term.name(),
+                                  b.dot(y) / std::sqrt(n2));
     if (z2 > out.turns_term_z2) {
       out.turns_term_z2 = z2;
       out.turns_term = lib[static_cast<std::size_t>(j)].term.name();

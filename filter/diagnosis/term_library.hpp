@@ -8,6 +8,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "filter/diagnosis/diagnosis.hpp"
@@ -66,6 +67,10 @@ struct LibraryFit {
   double turns_term_z2 = 0.0;
   double turns_term_quantile = 0.0;
   bool turns_term_reject = false;
+  /// The turns' residual along every library column alone, signed (z, as turns_term_z2 is its
+  /// square), by the term's name: each at most N(0, 1) under the noise model, zero on average
+  /// over sessions whatever the noise (the columns are functions of the table's known motion).
+  std::vector<std::pair<std::string, double>> turns_term_z;
   /// turns_chi2 beyond its quantile, or turns_term_z2 beyond its: the turns hold what the model
   /// does not.
   bool turns_reject = false;
