@@ -99,15 +99,15 @@ std::string open_world_profile() {
 }
 
 OpenWorldScore run_effect(const std::string& plan, std::size_t effect, int seeds,
-                          std::uint64_t seed0, double scale) {
+                          std::uint64_t seed0, double scale,
+                          const std::string& profile = open_world_profile()) {
   OpenWorldScore s;
   for (int k = 0; k < seeds; ++k) {
     const std::uint64_t seed = seed0 + static_cast<std::uint64_t>(k);
     ++s.seeds;
     DiagnosisOutcome o;
     try {
-      const HiddenCase c =
-          open_world_case(plan, open_world_profile(), effect, seed, kOpenWorldRate, scale);
+      const HiddenCase c = open_world_case(plan, profile, effect, seed, kOpenWorldRate, scale);
       o = diagnose_hidden(c, {});
     } catch (const std::exception& e) {
       ++s.errors;
@@ -289,4 +289,25 @@ TEST_CASE("Open world: the accelerometers' velocity over the turns finds a produ
     CHECK(q.result.findings.empty());
     CHECK_FALSE(q.result.unexplained.present);
   }
+}
+
+// A turns' finding is named only when the held-out turns gain by the chi-square quantile of its
+// dof (refusal_of). With any gain accepted, a MEMS gyro x scale that grows with f_z (3000 ppm/g)
+// on seed8 was named accel.scale_asym or accel.lever_arm first on 15 of 30 seeds (docs/accuracy.md,
+// stop 43); with the quantile on 2 of 30. Twelve seeds outside the measured ones may hold at most
+// allowed_misses(12) wrong names at the acceptance's 1 in 30: 2; at the old rate (one half) a run
+// passes 1.9 % of the time.
+TEST_CASE("Open world: a turns' family is named only on a significant held-out gain",
+          "[diagnosis][open_world][long]") {
+  const auto effects = open_world_effects(0.0);
+  const auto it = std::find_if(effects.begin(), effects.end(), [](const OpenWorldEffect& e) {
+    return e.name == "gyro x scale += 100 ppm/g f_z";
+  });
+  REQUIRE(it != effects.end());
+  const auto effect = static_cast<std::size_t>(it - effects.begin());
+  const int seeds = 12;
+  const OpenWorldScore s = run_effect("seed8.ini", effect, seeds, 9100, 30.0, "mems.ini");
+  INFO("first miss: " << s.first_miss);
+  CHECK(s.errors == 0);
+  CHECK(s.wrong_first <= allowed_misses(seeds, 29.0 / 30.0));
 }
