@@ -220,7 +220,7 @@ SessionSummary calibrate_kf(const CalibrateOptions& o, const Session& session,
   if (kr.diverged.empty() && kr.stopped.empty()) {
     gate.checks.push_back(check_kf_linearization(kr.linearization, o.passes,
                                                  kr.passes.empty() ? 1 : kr.passes.back().pass,
-                                                 session.log.file));
+                                                 session.log.file, o.stream));
     enforce(gate, o.force);
   }
   const ResultCoefficients coefficients = result_coefficients(kr);

@@ -53,6 +53,23 @@ TEST_CASE("Pass linearization: the second-order term against each sigma", "[kalm
   const PlausibilityCheck refused = check_kf_linearization(far, 1, 1, "imu.csv");
   CHECK_FALSE(refused.passed);
   CHECK_THAT(refused.detail, Catch::Contains("imu.csv") && Catch::Contains("--passes"));
+  // The remedy follows the run: a streamed log is read once; automatic passes that ran out need
+  // a larger count.
+  CHECK_THAT(check_kf_linearization(far, 1, 1, "imu.csv", true).detail,
+             Catch::Contains("not --stream"));
+  CHECK_THAT(check_kf_linearization(far, 0, 3, "imu.csv").detail, Catch::Contains("N > 3"));
+  // A temperature term of the scale factor (per deg C) is not a relative error: a large change of
+  // it does not become the triad's epsilon.
+  std::size_t scale_temp = cat.size();
+  for (std::size_t c = 0; c < cat.size(); ++c)
+    if (cat[c].name == "gyro.scale_temp1.x") scale_temp = c;
+  REQUIRE(scale_temp < cat.size());
+  e[scale_temp].status = CoefficientEstimate::Status::Estimated;
+  e[scale_temp].prior_sigma = 1.0;
+  e[scale_temp].sigma = 1e-3;
+  Eigen::VectorXd thermal = estimate;
+  thermal(static_cast<Eigen::Index>(scale_temp)) = 0.5;
+  CHECK(pass_linearization(e, thermal, point).epsilon_coefficient == "gyro.scale.x");
   // About the estimate itself: nothing neglected.
   const PassLinearization near = pass_linearization(e, estimate, estimate);
   CHECK(near.share == 0.0);

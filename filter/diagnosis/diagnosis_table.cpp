@@ -66,13 +66,17 @@ std::vector<int> with_turn_findings(std::vector<int> confirmed,
 // under the bias wander while the filter's are 1.2e-6 rad/s per m/s^2; at 5-10 of the filter's
 // sigmas the dwells' test missed it on 1-4 seeds of 30 (chi2 5.4 on 6 dof) with the turns never
 // asked (issue 33).
+// The level is the round's family-wise one at its largest (round: alpha over the dwells' tests
+// and the turns' together, here every turn candidate counted), so that a family the round does
+// not name on the dwells is never kept from the turns.
 bool dwells_miss(const std::string& family, const std::vector<CandidateTest>& dwell_round,
-                 double alpha) {
+                 double alpha, std::ptrdiff_t turn_candidates) {
   const CoefficientFamily& info = coefficient_family_info(family);
   if (info.thermal() || info.term == "bias_drift") return false;
   const auto tested = std::count_if(dwell_round.begin(), dwell_round.end(),
                                     [](const CandidateTest& c) { return c.dof > 0; });
-  const double level = alpha / static_cast<double>(std::max<std::ptrdiff_t>(1, tested));
+  const double level =
+      alpha / static_cast<double>(std::max<std::ptrdiff_t>(1, tested + turn_candidates));
   bool any = false;
   for (const auto& c : dwell_round) {
     if (c.family != family || c.dof <= 0) continue;
@@ -89,12 +93,15 @@ std::vector<std::string> turn_families(const std::vector<std::string>& candidate
                                        const std::vector<CandidateTest>& dwell_round,
                                        const CalibratorOptions& model, double alpha) {
   std::vector<std::string> out;
+  const auto open = std::count_if(candidates.begin(), candidates.end(),
+                                  [&](const std::string& f) { return !model.layout.on(f); });
   for (const auto& f : candidates) {
     if (model.layout.on(f)) continue;
     const bool seen = std::any_of(dwell_round.begin(), dwell_round.end(), [&](const auto& c) {
       return c.family == f && !c.separable.empty();
     });
-    if (!seen || thermal_acts_in_turns(f) || dwells_miss(f, dwell_round, alpha)) out.push_back(f);
+    if (!seen || thermal_acts_in_turns(f) || dwells_miss(f, dwell_round, alpha, open))
+      out.push_back(f);
   }
   return out;
 }

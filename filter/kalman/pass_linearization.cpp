@@ -10,10 +10,13 @@ namespace sinscal {
 
 namespace {
 
-// The relative errors: scale factors (their asymmetries too) and misalignments (rad).
+// The relative errors: scale factors (their asymmetries too) and misalignments (rad); not their
+// temperature terms (gyro.scale_temp1 is per deg C), which a prefix would also match.
 bool relative(const std::string& name) {
-  for (const char* f : {"gyro.scale", "gyro.misalignment", "accel.scale", "accel.misalignment"})
-    if (name.rfind(f, 0) == 0) return true;
+  const std::string family = name.substr(0, name.rfind('.'));
+  for (const char* f : {"gyro.scale", "gyro.scale_asym", "gyro.misalignment", "accel.scale",
+                        "accel.scale_asym", "accel.misalignment"})
+    if (family == f) return true;
   return false;
 }
 

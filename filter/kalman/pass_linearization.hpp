@@ -34,7 +34,7 @@ struct PassLinearization {
   double share = 0.0;
   std::string coefficient;
   bool within() const { return share <= kLinearizationShare; }
-  /// "gyro.misalignment.xy: 0.0512 x 1.97e-2 rad = 4.3 sigma (gyro.scale.x 5.12 %)"
+  /// "gyro.misalignment.xy: 4.3 sigma (gyro.scale.x changed by 0.0512)"
   std::string text() const;
 };
 

@@ -472,10 +472,22 @@ namespace {
 // The share beyond which a run's last pass is refused: its estimate may be off by a sigma of the
 // linearization's own (the automatic passes stop at kLinearizationShare, a tenth).
 constexpr double kLinearizationRefusal = 1.0;
+
+// What to run instead: a streamed log is read once (several passes need the file); automatic
+// passes that ran out need a larger fixed count; else either.
+std::string kf_linearization_remedy(int passes, bool streamed) {
+  if (streamed) return "several passes need the log as a file, not --stream (then --passes 0)";
+  if (passes == 0)
+    return "the automatic passes stopped at " + std::to_string(kMaxAutomaticPasses) +
+           ": run more (--passes N, N > " + std::to_string(kMaxAutomaticPasses) +
+           "), each about the previous estimate";
+  return "run the automatic passes (--passes 0) or more passes (--passes N), each about the "
+         "previous estimate";
+}
 }  // namespace
 
 PlausibilityCheck check_kf_linearization(const PassLinearization& last, int passes, int passes_run,
-                                         const std::string& input) {
+                                         const std::string& input, bool streamed) {
   PlausibilityCheck c{"kf linear range", true, ""};
   if (!(last.share > kLinearizationRefusal)) return c;
   c.passed = false;
@@ -485,10 +497,7 @@ PlausibilityCheck check_kf_linearization(const PassLinearization& last, int pass
              ") ran far from the coefficients it linearized about: its neglected second-order " +
              "term reaches " + last.text() + ", beyond " + number(kLinearizationRefusal, 2) +
              " sigma: the sensor's errors are too large for one linearization (consumer MEMS); " +
-             (passes == 0 && passes_run < kMaxAutomaticPasses
-                  ? std::string("several passes need the log, not --stream")
-                  : std::string("run the automatic passes (--passes 0) or more passes (--passes "
-                                "N), each about the previous estimate"));
+             kf_linearization_remedy(passes, streamed);
   return c;
 }
 

@@ -177,9 +177,10 @@ PlausibilityCheck check_linear_range(const ClosedFormReport& r, const std::strin
 /// second-order term of its linearization beyond a whole sigma (the automatic passes stop below
 /// kLinearizationShare, a tenth)
 /// (filter/kalman/pass_linearization.hpp); the cause named is the coefficients the pass moved
-/// far from the model it linearized about, and the remedy more passes.
+/// far from the model it linearized about, and the remedy more passes (`streamed`: the log came
+/// on standard input, read once, so the remedy is to give it as a file).
 PlausibilityCheck check_kf_linearization(const PassLinearization& last, int passes, int passes_run,
-                                         const std::string& input);
+                                         const std::string& input, bool streamed = false);
 /// The closed form's stage 2: its residual chi2 (dof = inputs - rank) against the chi-square
 /// quantile at the normal tail of `limits.stage2_fit_z`: above it the dwells do not fit one set
 /// of the model's coefficients.

@@ -232,7 +232,7 @@ std::vector<Param> candidate_params(bool gyro_rates, const RateTableOptions& opt
     for (int i = 0; i < 3; ++i)
       add(tr + "bias." + kAxis[i], o + i, [](const MeanRow&) { return 1.0; });
     for (int i = 0; t == 0 && drift && i < 3; ++i)
-      add(tr + "bias_drift." + kAxis[i], i, [](const MeanRow& r) { return r.t; });
+      add(tr + "bias_drift." + kAxis[i], o + i, [](const MeanRow& r) { return r.t; });
     if (t == 0 && !gyro_rates) continue;
     for (int i = 0; i < 3; ++i)
       add(tr + "scale." + kAxis[i], o + i, [x, i](const MeanRow& r) { return x(r)(i); });
