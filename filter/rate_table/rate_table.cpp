@@ -404,6 +404,7 @@ std::vector<RateSegment> rate_segments(const Plan& plan, const Site& site) {
       walk_step(plan, table, plan.steps[i], i, known, out);
   }
   if (out.empty()) throw RateTableError(plan.path + ": no static dwell or rate-table segment");
+  for (std::size_t i = 0; i < out.size(); ++i) out[i].number = i + 1;
   return out;
 }
 
@@ -437,6 +438,10 @@ void floor_by_pooled(std::vector<SegmentMean>& means) {
   }
 }
 
+std::string segment_name(const RateSegment& s, std::size_t index) {
+  return "segment " + std::to_string(s.number > 0 ? s.number : index + 1) + " (" + s.label + ")";
+}
+
 std::string largest_residual(const RateTableResult& r, const std::vector<RateSegment>& segments) {
   double worst = 0.0;
   std::string named;
@@ -448,7 +453,7 @@ std::string largest_residual(const RateTableResult& r, const std::vector<RateSeg
       char text[64];
       std::snprintf(text, sizeof text, "%s %s %+.1f sigma", i < 3 ? "gyro" : "accelerometer",
                     kAxis[i % 3], z);
-      named = "segment " + std::to_string(k + 1) + " (" + segments[k].label + "): " + text;
+      named = segment_name(segments[k], k) + ": " + text;
     }
   return named;
 }
@@ -529,6 +534,7 @@ RateTableResult rate_table_calibrate(const std::vector<RateSegment>& segments,
   res.dof = static_cast<int>(A.rows() - A.cols());
   res.triad_fits = triad_fits(rows, A * x - sys.b, params, keep, accel);
   res.residual_sigma = per_segment(rows, sys.b - A * x, accel);  // data less the fit
+  res.covariance = P;
   std::vector<bool> used(params.size(), false);
   for (std::size_t k = 0; k < keep.size(); ++k) {
     const auto e = static_cast<Eigen::Index>(k);
