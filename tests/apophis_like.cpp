@@ -79,7 +79,7 @@ std::string write_apophis_like(const std::string& dir, const ApophisLike& spec) 
         w += st.gyro;
         f += st.accel;
       }
-    f += accel_bias;
+    f += spec.accel_error * f + accel_bias;
     for (int i = 0; i < 3; ++i) {
       w(i) += gyro_white * unit(rng);
       f(i) += accel_white * unit(rng);

@@ -56,6 +56,8 @@ struct ApophisLike {
   /// The sensors' biases (rad/s, m/s^2; the log's size by default).
   Eigen::Vector3d gyro_bias = Eigen::Vector3d(-1.27, 0.38, -1.15) * (M_PI / 180.0);
   Eigen::Vector3d accel_bias = Eigen::Vector3d(-0.03, 0.05, -0.02) * 9.80665;
+  /// The accelerometers' scale factors and misalignments: f = (I + accel_error) f_true + bias.
+  Eigen::Matrix3d accel_error = Eigen::Matrix3d::Zero();
   /// Gyro i's output per |rate| about body axis j (i != j): an offset while turning across the
   /// axis that depends on the turn's direction, as the APOPHIS rate logs show (0: none).
   Eigen::Matrix3d gyro_cross_asym = Eigen::Matrix3d::Zero();

@@ -134,6 +134,9 @@ std::vector<TurnTiming> integrate_turns(const LogFormat& log, const std::vector<
     t.disagreement = angle_between(C[j].transpose() * A.f, B.f);
     t.tolerance = tolerance(A, B, duration[j], t.path, o);
     t.probe_shift = angle_between(C[j].transpose() * A.f, probe[j].transpose() * A.f);
+    t.rest_omega = 0.5 * (A.omega + B.omega);
+    t.rest_var_f = (A.var_f + B.var_f) / 6.0;  // the mean over both rests and the three axes
+    t.rest_var_omega = (A.var_omega + B.var_omega) / 6.0;
     out.push_back(t);
   }
   return out;

@@ -7,6 +7,7 @@
 // not the nominal rate. docs/usage/plausibility.md, "turn timing".
 #pragma once
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,10 @@ struct TurnTiming {
   /// rad: how far the integrated turn would leave gravity from where it leaves it now, were the
   /// log's true rate kTimingProbe off the nominal one (a turn about gravity: none).
   double probe_shift = 0.0;
+  /// rad/s: the two rests' mean rate (the gyros' bias and the Earth rate), taken from the turn's.
+  Eigen::Vector3d rest_omega = Eigen::Vector3d::Zero();
+  /// The rests' per-reading noise variance per axis: specific force ((m/s^2)^2), rate ((rad/s)^2).
+  double rest_var_f = 0.0, rest_var_omega = 0.0;
   bool agrees() const { return disagreement <= tolerance; }
   /// Whether the turn would show a time error of kTimingProbe beyond its tolerance.
   bool judges() const { return probe_shift > tolerance; }
