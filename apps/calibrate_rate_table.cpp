@@ -54,10 +54,13 @@ SessionSummary calibrate_rate_table_session(const CalibrateOptions& o,
   const auto segments = fitted_segments(all_segments, r);
   // The fit's gate: refused (exit 2) unless --force, which records it in the result.
   PlausibilityReport gate;
-  gate.checks.push_back(
-      check_rate_table_fit(r, PlausibilityLimits::from_profile(nullptr), session.log.file));
-  if (!gate.checks.back().passed)  // the segment the fit misses most, in its own sigmas
-    gate.checks.back().detail += "; the largest residual: " + largest_residual(r, segments);
+  const PlausibilityLimits limits = PlausibilityLimits::from_profile(nullptr);
+  gate.checks.push_back(check_rate_table_fit(r, limits, session.log.file));
+  // The segment each failed triad misses most, in its own sigmas.
+  for (const std::string& triad : failed_rate_table_triads(r, limits))
+    gate.checks.back().detail += "; the " +
+                                 std::string(triad == "gyro" ? "gyros'" : "accelerometers'") +
+                                 " largest residual: " + largest_residual(r, segments, triad);
   enforce(gate, o.force);
   const ResultCoefficients coefficients = result_coefficients(r);
   auto sections = result_sections(r, segments);

@@ -572,3 +572,19 @@ TEST_CASE("Rate table: leaving out a rest that is not a rest refuses when it is 
   REQUIRE(kept.unsteady.size() == 1);
   CHECK(kept.unsteady.front().segment == 1);
 }
+
+TEST_CASE("Turn timing: one rule for a log without time, none for a log with time",
+          "[plausibility][apophis]") {
+  // The integrating methods (kf, closed form, table-free) all take the turn-timing check from
+  // no_time_turn_timing: a log with a time column gets none, one without gets the check.
+  const Session timed = Session::load(
+      test::write_apophis_like(test::temp_dir("apophis_timed"), test::apophis_hand_tumble(true)),
+      Session::PlanNeed::Optional);
+  CHECK_FALSE(no_time_turn_timing(timed.log, nullptr).has_value());
+  const Session untimed = Session::load(
+      test::write_apophis_like(test::temp_dir("apophis_untimed"), test::apophis_hand_tumble(false)),
+      Session::PlanNeed::Optional);
+  const auto c = no_time_turn_timing(untimed.log, nullptr);
+  REQUIRE(c.has_value());
+  CHECK(c->name == "turn timing");
+}

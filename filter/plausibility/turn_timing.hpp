@@ -8,6 +8,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,8 @@
 #include "rig/io/log_io.hpp"
 
 namespace sinscal {
+
+struct SensorProfile;
 
 struct TurnTimingOptions {
   double rate_threshold = 3.0 * M_PI / 180.0;  // rad/s: a smoothed rate below it is rest
@@ -64,5 +67,15 @@ std::vector<TurnTiming> turn_timings(const LogFormat& log, const TurnTimingOptio
 /// no turn judges the time (turns about the vertical move no gravity; long turns' tolerances are
 /// wider than what a time error moves), since the log's time then cannot be trusted.
 PlausibilityCheck check_turn_timing(const std::vector<TurnTiming>& turns, const LogFormat& log);
+
+/// The options with the gyro and accelerometer errors `profile` allows (its scale and
+/// misalignment ranges; null: the consumer-MEMS defaults).
+TurnTimingOptions turn_timing_options(const SensorProfile* profile);
+
+/// The rule for every integrating method (Kalman filter, closed form, table-free): a log without a
+/// time column has its nominal rate checked by its turns between rests (check_turn_timing with
+/// the profile's errors); a log with time needs no such check (none returned).
+std::optional<PlausibilityCheck> no_time_turn_timing(const LogFormat& log,
+                                                     const SensorProfile* profile);
 
 }  // namespace sinscal

@@ -442,11 +442,13 @@ std::string segment_name(const RateSegment& s, std::size_t index) {
   return "segment " + std::to_string(s.number > 0 ? s.number : index + 1) + " (" + s.label + ")";
 }
 
-std::string largest_residual(const RateTableResult& r, const std::vector<RateSegment>& segments) {
+std::string largest_residual(const RateTableResult& r, const std::vector<RateSegment>& segments,
+                             const std::string& triad) {
   double worst = 0.0;
   std::string named;
+  const int from = triad == "accel" ? 3 : 0, to = triad == "gyro" ? 3 : 6;
   for (std::size_t k = 0; k < r.residual_sigma.size() && k < segments.size(); ++k)
-    for (int i = 0; i < 6; ++i) {
+    for (int i = from; i < to; ++i) {
       const double z = r.residual_sigma[k](i);
       if (!(std::abs(z) > worst)) continue;
       worst = std::abs(z);

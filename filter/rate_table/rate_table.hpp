@@ -159,7 +159,10 @@ std::string segment_name(const RateSegment& s, std::size_t index);
 
 /// The largest whitened residual of a fit, named: "segment 7 (label): gyro y -5.9 sigma" (empty
 /// without residuals). What a refused fit's user looks at first.
-std::string largest_residual(const RateTableResult& r, const std::vector<RateSegment>& segments);
+/// With `triad` ("gyro", "accel") only that triad's residuals: a refusal names the triad that
+/// failed, not the largest of one that passed.
+std::string largest_residual(const RateTableResult& r, const std::vector<RateSegment>& segments,
+                             const std::string& triad = "");
 
 /// The calibration from the segments' means at `site` (gravity: its normal gravity, or
 /// `gravity` m/s^2 when positive). Throws RateTableError when nothing can be estimated.
