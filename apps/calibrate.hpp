@@ -22,6 +22,7 @@ struct CalibrateOptions {
   double table_sigma = 2.5;      // arcsec
   bool cross_asymmetry = false;  // rate-table: the gyros' cross-axis asymmetries in the model
   bool gyro_drift = false;       // rate-table: the gyros' bias drift over the log in the model
+  bool keep_unsteady = false;    // rate-table: rests whose outputs change level kept in the fit
   /// --misalignment-frame: table | triad | empty (the method's and mode's own frame).
   std::string misalignment_frame;
   // Kalman filter

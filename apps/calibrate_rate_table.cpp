@@ -7,6 +7,7 @@
 
 #include "apps/calibrate.hpp"
 #include "filter/plausibility/plausibility.hpp"
+#include "filter/rate_table/unsteady_rests.hpp"
 #include "models/units.hpp"
 #include "report/rate_table_result.hpp"
 
@@ -22,7 +23,7 @@ SessionSummary calibrate_rate_table_session(const CalibrateOptions& o,
   ro.table_sigma = o.table_sigma * units::arcsec;
   ro.cross_asymmetry = o.cross_asymmetry;
   ro.gyro_drift = o.gyro_drift;
-  const auto segments = rate_segments(session.plan, session.site);
+  const auto all_segments = rate_segments(session.plan, session.site);
   // Bad readings (a NaN field, a damaged line) stop the run, or with --on-bad-sample skip are
   // left out of the means, counted and the first named.
   std::size_t skipped = 0;
@@ -38,17 +39,28 @@ SessionSummary calibrate_rate_table_session(const CalibrateOptions& o,
                  skipped, first_skipped.c_str());
   std::vector<SegmentMean> means;
   try {
-    means = find_segments(readings, segments, ro);
+    means = find_segments(readings, all_segments, ro);
   } catch (const RateTableError& e) {
     throw RateTableError(session.log.file + ": " + e.what());
   }
-  const RateTableResult r = rate_table_calibrate(segments, means, session.site, 0.0, ro);
+  // Rests whose outputs are not stationary and whose means disagree: left out, named.
+  RateTableResult r;
+  try {
+    r = rate_table_calibrate_rests(readings, all_segments, means, session.site, 0.0, ro,
+                                   o.keep_unsteady);
+  } catch (const RateTableError& e) {
+    throw RateTableError(session.log.file + ": " + e.what());
+  }
+  const auto segments = fitted_segments(all_segments, r);
   // The fit's gate: refused (exit 2) unless --force, which records it in the result.
   PlausibilityReport gate;
-  gate.checks.push_back(
-      check_rate_table_fit(r, PlausibilityLimits::from_profile(nullptr), session.log.file));
-  if (!gate.checks.back().passed)  // the segment the fit misses most, in its own sigmas
-    gate.checks.back().detail += "; the largest residual: " + largest_residual(r, segments);
+  const PlausibilityLimits limits = PlausibilityLimits::from_profile(nullptr);
+  gate.checks.push_back(check_rate_table_fit(r, limits, session.log.file));
+  // The segment each failed triad misses most, in its own sigmas.
+  for (const std::string& triad : failed_rate_table_triads(r, limits))
+    gate.checks.back().detail += "; the " +
+                                 std::string(triad == "gyro" ? "gyros'" : "accelerometers'") +
+                                 " largest residual: " + largest_residual(r, segments, triad);
   enforce(gate, o.force);
   const ResultCoefficients coefficients = result_coefficients(r);
   auto sections = result_sections(r, segments);
@@ -69,7 +81,7 @@ SessionSummary calibrate_rate_table_session(const CalibrateOptions& o,
                      coefficients};
   if (!verbose) return row;
   std::printf("Rate-table calibration of %s: %zu readings, %zu segments from their means\n\n",
-              session.name.c_str(), readings.size(), segments.size());
+              session.name.c_str(), readings.size(), all_segments.size());
   std::cout << rate_table_text(r, segments, truth);
   std::printf("\nResult written to %s\n", out_path.c_str());
   return row;

@@ -65,24 +65,6 @@ void print_timing_assumption(const PlausibilityReport& report) {
 
 }  // namespace
 
-// The turns between rests against a log's nominal rate (no time column), with the gyro errors
-// the profile allows (its scale and misalignment ranges; without a profile, consumer MEMS).
-PlausibilityCheck turn_timing_check(const Session& session, const SensorProfile* profile) {
-  TurnTimingOptions t;
-  if (profile) {
-    auto largest = [&](const std::string& family) {
-      const auto it = profile->ranges.find(family);
-      return it != profile->ranges.end() && it->second.present()
-                 ? std::max(std::abs(it->second.lo), std::abs(it->second.hi))
-                 : 0.0;
-    };
-    t.relative = largest("gyro.scale") + largest("gyro.misalignment");
-    t.accel_direction =
-        largest("accel.bias") / units::g0 + largest("accel.scale") + largest("accel.misalignment");
-  }
-  return check_turn_timing(turn_timings(session.log, t), session.log);
-}
-
 namespace {
 
 // The plausibility gate (filter/plausibility/plausibility.hpp) before any estimate: a failure stops
@@ -108,7 +90,7 @@ PlausibilityReport plausibility_gate(const CalibrateOptions& o, const Session& s
     report = check_plausibility(session, l, dwells_from_plan);
   }
   // Without a time column the turns between rests show whether the nominal rate holds.
-  if (l.assumed_rate_hz > 0.0) report.checks.push_back(turn_timing_check(session, profile));
+  if (auto timing = no_time_turn_timing(session.log, profile)) report.checks.push_back(*timing);
   enforce(report, o.force);
   print_timing_assumption(report);
   return report;
@@ -117,11 +99,9 @@ PlausibilityReport plausibility_gate(const CalibrateOptions& o, const Session& s
 // A log without a time column whose turns do not match its nominal rate (the gate's check, run
 // with --force): a cause of a divergence the data show (APOPHIS, issue 34).
 void add_timing_cause(std::string& message, const Session& session, const SensorProfile& profile) {
-  const PlausibilityLimits l = integrating_limits(PlausibilityLimits{}, session.log);
-  if (!(l.assumed_rate_hz > 0.0)) return;
   try {
-    const PlausibilityCheck c = turn_timing_check(session, &profile);
-    if (!c.passed) message += "; the cause the data show: " + c.detail;
+    const auto c = no_time_turn_timing(session.log, &profile);
+    if (c && !c->passed) message += "; the cause the data show: " + c->detail;
   } catch (const std::runtime_error&) {
     // the log read once already: nothing more to say
   }

@@ -9,6 +9,7 @@
 #include "apps/handheld_gate.hpp"
 #include "apps/print.hpp"
 #include "filter/plausibility/rest_plausibility.hpp"
+#include "filter/plausibility/turn_timing.hpp"
 #include "models/earth.hpp"
 #include "report/table_free_result.hpp"
 
@@ -27,8 +28,8 @@ TableFreeRun gated_table_free_run(const Session& session, TableFreeRunOptions ro
                          : Earth::wgs84().gravity_n(r.site.lat_rad, r.site.h_m).norm();
     gate = check_handheld(session.log, r.readings, r.detection.poses, g, limits, r.log);
     // The fit integrates the turns: a log without time has its nominal rate checked by them.
-    if (integrating_limits(PlausibilityLimits{}, session.log).assumed_rate_hz > 0.0)
-      gate.checks.push_back(turn_timing_check(session, profile ? &*profile : nullptr));
+    if (auto timing = no_time_turn_timing(session.log, profile ? &*profile : nullptr))
+      gate.checks.push_back(*timing);
     enforce(gate, force);
   };
   TableFreeRun run = run_table_free(session, ro);

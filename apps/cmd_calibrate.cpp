@@ -33,6 +33,10 @@ void add_options(po::options_description& d, CalibrateOptions& o) {
       ("gyro-drift", po::bool_switch(&o.gyro_drift),
        "rate-table: the gyros' bias drift over the log in the model (gyro.bias_drift.i, with each "
        "segment at its readings' time at the session's nominal rate)")
+      ("keep-unsteady-rests", po::bool_switch(&o.keep_unsteady),
+       "rate-table: keep in the fit a rest whose outputs change level within it (tested against "
+       "the other rests' noise) and whose mean disagrees with the fit; by default it is left out "
+       "and named")
       ("misalignment-frame", po::value(&o.misalignment_frame),
        "kf, closed-form: the frame of the misalignments: table (relative to the table's platform; "
        "the default with table-attitude updates) | triad (within the triads, the accelerometer "
@@ -106,6 +110,9 @@ void check_method_options(const po::variables_map& vm, CalibrateOptions& o) {
                      name_of(o.method));
   if (o.gyro_drift && o.method != Method::RateTable)
     throw UsageError("--gyro-drift acts in --method rate-table only, not in --method " +
+                     name_of(o.method));
+  if (o.keep_unsteady && o.method != Method::RateTable)
+    throw UsageError("--keep-unsteady-rests acts in --method rate-table only, not in --method " +
                      name_of(o.method));
   misalignment_frame_option(o);  // the table methods only; a known name
   check_table_free_options(vm, o, {closed_form_only, kf_only, {"table-sigma"}});

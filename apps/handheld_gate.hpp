@@ -16,9 +16,4 @@ namespace sinscal::cli {
 TableFreeRun gated_table_free_run(const Session& session, TableFreeRunOptions options, bool force,
                                   PlausibilityReport& gate, HandheldFitBounds* bounds = nullptr);
 
-/// The gate's "turn timing" check of a log without a time column (filter/plausibility/
-/// turn_timing.hpp), with the gyro errors the session's profile allows (null: consumer MEMS);
-/// apps/calibrate_run.cpp.
-PlausibilityCheck turn_timing_check(const Session& session, const SensorProfile* profile);
-
 }  // namespace sinscal::cli

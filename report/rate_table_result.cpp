@@ -64,6 +64,25 @@ nlohmann::ordered_json result_sections(const RateTableResult& r,
       segs.back()["residual_sigma"] = z;
     }
   }
+  nlohmann::ordered_json unsteady = nlohmann::ordered_json::array();
+  for (const auto& u : r.unsteady) {
+    const bool gyro = u.output < 3;
+    const double per = gyro ? units::deg_per_s : 1e-3 * units::g0;
+    unsteady.push_back({{"segment", u.segment + 1},
+                        {"readings", {u.first, u.last}},
+                        {"output", std::string(gyro ? "gyro." : "accel.") + "xyz"[u.output % 3]},
+                        {"level_change", u.change / per},
+                        {"unit", gyro ? "deg/s" : "mg"},
+                        {"at_reading", u.at},
+                        {"sigma", u.sigma},
+                        {"quantile_sigma", u.quantile},
+                        {"scatter_ratio", u.scatter_ratio},
+                        {"others_chi2", u.others_chi2},
+                        {"others_dof", u.others_dof},
+                        {"others_quantile", u.others_quantile},
+                        {"excluded", u.excluded},
+                        {"statement", u.statement}});
+  }
   extra["method"] = "rate-table";
   extra["rate_table"] = {{"chi2", r.chi2},
                          {"dof", r.dof},
@@ -71,7 +90,8 @@ nlohmann::ordered_json result_sections(const RateTableResult& r,
                          {"rate_segments", r.rate_segments},
                          {"terms_outside_the_catalog", own},
                          {"undetermined", r.undetermined},
-                         {"segments", segs}};
+                         {"segments", segs},
+                         {"unsteady_rests", unsteady}};
   return extra;
 }
 
@@ -106,6 +126,7 @@ std::string rate_table_text(const RateTableResult& r, const std::vector<RateSegm
         "not describe the data (an effect outside the model, a table rate or attitude off its "
         "command); the sigmas understate the errors. The largest residual: " +
         largest_residual(r, segments) + ".\n";
+  for (const auto& u : r.unsteady) out += "Rest with a level change: " + u.statement + ".\n";
   if (!r.undetermined.empty()) {
     out += "Not determined by these segments (not estimated):";
     for (const auto& u : r.undetermined) out += " " + u;

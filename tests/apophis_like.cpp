@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <fstream>
 #include <random>
+#include <stdexcept>
+#include <string>
 
 #include "models/attitude.hpp"
 #include "models/earth.hpp"
@@ -72,7 +74,12 @@ std::string write_apophis_like(const std::string& dir, const ApophisLike& spec) 
                         truth.C_b_n[k].transpose() * spec.omega_ie_n;
     Eigen::Vector3d f = truth.C_b_n[k].transpose() * f_n;
     w += spec.gyro_cross_asym * truth.omega_b[k].cwiseAbs();
-    f += accel_bias;
+    for (const auto& st : spec.steps)
+      if (t >= st.from && t < st.to) {
+        w += st.gyro;
+        f += st.accel;
+      }
+    f += spec.accel_error * f + accel_bias;
     for (int i = 0; i < 3; ++i) {
       w(i) += gyro_white * unit(rng);
       f(i) += accel_white * unit(rng);
@@ -222,6 +229,28 @@ ApophisLike apophis_tumble() {
   const double lat_deg = 28.6;
   spec.omega_ie_n = Earth::wgs84().omega_ie_n(lat_deg * units::deg);
   spec.plan_text = tumble_plan_text(spec, lat_deg, dwell);
+  return spec;
+}
+
+std::pair<double, double> rest_window(const ApophisLike& spec, int k) {
+  double t = 0.0;
+  int rests = 0;
+  for (const auto& p : spec.phases) {
+    const double seconds = p.rest > 0.0 ? p.rest : 2.0 * p.rate / p.accel + p.hold;
+    if (p.rest > 0.0 && ++rests == k) return {t, t + seconds};
+    t += seconds;
+  }
+  throw std::invalid_argument("rest_window: no rest " + std::to_string(k));
+}
+
+ApophisLike apophis_tumble_step(int rest, double step) {
+  ApophisLike spec = apophis_tumble();
+  const auto [from, to] = rest_window(spec, rest);
+  LevelStep s;
+  s.from = 0.5 * (from + to);
+  s.to = to;
+  s.gyro.y() = step;
+  spec.steps.push_back(s);
   return spec;
 }
 

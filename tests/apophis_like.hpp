@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace sinscal::test {
@@ -34,6 +35,13 @@ inline ApophisPhase turn_phase(const Eigen::Vector3d& axis_b, double rate, doubl
   return p;
 }
 
+/// A level change of the outputs from `from` to `to` s of true time: added to the gyros (rad/s)
+/// and the accelerometers (m/s^2), as board 3's last rest shows in its gyro y.
+struct LevelStep {
+  double from = 0.0, to = 0.0;
+  Eigen::Vector3d gyro = Eigen::Vector3d::Zero(), accel = Eigen::Vector3d::Zero();
+};
+
 struct ApophisLike {
   std::vector<ApophisPhase> phases;
   Eigen::Matrix3d C_b_n_start = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();  // z up
@@ -48,6 +56,8 @@ struct ApophisLike {
   /// The sensors' biases (rad/s, m/s^2; the log's size by default).
   Eigen::Vector3d gyro_bias = Eigen::Vector3d(-1.27, 0.38, -1.15) * (M_PI / 180.0);
   Eigen::Vector3d accel_bias = Eigen::Vector3d(-0.03, 0.05, -0.02) * 9.80665;
+  /// The accelerometers' scale factors and misalignments: f = (I + accel_error) f_true + bias.
+  Eigen::Matrix3d accel_error = Eigen::Matrix3d::Zero();
   /// Gyro i's output per |rate| about body axis j (i != j): an offset while turning across the
   /// axis that depends on the turn's direction, as the APOPHIS rate logs show (0: none).
   Eigen::Matrix3d gyro_cross_asym = Eigen::Matrix3d::Zero();
@@ -56,6 +66,7 @@ struct ApophisLike {
   Eigen::Vector3d gyro_drift = Eigen::Vector3d::Zero();
   /// The Earth rate in the navigation frame (rad/s, NED) the gyros sense (0: none).
   Eigen::Vector3d omega_ie_n = Eigen::Vector3d::Zero();
+  std::vector<LevelStep> steps;  // level changes of the outputs (none: stationary rests)
   unsigned seed = 1;
   std::string plan_text;     // plan.ini (empty: none; a hand-held session with [site] gravity)
   std::string sensor_text;   // sensor.ini (empty: none in the session)
@@ -86,6 +97,13 @@ ApophisLike apophis_rate_test_short();
 /// latitude, and the gyros' bias drifting as board 2's (x -0.0104, z -0.0022 deg/s per 100 s).
 /// Its plan (orientations, from the generated attitudes) is in plan_text.
 ApophisLike apophis_tumble();
+
+/// The true start and end (s) of rest `k` (1-based) of `spec`.
+std::pair<double, double> rest_window(const ApophisLike& spec, int k);
+
+/// apophis_tumble() with gyro y's level changed by `step` (rad/s) from the middle of rest `rest`
+/// (1-based) to its end: a rest that is not a rest (APOPHIS board 3's last rest).
+ApophisLike apophis_tumble_step(int rest, double step);
 
 /// Board 1's rate test about z (8 s at rest, -z and +z at 25 deg/s for 40 s each, 15 s at rest)
 /// at the data sheet's white noise, with the BMI160 profile: turns that move no gravity.

@@ -1,7 +1,10 @@
 // Writes a generated session of the APOPHIS logs' structure (tests/apophis_like.hpp) for the
 // bad-input corpus (tests/bad_input_test.sh): apophis_like_writer DIR rate-test | rate-test-short
-// | z-turns | tumble | hand-tumble | hand-tumble-timed [SEED] (Monte Carlos of the rate test and
+// | z-turns | tumble | tumble-step | tumble-step-face | hand-tumble | hand-tumble-timed [SEED]
+// (tumble-step: gyro y's level changes by -0.3 deg/s within the last z-up rest; -face: within the
+// only x-down face) (Monte Carlos of the rate test and
 // the tumble: docs/measured/apophis/README.md).
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -11,8 +14,8 @@
 namespace {
 
 bool known_kind(const std::string& kind) {
-  for (const char* k :
-       {"rate-test", "rate-test-short", "z-turns", "tumble", "hand-tumble", "hand-tumble-timed"})
+  for (const char* k : {"rate-test", "rate-test-short", "z-turns", "tumble", "tumble-step",
+                        "tumble-step-face", "hand-tumble", "hand-tumble-timed"})
     if (kind == k) return true;
   return false;
 }
@@ -21,6 +24,8 @@ sinscal::test::ApophisLike spec_of(const std::string& kind) {
   using namespace sinscal::test;
   if (kind == "z-turns") return apophis_z_turns();
   if (kind == "tumble") return apophis_tumble();
+  if (kind == "tumble-step" || kind == "tumble-step-face")
+    return apophis_tumble_step(kind == "tumble-step" ? 8 : 2, -0.3 * M_PI / 180.0);
   if (kind == "rate-test-short") return apophis_rate_test_short();
   if (kind == "hand-tumble" || kind == "hand-tumble-timed")
     return apophis_hand_tumble(kind == "hand-tumble-timed");
@@ -31,9 +36,11 @@ sinscal::test::ApophisLike spec_of(const std::string& kind) {
 
 int main(int argc, char** argv) {
   if (argc != 3 && argc != 4) {
-    std::fprintf(stderr,
-                 "usage: apophis_like_writer DIR "
-                 "rate-test|rate-test-short|z-turns|tumble|hand-tumble|hand-tumble-timed [SEED]\n");
+    std::fprintf(
+        stderr,
+        "usage: apophis_like_writer DIR "
+        "rate-test|rate-test-short|z-turns|tumble|tumble-step|tumble-step-face|hand-tumble|"
+        "hand-tumble-timed [SEED]\n");
     return 1;
   }
   const std::string kind = argv[2];

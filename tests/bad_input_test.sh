@@ -1044,6 +1044,20 @@ apnew apophis-like-tumble-gyro-drift tumble
 control 0 "" apcal --method rate-table --gyro-drift
 apnew apophis-like-gyro-drift-kf tumble
 fixed 1 "--gyro-drift acts in --method rate-table only, not in --method kf" apcal --method kf --gyro-drift
+# A rest that is not a rest (APOPHIS board 3's last rest): gyro y changes level within the last
+# z-up rest: left out and named, the fit passes; with --keep-unsteady-rests kept and said so; in
+# the only x-down face leaving it out leaves accelerometer x's K2 undetermined: refused, named;
+# the option is the rate table's only.
+apnew apophis-like-tumble-step-control tumble-step
+POST='grep -q "not a rest, left out of the fit" out/r.json'
+control 0 "" apcal --method rate-table --gyro-drift
+apnew apophis-like-tumble-step-kept tumble-step
+POST='grep -q "not a rest, kept" out/r.json'
+control 0 "" apcal --method rate-table --gyro-drift --keep-unsteady-rests
+apnew apophis-like-tumble-step-face tumble-step-face
+fixed 2 "log.csv: segment 2 (2), readings|gyro y level change|not a rest|do not determine|accel.k2.x|--keep-unsteady-rests" apcal --method rate-table --gyro-drift
+apnew apophis-like-keep-unsteady-kf tumble-step
+fixed 1 "--keep-unsteady-rests acts in --method rate-table only, not in --method kf" apcal --method kf --keep-unsteady-rests
 apnew apophis-like-z-turns-kf z-turns
 fixed 2 "turn timing|log.csv: the log's time cannot be checked|none of the 1 turns|--method rate-table" apcal --method kf
 apnew apophis-like-z-turns-closed-form z-turns

@@ -201,3 +201,25 @@ TEST_CASE("rate table: the fit's gate passes a clean session, refuses what the m
   CHECK_FALSE(q_check.passed);
   CHECK_THAT(q_check.detail, Catch::Contains("gyros'") && Catch::Contains("accelerometers'"));
 }
+
+TEST_CASE("Rate table: a refusal names the largest residual of the triad that failed",
+          "[rate_table][plausibility]") {
+  // A fit whose gyros fail and whose accelerometers pass may still have its largest whitened
+  // residual in an accelerometer row: the gyros' refusal names the gyros' largest.
+  RateTableResult r;
+  Eigen::Matrix<double, 6, 1> z;
+  z << 2.0, -3.0, 1.0, 0.5, 5.0, -0.2;
+  r.residual_sigma = {z};
+  RateSegment s;
+  s.label = "start";
+  s.number = 4;
+  CHECK(largest_residual(r, {s}) == "segment 4 (start): accelerometer y +5.0 sigma");
+  CHECK(largest_residual(r, {s}, "gyro") == "segment 4 (start): gyro y -3.0 sigma");
+  CHECK(largest_residual(r, {s}, "accel") == "segment 4 (start): accelerometer y +5.0 sigma");
+  // The failed triads by check_rate_table_fit's rule: gyros 30 on 3 dof fail, the
+  // accelerometers' 3 on 3 pass.
+  r.triad_fits = {{"gyro", 30.0, 3}, {"accel", 3.0, 3}};
+  const auto failed = failed_rate_table_triads(r, PlausibilityLimits::from_profile(nullptr));
+  REQUIRE(failed.size() == 1);
+  CHECK(failed.front() == "gyro");
+}

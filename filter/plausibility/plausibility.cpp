@@ -396,7 +396,7 @@ PlausibilityLimits integrating_limits(PlausibilityLimits l, const LogFormat& log
 }
 
 PlausibilityCheck check_interval_spread(const IntervalSpread& s, const PlausibilityLimits& l,
-                                        const std::string& input) {
+                                        const std::string& input, const std::string& remedy) {
   PlausibilityCheck c{"sample intervals", true, ""};
   if (l.assumed_rate_hz > 0.0) {
     c.detail = input + ": no time column: the times are assumed from the session's rate of " +
@@ -417,8 +417,7 @@ PlausibilityCheck check_interval_spread(const IntervalSpread& s, const Plausibil
     return c;
   }
   c.detail += ", tolerated " + number(100.0 * l.max_interval_spread, 2) +
-              " %): the integrating methods need a steady rate; use --method rate-table (means "
-              "only) or a log with a clean time column";
+              " %): the integrating methods need a steady rate; " + remedy;
   return c;
 }
 
@@ -548,14 +547,23 @@ PlausibilityCheck check_stage2_fit(const ClosedFormReport& r, const Plausibility
   return c;
 }
 
+std::vector<std::string> failed_rate_table_triads(const RateTableResult& r,
+                                                  const PlausibilityLimits& l) {
+  std::vector<std::string> out;
+  for (const auto& t : r.triad_fits)
+    if (t.dof > 0 && t.chi2 / t.dof > chi2_per_dof_bound(t.dof, l.stage2_fit_z))
+      out.push_back(t.triad);
+  return out;
+}
+
 PlausibilityCheck check_rate_table_fit(const RateTableResult& r, const PlausibilityLimits& l,
                                        const std::string& input) {
   Findings bad;
   bad.items = "triads";
+  const std::vector<std::string> failed = failed_rate_table_triads(r, l);
   for (const auto& t : r.triad_fits) {
-    if (t.dof <= 0) continue;
+    if (std::find(failed.begin(), failed.end(), t.triad) == failed.end()) continue;
     const double per_dof = t.chi2 / t.dof, bound = chi2_per_dof_bound(t.dof, l.stage2_fit_z);
-    if (per_dof <= bound) continue;
     bad.add(input + ": the " + (t.triad == "gyro" ? "gyros" : "accelerometers") +
             "' chi2 per dof " + number(per_dof, 3) + " over " + std::to_string(t.dof) +
             " dof (bound " + number(bound, 3) + ", its " + number(l.stage2_fit_z, 2) +

@@ -158,10 +158,15 @@ struct IntervalSpread {
 /// The spread of sample intervals held in memory (s, each positive; others are skipped), with the
 /// timestamps' grid found as the log pass finds it.
 IntervalSpread interval_spread(const std::vector<double>& intervals);
-/// The "sample intervals" check: refuses a spread above `limits.max_interval_spread` (a pass
-/// without a time column names the assumed rate in its detail).
+/// The table methods' remedy for irregular intervals.
+inline const char* const kIntervalRemedyTable =
+    "use --method rate-table (means only) or a log with a clean time column";
+/// The "sample intervals" check: refuses a spread above `limits.max_interval_spread`, naming
+/// `remedy` (the caller's: what its method's user can do; a pass without a time column names the
+/// assumed rate in its detail).
 PlausibilityCheck check_interval_spread(const IntervalSpread& s, const PlausibilityLimits& limits,
-                                        const std::string& input);
+                                        const std::string& input,
+                                        const std::string& remedy = kIntervalRemedyTable);
 
 /// The closed form's stage-1 fits: a dwell whose residual chi2 per dof is far above 1 does not
 /// fit the model (the data or the plan are not what the session says).
@@ -190,6 +195,10 @@ PlausibilityCheck check_stage2_fit(const ClosedFormReport& r, const Plausibility
 /// The rate table's fit, triad by triad: each triad's chi2 against its chi-square quantile at
 /// the normal tail of `limits.stage2_fit_z` (the same tail as the closed form's stage 2); above
 /// it the segments' means do not fit the model (a segment not at its commanded rate, a gyro
+/// The triads ("gyro", "accel") whose rate-table fit is beyond its quantile (check_rate_table_fit's
+/// rule).
+std::vector<std::string> failed_rate_table_triads(const RateTableResult& r,
+                                                  const PlausibilityLimits& limits);
 /// offset while turning the model lacks, noise densities too small).
 PlausibilityCheck check_rate_table_fit(const RateTableResult& r, const PlausibilityLimits& limits,
                                        const std::string& input);

@@ -455,14 +455,10 @@ PlausibilityCheck check_reading_intervals(const LogFormat& log,
   std::vector<double> dt;
   dt.reserve(readings.size());
   for (std::size_t i = 1; i < readings.size(); ++i) dt.push_back(readings[i].t - readings[i - 1].t);
-  PlausibilityCheck c = check_interval_spread(interval_spread(dt),
-                                              integrating_limits(PlausibilityLimits{}, log), input);
   // The table methods' remedy (the rate table's means) is not this record's.
-  const std::string table_remedy = "use --method rate-table (means only) or a log";
-  const std::size_t at = c.detail.find(table_remedy);
-  if (at != std::string::npos)
-    c.detail.replace(at, table_remedy.size(), "the table-free fit integrates its turns: use a log");
-  return c;
+  return check_interval_spread(
+      interval_spread(dt), integrating_limits(PlausibilityLimits{}, log), input,
+      "the table-free fit integrates its turns: use a log with a clean time column");
 }
 
 PlausibilityReport check_handheld(const LogFormat& log, const std::vector<ImuReading>& readings,

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "models/attitude.hpp"
+#include "models/sensor_profile.hpp"
 #include "models/units.hpp"
 
 namespace sinscal {
@@ -134,6 +135,9 @@ std::vector<TurnTiming> integrate_turns(const LogFormat& log, const std::vector<
     t.disagreement = angle_between(C[j].transpose() * A.f, B.f);
     t.tolerance = tolerance(A, B, duration[j], t.path, o);
     t.probe_shift = angle_between(C[j].transpose() * A.f, probe[j].transpose() * A.f);
+    t.rest_omega = 0.5 * (A.omega + B.omega);
+    t.rest_var_f = (A.var_f + B.var_f) / 6.0;  // the mean over both rests and the three axes
+    t.rest_var_omega = (A.var_omega + B.var_omega) / 6.0;
     out.push_back(t);
   }
   return out;
@@ -226,6 +230,27 @@ PlausibilityCheck check_turn_timing(const std::vector<TurnTiming>& turns, const 
              " turns disagree): without a time column each reading is taken as 1 / rate, and "
              "the integrating methods need the true intervals";
   return c;
+}
+
+TurnTimingOptions turn_timing_options(const SensorProfile* profile) {
+  TurnTimingOptions t;
+  if (!profile) return t;
+  auto largest = [&](const std::string& family) {
+    const auto it = profile->ranges.find(family);
+    return it != profile->ranges.end() && it->second.present()
+               ? std::max(std::abs(it->second.lo), std::abs(it->second.hi))
+               : 0.0;
+  };
+  t.relative = largest("gyro.scale") + largest("gyro.misalignment");
+  t.accel_direction =
+      largest("accel.bias") / units::g0 + largest("accel.scale") + largest("accel.misalignment");
+  return t;
+}
+
+std::optional<PlausibilityCheck> no_time_turn_timing(const LogFormat& log,
+                                                     const SensorProfile* profile) {
+  if (!(integrating_limits(PlausibilityLimits{}, log).assumed_rate_hz > 0.0)) return std::nullopt;
+  return check_turn_timing(turn_timings(log, turn_timing_options(profile)), log);
 }
 
 }  // namespace sinscal

@@ -7,6 +7,8 @@
 // not the nominal rate. docs/usage/plausibility.md, "turn timing".
 #pragma once
 
+#include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,6 +16,8 @@
 #include "rig/io/log_io.hpp"
 
 namespace sinscal {
+
+struct SensorProfile;
 
 struct TurnTimingOptions {
   double rate_threshold = 3.0 * M_PI / 180.0;  // rad/s: a smoothed rate below it is rest
@@ -41,6 +45,10 @@ struct TurnTiming {
   /// rad: how far the integrated turn would leave gravity from where it leaves it now, were the
   /// log's true rate kTimingProbe off the nominal one (a turn about gravity: none).
   double probe_shift = 0.0;
+  /// rad/s: the two rests' mean rate (the gyros' bias and the Earth rate), taken from the turn's.
+  Eigen::Vector3d rest_omega = Eigen::Vector3d::Zero();
+  /// The rests' per-reading noise variance per axis: specific force ((m/s^2)^2), rate ((rad/s)^2).
+  double rest_var_f = 0.0, rest_var_omega = 0.0;
   bool agrees() const { return disagreement <= tolerance; }
   /// Whether the turn would show a time error of kTimingProbe beyond its tolerance.
   bool judges() const { return probe_shift > tolerance; }
@@ -59,5 +67,15 @@ std::vector<TurnTiming> turn_timings(const LogFormat& log, const TurnTimingOptio
 /// no turn judges the time (turns about the vertical move no gravity; long turns' tolerances are
 /// wider than what a time error moves), since the log's time then cannot be trusted.
 PlausibilityCheck check_turn_timing(const std::vector<TurnTiming>& turns, const LogFormat& log);
+
+/// The options with the gyro and accelerometer errors `profile` allows (its scale and
+/// misalignment ranges; null: the consumer-MEMS defaults).
+TurnTimingOptions turn_timing_options(const SensorProfile* profile);
+
+/// The rule for every integrating method (Kalman filter, closed form, table-free): a log without a
+/// time column has its nominal rate checked by its turns between rests (check_turn_timing with
+/// the profile's errors); a log with time needs no such check (none returned).
+std::optional<PlausibilityCheck> no_time_turn_timing(const LogFormat& log,
+                                                     const SensorProfile* profile);
 
 }  // namespace sinscal

@@ -404,6 +404,7 @@ std::vector<RateSegment> rate_segments(const Plan& plan, const Site& site) {
       walk_step(plan, table, plan.steps[i], i, known, out);
   }
   if (out.empty()) throw RateTableError(plan.path + ": no static dwell or rate-table segment");
+  for (std::size_t i = 0; i < out.size(); ++i) out[i].number = i + 1;
   return out;
 }
 
@@ -437,18 +438,24 @@ void floor_by_pooled(std::vector<SegmentMean>& means) {
   }
 }
 
-std::string largest_residual(const RateTableResult& r, const std::vector<RateSegment>& segments) {
+std::string segment_name(const RateSegment& s, std::size_t index) {
+  return "segment " + std::to_string(s.number > 0 ? s.number : index + 1) + " (" + s.label + ")";
+}
+
+std::string largest_residual(const RateTableResult& r, const std::vector<RateSegment>& segments,
+                             const std::string& triad) {
   double worst = 0.0;
   std::string named;
+  const int from = triad == "accel" ? 3 : 0, to = triad == "gyro" ? 3 : 6;
   for (std::size_t k = 0; k < r.residual_sigma.size() && k < segments.size(); ++k)
-    for (int i = 0; i < 6; ++i) {
+    for (int i = from; i < to; ++i) {
       const double z = r.residual_sigma[k](i);
       if (!(std::abs(z) > worst)) continue;
       worst = std::abs(z);
       char text[64];
       std::snprintf(text, sizeof text, "%s %s %+.1f sigma", i < 3 ? "gyro" : "accelerometer",
                     kAxis[i % 3], z);
-      named = "segment " + std::to_string(k + 1) + " (" + segments[k].label + "): " + text;
+      named = segment_name(segments[k], k) + ": " + text;
     }
   return named;
 }
@@ -529,6 +536,7 @@ RateTableResult rate_table_calibrate(const std::vector<RateSegment>& segments,
   res.dof = static_cast<int>(A.rows() - A.cols());
   res.triad_fits = triad_fits(rows, A * x - sys.b, params, keep, accel);
   res.residual_sigma = per_segment(rows, sys.b - A * x, accel);  // data less the fit
+  res.covariance = P;
   std::vector<bool> used(params.size(), false);
   for (std::size_t k = 0; k < keep.size(); ++k) {
     const auto e = static_cast<Eigen::Index>(k);

@@ -34,8 +34,9 @@ struct RateSegment {
   Eigen::Matrix3d C_b_n_known = Eigen::Matrix3d::Identity();  // static; rate: at its start
   Eigen::Vector3d axis_b = Eigen::Vector3d::UnitZ();          // rate: unit, signed
   double rate = 0.0;                                          // rad/s (rate), positive
-  double duration = 0.0;  // s: the dwell, or the time at the constant rate (plan)
-  double angle = 0.0;     // rad turned at the constant rate (plan)
+  double duration = 0.0;   // s: the dwell, or the time at the constant rate (plan)
+  double angle = 0.0;      // rad turned at the constant rate (plan)
+  std::size_t number = 0;  // 1-based position in the plan's segments (what messages name)
 };
 
 /// The plan's static dwells and rate-table segments in order (known-angle turns and moves are
@@ -110,8 +111,28 @@ struct RateCoefficient {
   bool in_catalog = true;  // false: gyro.k2, gyro.cross_asym, accel.k3 (not in the schema's model)
 };
 
+/// A rest whose outputs are not stationary (filter/rate_table/unsteady_rests.hpp): its largest
+/// level change beyond its quantile, and what was done with the rest.
+struct UnsteadyRest {
+  std::size_t segment = 0;          // index in the plan's segments
+  int output = 0;                   // 0-2 gyro x y z, 3-5 accelerometer x y z
+  std::size_t first = 0, last = 0;  // the rest's readings [first, last)
+  std::size_t at = 0;               // the first reading at the later level
+  double change = 0.0;              // SI (rad/s, m/s^2): the later level less the earlier one
+  double sigma = 0.0;               // the split's chi2 gain as a normal deviate (its square root)
+  double quantile = 0.0;  // the gain's quantile as a normal deviate (Bonferroni over the splits)
+  double scatter_ratio = 0.0;  // the rest's readings' scatter over the other rests'
+  /// The rest's means against the fit of the other segments: the coefficients' shift when it is
+  /// left out, chi2 in the shift's covariance (P without it less P with it), its dof and quantile.
+  double others_chi2 = 0.0, others_quantile = 0.0;
+  int others_dof = 0;
+  bool excluded = false;  // left out of the estimate
+  std::string statement;  // what a user reads (text and JSON)
+};
+
 struct RateTableResult {
   std::vector<RateCoefficient> coefficients;
+  Eigen::MatrixXd covariance;             // of the coefficients, in their order (SI)
   std::vector<std::string> undetermined;  // parameter names the segments do not determine
   double chi2 = 0.0;
   int dof = 0;
@@ -128,11 +149,20 @@ struct RateTableResult {
   /// accelerometer x y z; NaN where a segment has no row: the accelerometers of a rate segment, or
   /// of a fit without them).
   std::vector<Eigen::Matrix<double, 6, 1>> residual_sigma;
+  /// Rests whose outputs are not stationary, each left out of the fit or kept, said so
+  /// (rate_table_calibrate_rests; empty from rate_table_calibrate).
+  std::vector<UnsteadyRest> unsteady;
 };
+
+/// "segment 7 (label)": its plan position (`number`, else index + 1) and label.
+std::string segment_name(const RateSegment& s, std::size_t index);
 
 /// The largest whitened residual of a fit, named: "segment 7 (label): gyro y -5.9 sigma" (empty
 /// without residuals). What a refused fit's user looks at first.
-std::string largest_residual(const RateTableResult& r, const std::vector<RateSegment>& segments);
+/// With `triad` ("gyro", "accel") only that triad's residuals: a refusal names the triad that
+/// failed, not the largest of one that passed.
+std::string largest_residual(const RateTableResult& r, const std::vector<RateSegment>& segments,
+                             const std::string& triad = "");
 
 /// The calibration from the segments' means at `site` (gravity: its normal gravity, or
 /// `gravity` m/s^2 when positive). Throws RateTableError when nothing can be estimated.
