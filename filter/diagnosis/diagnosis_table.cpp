@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 
 #include "filter/thermal/soak_fit.hpp"
@@ -447,6 +448,10 @@ void pair_with_term(TableFinding& f, const HeldoutContest& c) {
   f.alternative_term = c.term;
   f.ambiguous_with.push_back(c.term.name());
   f.separated_by.push_back(c.term.separated_by);
+  for (const auto& t : c.others) {  // every term the contest finds as good: one set
+    f.ambiguous_with.push_back(t.name());
+    f.separated_by.push_back(t.separated_by);
+  }
   if (f.picked_by.empty()) f.picked_by = "catalog";
 }
 
@@ -630,6 +635,8 @@ class TableRounds {
     lt.about = tm_->base.initial_model ? &*tm_->base.initial_model : nullptr;
     lt.thermal = o_.dwells.thermal;  // the temperature terms of the turns (a ramp)
     lt.reference_temperature_c = tm_->base.reference_temperature_c;
+    if (!motion_) motion_ = with_motion(lt).motion;  // once per session
+    lt.motion = motion_;
     return lt;
   }
 
@@ -907,6 +914,9 @@ class TableRounds {
   std::optional<TurnTests::State> before_;
   std::vector<KalmanCandidateTest> last_turn_round_;
   std::string pick_note_;  // heldout_pick's close_pick_note
+  // The table's known motion for the library's turns, built at the first library fit (a cache:
+  // the session's plan does not change).
+  mutable std::shared_ptr<const Motion> motion_;
 };
 
 }  // namespace
