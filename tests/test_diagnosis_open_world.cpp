@@ -28,11 +28,12 @@ constexpr double kAccelTurnScale = 0.5;
 
 struct OpenWorldScore {
   int seeds = 0, wrong_first = 0, unexplained = 0, quiet = 0, errors = 0;
-  int right_term = 0;   // the effect's library term reported, within 3 sigma of the truth
-  int wrong_term = 0;   // a library term reported, but not the effect's within 3 sigma
-  int alternative = 0;  // a catalog family and the effect's library term first, as a set the
-                        // plan cannot separate (TableFinding::library_alternative): not counted
-                        // in wrong_first, the family is not given as the name
+  int right_term = 0;      // the effect's library term reported, within 3 sigma of the truth
+  int wrong_term = 0;      // a library term reported, but not the effect's within 3 sigma
+  int alternative = 0;     // a catalog family and the effect's library term first, as a set the
+                           // plan cannot separate (TableFinding::library_alternative): not counted
+                           // in wrong_first, the family is not given as the name
+  int paired_without = 0;  // a catalog family and library terms first, the effect's not among them
   std::string first_miss, first_terms;
 };
 
@@ -123,6 +124,8 @@ OpenWorldScore run_effect(const std::string& plan, std::size_t effect, int seeds
     const bool pair = !o.result.findings.empty() && is_pair_with(o.result.findings.front(), e);
     const bool wrong = !o.result.findings.empty() && !pair;
     s.alternative += pair ? 1 : 0;
+    s.paired_without +=
+        !pair && !o.result.findings.empty() && o.result.findings.front().alternative_term ? 1 : 0;
     if (term <= 0 && pair && right_pair_term(o.result.findings.front(), e, scale)) {
       ++s.right_term;
       s.wrong_term -= term < 0 ? 1 : 0;
@@ -310,4 +313,31 @@ TEST_CASE("Open world: a turns' family is named only on a significant held-out g
   INFO("first miss: " << s.first_miss);
   CHECK(s.errors == 0);
   CHECK(s.wrong_first <= allowed_misses(seeds, 29.0 / 30.0));
+}
+
+// A MEMS gyro nonlinearity of its output, k omega_x|omega_x| (k = 1571 ppm/(deg/s), the matrix's
+// size times 30), on rot19. The output carries the gyro's bias b (0.1-0.5 deg/s), so the effect is
+// k omega|omega| + 2 k b |omega| + k b^2: on rot19's one rate profile the scale factor absorbs the
+// first share and the second is gyro.scale_asym's signature (named on 12 of 30 seeds, within 1.3
+// sigma of 2 k b on every one). The library's rate terms are functions of the output (the
+// linearization model's, bias included): the effect's term is then aliased with the family, and
+// every library term the held-out contest finds as good joins the set the plan cannot separate.
+// A family paired with library terms never leaves the effect's out (with the rate terms of the
+// true rate: the set {gyro.scale_asym, omega_x^2} on 12 of 30 seeds, the term found on none; with
+// only the best term in the set: omega_x^3 or omega_x^2 stated on 9 of 11 sets); at most
+// allowed_misses(12) = 2 catalog names first at the acceptance's 1 in 30 (measured 1 of 30: a
+// gyro.scale_asym alone); the effect's term found on some seed (17 of 30 measured; the true
+// rate's column, which the scale factor absorbs whole, found it on none).
+TEST_CASE("Open world: a MEMS gyro's output nonlinearity is not named gyro.scale_asym alone",
+          "[diagnosis][open_world][mems][long]") {
+  const std::size_t effect = 2;  // gyro x += 3000 ppm/(rad/s) omega_x |omega_x|
+  REQUIRE(open_world_effects(0.0)[effect].formula == "omega_x |omega_x|");
+  const int seeds = 12;
+  const OpenWorldScore s = run_effect("rot19.ini", effect, seeds, 9100, 30.0, "mems.ini");
+  INFO("first miss: " << s.first_miss << " | sets " << s.alternative << ", right term "
+                      << s.right_term << ", unexplained " << s.unexplained);
+  CHECK(s.errors == 0);
+  CHECK(s.paired_without == 0);
+  CHECK(s.wrong_first <= allowed_misses(seeds, 29.0 / 30.0));
+  CHECK(s.right_term >= 1);
 }

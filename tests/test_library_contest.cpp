@@ -23,7 +23,7 @@ using TermAt = std::function<ExtraTerm(double mid_s)>;
 
 // The dwells and turns of a case set up as the table diagnosis sets them up (the dwells' model
 // with the bias wander and the session grade's priors, with `turn_families` also the families the
-// turns' model has on, as dwells_model does; the turns with the table's attitude sigma), handed to
+// turns' model has on: dwells_model; the turns with the table's attitude sigma), handed to
 // `use(dwells, parameters, turns)`.
 template <class Use>
 auto with_library_inputs(const HiddenCase& c, bool turn_families, const Use& use) {
@@ -32,13 +32,7 @@ auto with_library_inputs(const HiddenCase& c, bool turn_families, const Use& use
   const ClosedFormReport& cal = cc.calibration;
   Stage2Options base = cal.stage2_options;
   base.bias_wander = model.base.noise;
-  const auto& cat = coefficient_catalog();
-  for (std::size_t k = 0; k < cat.size() && turn_families; ++k) {
-    const int j = static_cast<int>(k);
-    if (!coefficient_family_info(cat[k].family).base && model.base.layout.on(cat[k].family) &&
-        std::find(base.parameters.begin(), base.parameters.end(), j) == base.parameters.end())
-      base.parameters.push_back(j);
-  }
+  if (turn_families) base = dwells_model(cal.stage2_options, &model);  // the diagnosis's own
   DiagnosisOptions o;
   o.prior_sigma = grade_priors(model.base);
   const DwellTests dwells(cal.stage1, c.session.site, base, o);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 
 #include "filter/thermal/soak_fit.hpp"
@@ -240,10 +241,6 @@ TurnModel turn_model_of(const Session& session, const SensorProfile& profile, do
   return t;
 }
 
-namespace {
-
-// The dwells' model: the base coefficients plus the profile's extended families (the model
-// both tests use), the dwells correlated by the profile's bias wander.
 Stage2Options dwells_model(const Stage2Options& base, const TurnModel* turn_model) {
   Stage2Options model = base;
   if (!turn_model) return model;
@@ -257,6 +254,8 @@ Stage2Options dwells_model(const Stage2Options& base, const TurnModel* turn_mode
   }
   return model;
 }
+
+namespace {
 
 // A finding of `source`: the family, the components that joined the model, its test.
 TableFinding finding_of(TableFinding::Source source, const std::string& family,
@@ -447,6 +446,10 @@ void pair_with_term(TableFinding& f, const HeldoutContest& c) {
   f.alternative_term = c.term;
   f.ambiguous_with.push_back(c.term.name());
   f.separated_by.push_back(c.term.separated_by);
+  for (const auto& t : c.others) {  // every term the contest finds as good: one set
+    f.ambiguous_with.push_back(t.name());
+    f.separated_by.push_back(t.separated_by);
+  }
   if (f.picked_by.empty()) f.picked_by = "catalog";
 }
 
@@ -630,6 +633,8 @@ class TableRounds {
     lt.about = tm_->base.initial_model ? &*tm_->base.initial_model : nullptr;
     lt.thermal = o_.dwells.thermal;  // the temperature terms of the turns (a ramp)
     lt.reference_temperature_c = tm_->base.reference_temperature_c;
+    if (!motion_) motion_ = with_motion(lt).motion;  // once per session
+    lt.motion = motion_;
     return lt;
   }
 
@@ -907,6 +912,9 @@ class TableRounds {
   std::optional<TurnTests::State> before_;
   std::vector<KalmanCandidateTest> last_turn_round_;
   std::string pick_note_;  // heldout_pick's close_pick_note
+  // The table's known motion for the library's turns, built at the first library fit (a cache:
+  // the session's plan does not change).
+  mutable std::shared_ptr<const Motion> motion_;
 };
 
 }  // namespace

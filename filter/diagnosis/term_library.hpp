@@ -2,11 +2,12 @@
 // dwells and turns: what the final model leaves is fitted against a library of candidate terms
 // wider than the catalog (products f_i f_j per accelerometer and gyro axis, bias steps between
 // dwells, bias quadratic in time, periodic bias at the plan's cycle, gyro rate nonlinearity
-// omega_i |omega_i|, omega_i^2, omega_i^3 on the turns), by sequential thresholded least squares
-// (as in SINDy) with the threshold chosen on held-out dwells and turns.
+// omega_i |omega_i|, omega_i^2, omega_i^3 of the gyro's output on the turns), by sequential
+// thresholded least squares (as in SINDy) with the threshold chosen on held-out dwells and turns.
 // docs/methods/diagnosis.md "Out-of-catalog terms".
 #pragma once
 
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -93,7 +94,13 @@ struct LibraryTurns {
   /// times the temperature (scale factor and misalignment linear in it, acting in the turns).
   bool thermal = false;
   double reference_temperature_c = 25.0;
+  /// The table's known motion (the session's plan, rig/plan.hpp build_motion), built once for
+  /// the session's many library fits and contests (library_turns_of); null: each fit builds it.
+  std::shared_ptr<const Motion> motion;
 };
+
+/// `lt` with its motion built from the session's plan (none without a session or a plan).
+LibraryTurns with_motion(LibraryTurns lt);
 
 /// A catalog family against the library on the same held-out blocks (each dwell and each turn
 /// segment left out in turn, its coefficients predicted from the others; the model `current`
@@ -122,6 +129,10 @@ struct HeldoutContest {
   double family_gain = 0.0;  // (term_alone - both) / scale
   double term_needed = 0.0;  // the quantiles the gains are tested against
   double family_needed = 0.0;
+  /// With `alternative`: the other library terms that predict the held-out data as well as the
+  /// family by the same test (each the family's alternative too), lowest held-out chi-square
+  /// first. The set the plan cannot separate is the family, `term` and these.
+  std::vector<LibraryTerm> others;
   /// "the library term gyro y: 52 +- 0.1 ppm/(deg/s) * omega_y^2 predicts the held-out dwells
   /// and turns better (...)"; empty when neither replaced nor an alternative.
   std::string reason() const;
