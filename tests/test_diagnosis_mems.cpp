@@ -142,3 +142,39 @@ TEST_CASE("MEMS clean sessions are quiet: no name and nothing unexplained, rot19
     CHECK(seeds - quiet <= allowed_misses(seeds));
   }
 }
+
+TEST_CASE("MEMS seed8 hidden g-sensitivity: named first, and the model with it explains the data",
+          "[diagnosis][mems][long]") {
+  // Issue 33 (item 5 and the acceptance's named-first cells): on seed8 the MEMS gyro
+  // g-sensitivity's column of f_y is aliased with the gyro scale and misalignment's y column
+  // through the earth's rate, so the dwells name 6 of its 9 components. The final checks judged
+  // the dwells' model without the other 3, which the grade's prior on the scale (1.5 %) cannot
+  // imitate (it takes 400-500 %): the held-out dwells rejected the true family (predictive chi2
+  // 919 on 48 inputs, 99 % quantile 86.5) and the library's turns too, "unexplained" on 30 of 30
+  // seeds; with the whole family (diagnosis_table.cpp with_whole_families) 60.7. The cell as the
+  // matrix runs it: 5-10 detection sigmas, the matrix's detection sigma on seed8 MEMS
+  // (3.617e-6 rad/s per m/s^2, SINSCAL_MATRIX_VERBOSE prints it), seeds outside the measured ones.
+  // At most allowed_misses(6) = 2 of 6 seeds not named first or unexplained (binomial at 95 %,
+  // alpha 1 %).
+  const double sigma = 3.617e-6;
+  const CoefficientFamily& info = coefficient_family_info("gyro.g_sensitivity");
+  char line[160];
+  std::snprintf(line, sizeof line, "g_sensitivity = %.6g %.6g %s", 5.0 * sigma / info.si_per_unit(),
+                10.0 * sigma / info.si_per_unit(), info.unit().c_str());
+  const int seeds = 6;
+  int right = 0;
+  std::string misses;
+  for (int k = 0; k < seeds; ++k) {
+    const auto seed = 8300 + static_cast<std::uint64_t>(k);
+    const HiddenCase c =
+        hidden_case("mems_gsens", "seed8.ini", "mems.ini", {{"gyro", line}}, seed, 20.0);
+    const DiagnosisOutcome o = diagnose_hidden(c, {"gyro.g_sensitivity"});
+    const bool ok = o.first_right && o.false_names.empty() && !o.result.unexplained.present;
+    right += ok ? 1 : 0;
+    if (ok) continue;
+    misses += " seed " + std::to_string(seed) + ": " + o.story;
+    for (const auto& s : o.result.unexplained.signature) misses += "; " + s;
+  }
+  INFO("named first and explained on " << right << " of " << seeds << misses);
+  CHECK(seeds - right <= allowed_misses(seeds));
+}
