@@ -1,10 +1,9 @@
 #include "filter/diagnosis/time_structure.hpp"
 
 #include <Eigen/Cholesky>
-#include <Eigen/SVD>
+#include <Eigen/QR>
 #include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
-#include <boost/math/distributions/fisher_f.hpp>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -116,17 +115,18 @@ std::string RevisitCheck::text() const {
   char scaled[64] = "";
   if (scale > 1.0)
     std::snprintf(scaled, sizeof scaled, " (in their residual's scale x%.3g)", scale);
-  char b[300];
+  char b[400];
   std::snprintf(b, sizeof b,
-                "%d revisits of an orientation (%d rows): the drift's chi-square from their "
-                "differences %.3g%s, %.3g needed",
-                pairs, rows, statistic, scaled, needed);
+                "%d revisits of an orientation (%d rows): the fitted drift's trend over their "
+                "differences %.3g, with it their chi-square %.3g %s than without%s, %.3g allowed",
+                pairs, rows, trend, std::abs(statistic), statistic >= 0.0 ? "more" : "less", scaled,
+                needed);
   return b;
 }
 
 RevisitCheck revisit_check(const std::vector<EquivalentInputs>& inputs, const Site& site,
                            const Stage2Options& base, const std::vector<int>& components,
-                           double alpha) {
+                           const Eigen::VectorXd& values, double alpha) {
   RevisitCheck out;
   if (components.empty()) return out;
   const Differences d = differences(inputs, site, base, components);
@@ -138,30 +138,22 @@ RevisitCheck revisit_check(const std::vector<EquivalentInputs>& inputs, const Si
     throw std::invalid_argument("diagnosis: the revisits' differences have no covariance");
   const Eigen::MatrixXd A = llt.matrixL().solve(d.dH);
   const Eigen::VectorXd y = llt.matrixL().solve(d.du);
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeThinU);
-  const Eigen::VectorXd& s = svd.singularValues();
-  const double smax = s.size() ? s(0) : 0.0;
-  Eigen::VectorXd along = Eigen::VectorXd::Zero(y.size());
-  for (Eigen::Index k = 0; k < s.size(); ++k)
-    if (s(k) > 1e-8 * smax && smax > 0.0) {
-      ++out.dof;
-      along += svd.matrixU().col(k) * svd.matrixU().col(k).dot(y);
-    }
-  if (out.dof == 0) return out;
-  const double fitted = along.squaredNorm();
-  const double rest = (y - along).squaredNorm();
-  const int rest_dof = out.rows - out.dof;
-  out.needed = boost::math::quantile(boost::math::chi_squared(out.dof), 1.0 - alpha);
-  out.statistic = fitted;
-  // The differences' own scale: where their residual rejects the noise model, the F test.
+  const Eigen::VectorXd p = A * values;
+  out.trend = p.squaredNorm();
+  out.statistic = (y - p).squaredNorm() - y.squaredNorm();
+  // The differences' own scale: their residual after the drift's least squares, where it rejects
+  // the noise model.
+  const Eigen::VectorXd fit = A * A.completeOrthogonalDecomposition().solve(y);
+  const auto rank = static_cast<int>(A.completeOrthogonalDecomposition().rank());
+  const int rest_dof = out.rows - rank;
+  const double rest = (y - fit).squaredNorm();
   if (rest_dof > 0 &&
       rest > boost::math::quantile(boost::math::chi_squared(rest_dof), kRevisitNoiseLevel)) {
     out.scale = rest / rest_dof;
-    out.statistic = fitted / out.scale;
-    out.needed =
-        out.dof * boost::math::quantile(boost::math::fisher_f(out.dof, rest_dof), 1.0 - alpha);
+    out.statistic /= out.scale;
   }
-  out.confirms = out.statistic >= out.needed;
+  out.needed = boost::math::quantile(boost::math::chi_squared(1), 1.0 - alpha);
+  out.contradicts = out.statistic > out.needed;
   return out;
 }
 

@@ -21,20 +21,24 @@ constexpr const char* kTimeOrOrientation = "unexplained: time or orientation";
 /// Two dwells closer in attitude than this are one orientation visited twice (rad).
 constexpr double kRevisitAngle = 0.5 * 3.14159265358979323846 / 180.0;
 
-/// The time family's components fitted to the revisits alone: each orientation's consecutive
-/// visits differenced (the differences' covariance from each dwell's and the bias wander between
-/// them), the components' chi-square from those differences in the differences' own residual
-/// scale (their chi-square per dof after the fit, where above 1: an excess the noise model does
-/// not hold, such as timing jitter on the vertical accelerometer, is not a trend).
+/// The revisits against the drift the dwells fitted: each orientation's consecutive visits
+/// differenced (the differences' covariance from each dwell's and the bias wander between them),
+/// the chi-square of the differences with the fitted drift's trend against without it. A drift
+/// predicts its trend between the visits; an effect of the orientation that the drift absorbed
+/// elsewhere predicts none. The statistic is in the differences' own scale where their residual
+/// rejects the noise model (an excess the noise model does not hold is not a trend).
 struct RevisitCheck {
-  int pairs = 0;           // consecutive visits of one orientation
-  int rows = 0;            // difference rows (the family's sensor's NED inputs estimated in both)
-  int dof = 0;             // the family's components the differences determine
-  double statistic = 0.0;  // the components' chi-square from the differences, in their scale
-  double scale = 1.0;      // the differences' residual chi-square per dof after the fit (>= 1)
-  double needed = 0.0;     // the chi-square quantile of dof at 1 - alpha
-  bool confirms = false;   // statistic >= needed
-  /// "12 revisits (36 rows): the drift's chi-square from them 3.1 (scale x2.4), 11.3 needed"
+  int pairs = 0;       // consecutive visits of one orientation
+  int rows = 0;        // difference rows (the family's sensor's NED inputs estimated in both)
+  double trend = 0.0;  // the fitted drift's trend over the differences, chi-square (whitened)
+  /// The differences' chi-square with the fitted drift's trend minus without it, in their scale:
+  /// negative where the revisits hold the trend, near `trend` where they hold none.
+  double statistic = 0.0;
+  double scale = 1.0;        // the differences' residual chi-square per dof (>= 1)
+  double needed = 0.0;       // the chi-square quantile of 1 dof at 1 - alpha
+  bool contradicts = false;  // statistic > needed: the revisits refuse the drift
+  /// "9 revisits (27 rows): the drift's trend over them 14.2, with it their chi-square 12.3 more
+  /// than without, 6.63 allowed"
   std::string text() const;
 };
 
@@ -42,11 +46,11 @@ struct RevisitCheck {
 /// accel.bias_drift).
 bool is_time_family(const std::string& family);
 
-/// The revisit check of the time family's `components` (catalog indices) on the dwells `inputs`
-/// (`base`: the table's attitude error, the bias wander and T0). pairs == 0: the plan revisits no
-/// orientation (dof 0: the revisits do not determine the components).
+/// The revisit check of the time family's `components` (catalog indices) at the dwells' fitted
+/// `values` (SI) on the dwells `inputs` (`base`: the table's attitude error, the bias wander and
+/// T0). pairs == 0: the plan revisits no orientation.
 RevisitCheck revisit_check(const std::vector<EquivalentInputs>& inputs, const Site& site,
                            const Stage2Options& base, const std::vector<int>& components,
-                           double alpha);
+                           const Eigen::VectorXd& values, double alpha);
 
 }  // namespace sinscal
