@@ -1175,7 +1175,7 @@ void add_other_alternatives(const Stacked& s, const std::vector<Column>& lib,
 
 HeldoutContest contest_family(const DwellTests& dwells, const std::vector<int>& current,
                               const std::vector<int>& family, double alpha,
-                              const LibraryTurns* turns) {
+                              const LibraryTurns* turns, bool orientation_only) {
   HeldoutContest out;
   std::vector<int> fam;
   for (int k : family)
@@ -1194,6 +1194,7 @@ HeldoutContest contest_family(const DwellTests& dwells, const std::vector<int>& 
   std::vector<Eigen::Index> tried;
   for (Eigen::Index j = 0; j < m; ++j)
     if (catalog_family_of(lib[static_cast<std::size_t>(j)].term).empty() &&
+        (!orientation_only || lib[static_cast<std::size_t>(j)].kind == Kind::Product) &&
         s.B.col(j).squaredNorm() >= 1e-12 * s.y.squaredNorm())
       tried.push_back(j);
   out.terms = static_cast<int>(tried.size());

@@ -139,10 +139,12 @@ struct HeldoutContest {
 };
 
 /// The contest of the family's columns `family` (catalog indices) added to `current` against
-/// every library term (alpha: the family-wise level).
+/// every library term (alpha: the family-wise level); with `orientation_only` against the terms
+/// that are functions of the orientation alone (the products of the specific force: a time
+/// family's rivals on a plan that visits each orientation once, time_structure.hpp).
 HeldoutContest contest_family(const DwellTests& dwells, const std::vector<int>& current,
                               const std::vector<int>& family, double alpha,
-                              const LibraryTurns* turns = nullptr);
+                              const LibraryTurns* turns = nullptr, bool orientation_only = false);
 
 /// Fits the residual of the model `parameters` on the dwells (and with `turns`, on the turns)
 /// against the library (alpha: the level of the held-out confirmation). Terms the model's columns
