@@ -240,10 +240,6 @@ TurnModel turn_model_of(const Session& session, const SensorProfile& profile, do
   return t;
 }
 
-namespace {
-
-// The dwells' model: the base coefficients plus the profile's extended families (the model
-// both tests use), the dwells correlated by the profile's bias wander.
 Stage2Options dwells_model(const Stage2Options& base, const TurnModel* turn_model) {
   Stage2Options model = base;
   if (!turn_model) return model;
@@ -257,6 +253,8 @@ Stage2Options dwells_model(const Stage2Options& base, const TurnModel* turn_mode
   }
   return model;
 }
+
+namespace {
 
 // A finding of `source`: the family, the components that joined the model, its test.
 TableFinding finding_of(TableFinding::Source source, const std::string& family,
