@@ -68,19 +68,15 @@ double detection_sigma(const std::string& plan, const std::string& profile,
   const CaseCalibration cc = calibrate_case(c);
   const TurnModel& model = cc.model;
   const ClosedFormReport& cal = cc.calibration;
-  Stage2Options o = cal.stage2_options;
-  o.bias_wander = model.base.noise;  // the dwells' noise model as the diagnosis has it
+  // The dwells' model as the diagnosis has it (its noise model, the base and the profile's
+  // extended families). Without the profile's families the MEMS profile's K2 was missing, which
+  // takes accel.scale_asym's whole dwell signature on plans of axis-aligned dwells (|f| and f^2
+  // at -g, 0, +g): the cell was sized at a sigma the diagnosis never has (issue 33).
+  Stage2Options o = dwells_model(cal.stage2_options, &model);
   const auto& cat = coefficient_catalog();
   std::vector<int> components;
-  for (std::size_t k = 0; k < cat.size(); ++k) {
+  for (std::size_t k = 0; k < cat.size(); ++k)
     if (cat[k].family == family) components.push_back(static_cast<int>(k));
-    // The dwells' model as the diagnosis has it (diagnosis_table.cpp dwells_model): the base and
-    // the profile's extended families. Without them the MEMS profile's K2 was missing, which
-    // takes accel.scale_asym's whole dwell signature on plans of axis-aligned dwells (|f| and
-    // f^2 at -g, 0, +g): the cell was sized at a sigma the diagnosis never has (issue 33).
-    if (!coefficient_family_info(cat[k].family).base && model.base.layout.on(cat[k].family))
-      o.parameters.push_back(static_cast<int>(k));
-  }
   const auto first = static_cast<Eigen::Index>(o.parameters.size());
   o.parameters.insert(o.parameters.end(), components.begin(), components.end());
   const Stage2Result r = solve_stage2(cal.stage1, c.session.site, o);

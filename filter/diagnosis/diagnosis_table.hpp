@@ -46,9 +46,10 @@ std::vector<double> grade_priors(const CalibratorOptions& model);
 /// table's attitude sigma (rad), the session's time offset.
 TurnModel turn_model_of(const Session& session, const SensorProfile& profile, double table_sigma);
 
-/// The dwells' model of the table diagnosis: `base` plus the extended families the turns' model
-/// has on (the model both tests use), the dwells correlated by the profile's bias wander; `base`
-/// itself without a turns' model.
+/// The dwells' model of the diagnosis: `base` plus the extended families `turn_model`'s profile
+/// declares (the model both tests use; not repeated when already in `base`), the dwells
+/// correlated by the profile's bias wander (`turn_model->base.noise`); `base` itself without a
+/// turn model.
 Stage2Options dwells_model(const Stage2Options& base, const TurnModel* turn_model);
 
 /// One pass's NIS per dof above this: the session's errors are too large for one linearization
