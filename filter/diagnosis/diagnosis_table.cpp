@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "filter/diagnosis/pair_separation.hpp"
 #include "filter/thermal/soak_fit.hpp"
 #include "models/coefficient_families.hpp"
 #include "rig/timeline.hpp"
@@ -603,8 +604,10 @@ class TableRounds {
       d_.turns->final_run = turns_->now();
     }
     d_.check = residual_check(rep.final_fit, turns_ ? &turns_->now() : nullptr);
-    for (auto& f : d_.findings)
+    for (auto& f : d_.findings) {
       final_magnitudes(f, turns_ ? &turns_->now() : nullptr, rep.final_fit.fit);
+      if (!f.pick_note.empty()) separability(f);
+    }
     const std::vector<int> confirmed = demote_unexplaining();
     d_.unexplained = unexplained_of(d_, rep.residuals);
     library(confirmed);
@@ -780,6 +783,37 @@ class TableRounds {
         pick = c.family;
       }
     return pick;
+  }
+
+  // A close pick (`pick_note`): whether this plan can tell the pair apart at all, from its
+  // information at the size found (pair_separation), and what the plan with its turns split in
+  // halves gives (tilted dwells). Only the first member of the set with as many components.
+  void separability(TableFinding& f) const {
+    if (!session_ || !session_->plan.has_site) return;
+    const auto& cat = coefficient_catalog();
+    std::vector<double> size;
+    for (std::size_t k = 0; k < cat.size(); ++k)
+      if (cat[k].family == f.family) {
+        double v = 0.0;
+        for (const auto& c : f.coefficients)
+          if (c.catalog == static_cast<int>(k)) v = c.value;
+        size.push_back(v);
+      }
+    const auto n = static_cast<std::ptrdiff_t>(size.size());
+    for (const auto& other : f.ambiguous_with) {
+      if (std::count_if(cat.begin(), cat.end(),
+                        [&](const CoefficientInfo& c) { return c.family == other; }) != n)
+        continue;
+      const CalibratorOptions& m = turns_->model();
+      f.separation = pair_separation(session_->plan, m, f.family, other, size);
+      const Plan split = split_turns(session_->plan);
+      if (split.steps.size() > session_->plan.steps.size())
+        f.separating = pair_separation(split, m, f.family, other, size, false);
+      const double need = boost::math::quantile(boost::math::chi_squared(1), 1.0 - o_.dwells.alpha);
+      f.separability =
+          separation_statement(*f.separation, f.separating ? &*f.separating : nullptr, need);
+      return;
+    }
   }
 
   // A bias's degree-1 temperature term against a drift of the same bias in time (a session whose
