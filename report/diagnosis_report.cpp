@@ -170,17 +170,20 @@ json combinations_json(const TableFinding& f) {
 }
 
 json pair_separation_json(const PairSeparation& s) {
-  return {{"plan", s.plan},
-          {"families", {s.a, s.b}},
-          {"correlation", s.correlation},
-          {"correlations", s.correlations},
-          {"expected_chi2_difference", s.expected_gap}};
+  json j = {{"plan", s.plan},
+            {"families", {s.a, s.b}},
+            {"correlation", s.correlation},
+            {"correlations", s.correlations},
+            {"expected_chi2_difference", s.expected_gap}};
+  if (s.heldout()) j["expected_heldout_difference"] = s.heldout_gap();
+  return j;
 }
 
-// A close pick's separability (TableFinding::separability): the statement, this plan's figures
+// A turns' pick's separability (TableFinding::separability): the statement, this plan's figures
 // and the plan with its turns split in halves.
 json separability_json(const TableFinding& f) {
   json j = {{"statement", f.separability}};
+  if (f.pick_gap) j["session_heldout_difference"] = *f.pick_gap;
   if (f.separation) j["this_plan"] = pair_separation_json(*f.separation);
   if (f.separating) j["separating_plan"] = pair_separation_json(*f.separating);
   return j;

@@ -85,9 +85,12 @@ void heldout_figures(PairSeparation& s, const Plan& plan, const CalibratorOption
   auto refs = truth.coefficient_refs();
   for (std::size_t i = 0; i < ca.size(); ++i)
     *refs[static_cast<std::size_t>(ca[i])].second = size[i];
+  // Each member alone: the diagnosis's model may hold the pick already.
   for (const auto& [family, out] :
        {std::make_pair(s.a, &s.heldout_a), std::make_pair(s.b, &s.heldout_b)}) {
     CalibratorOptions m = model;
+    m.layout.set(s.a, false);
+    m.layout.set(s.b, false);
     m.layout.set(family, true);
     *out = noise_free_heldout(plan, m, truth, rate_hz);
   }
@@ -97,8 +100,7 @@ void heldout_figures(PairSeparation& s, const Plan& plan, const CalibratorOption
 
 PairSeparation pair_separation(const Plan& plan, const CalibratorOptions& model,
                                const std::string& a, const std::string& b,
-                               const std::vector<double>& size, bool heldout,
-                               double rate_hz) {
+                               const std::vector<double>& size, bool heldout, double rate_hz) {
   const std::vector<int> ca = components_of(a), cb = components_of(b);
   if (ca.empty() || ca.size() != cb.size() || size.size() != ca.size())
     throw std::invalid_argument("pair_separation: " + a + " and " + b +
@@ -154,7 +156,7 @@ Plan split_turns(const Plan& plan) {
 }
 
 std::string separation_statement(const PairSeparation& here, const PairSeparation* other,
-                                 double need) {
+                                 double need, double session_gap) {
   // The figure the pick needs: the held-out turns' expected difference, else all the data's.
   const double gap = here.heldout() ? here.heldout_gap() : here.expected_gap;
   char figures[300];
@@ -165,14 +167,18 @@ std::string separation_statement(const PairSeparation& here, const PairSeparatio
                 here.plan.c_str(), here.correlation, gap, need, here.expected_gap);
   char b[900];
   if (gap >= need) {
-    std::snprintf(b, sizeof b,
-                  "%s or %s: separable on this plan in expectation (%s); close on this session "
-                  "by the noise",
-                  here.a.c_str(), here.b.c_str(), figures);
+    std::snprintf(b, sizeof b, "%s or %s: separable on this plan in expectation (%s)%s",
+                  here.a.c_str(), here.b.c_str(), figures,
+                  session_gap < need ? "; close on this session by the noise" : "");
     return b;
   }
-  int n = std::snprintf(b, sizeof b, "%s or %s: not separable on this plan (%s)", here.a.c_str(),
-                        here.b.c_str(), figures);
+  char noise[200] = "";
+  if (session_gap >= need)
+    std::snprintf(noise, sizeof noise,
+                  "; this session's held-out difference of %.3g is the noise's, not the plan's",
+                  session_gap);
+  int n = std::snprintf(b, sizeof b, "%s or %s: not separable on this plan (%s)%s", here.a.c_str(),
+                        here.b.c_str(), figures, noise);
   if (n < 0 || n >= static_cast<int>(sizeof b)) return b;
   if (other)
     std::snprintf(b + n, sizeof b - static_cast<std::size_t>(n),

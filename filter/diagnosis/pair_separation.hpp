@@ -60,10 +60,11 @@ PairSeparation pair_separation(const Plan& plan, const CalibratorOptions& model,
 /// orientation plan).
 Plan split_turns(const Plan& plan);
 
-/// The statement of a close pick: the pair not separable on `here` (correlation, expected gap
-/// against `need`), and what separates it: `other` (the split-turns plan) with its figures, or
+/// The statement of a pick: the pair not separable on `here` (correlation, expected gap against
+/// `need`; `session_gap` this session's held-out difference, noise when at least `need`), and
+/// what separates it: `other` (the split-turns plan) with its figures, or
 /// for a plan without turns to split, dwells at 45 deg.
 std::string separation_statement(const PairSeparation& here, const PairSeparation* other,
-                                 double need);
+                                 double need, double session_gap);
 
 }  // namespace sinscal
