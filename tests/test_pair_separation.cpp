@@ -42,7 +42,7 @@ double need_at(double alpha) {
 
 // The hidden sizes: 10 detection sigmas of the MEMS matrix (K2's dwells' sigma 20.9 ug/g^2 on
 // rot19, 43.3 on seed8). The threshold is the one the pick uses (alpha 0.01).
-TEST_CASE("Pair separation: rot19 and seed8 cannot tell K2 from the asymmetry; split turns can",
+TEST_CASE("Pair separation: rot19 and seed8 cannot tell K2 from the asymmetry, split turns can",
           "[diagnosis][pair]") {
   const HiddenCase c = hidden_case("pair_info", "rot19.ini", "mems.ini", {k2_line(210.0)}, 1, 20.0);
   const CalibratorOptions m = mems_model(c);
