@@ -606,7 +606,12 @@ class TableRounds {
     d_.check = residual_check(rep.final_fit, turns_ ? &turns_->now() : nullptr);
     for (auto& f : d_.findings) {
       final_magnitudes(f, turns_ ? &turns_->now() : nullptr, rep.final_fit.fit);
-      if (f.picked_by == "turns" && f.pick_gap) separability(f);
+      if (f.picked_by == "turns" && f.pick_gap) try {
+          separability(f);
+        } catch (const std::exception& e) {  // a statement, never the diagnosis's stop
+          f.separability =
+              std::string("whether the plan separates the pair: not computed (") + e.what() + ")";
+        }
     }
     const std::vector<int> confirmed = demote_unexplaining();
     d_.unexplained = unexplained_of(d_, rep.residuals);

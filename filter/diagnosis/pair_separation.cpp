@@ -98,9 +98,19 @@ void heldout_figures(PairSeparation& s, const Plan& plan, const CalibratorOption
 
 }  // namespace
 
-PairSeparation pair_separation(const Plan& plan, const CalibratorOptions& model,
+// `model` without its thermal families: the plan's ideal IMU has no temperature (a chamber's
+// soak, each at one temperature, diagnosed as a table session).
+static CalibratorOptions without_thermal(const CalibratorOptions& model) {
+  CalibratorOptions o = model;
+  for (const auto& fam : coefficient_families())
+    if (fam.thermal() && o.layout.on(fam.name)) o.layout.set(fam.name, false);
+  return o;
+}
+
+PairSeparation pair_separation(const Plan& plan, const CalibratorOptions& with_thermal,
                                const std::string& a, const std::string& b,
                                const std::vector<double>& size, bool heldout, double rate_hz) {
+  const CalibratorOptions model = without_thermal(with_thermal);
   const std::vector<int> ca = components_of(a), cb = components_of(b);
   if (ca.empty() || ca.size() != cb.size() || size.size() != ca.size())
     throw std::invalid_argument("pair_separation: " + a + " and " + b +

@@ -43,7 +43,8 @@ struct PairSeparation {
 constexpr double kPairPriorWidening = 100.0;
 
 /// The pair's separation on `plan` with the filter's options `model` (the profile's noise,
-/// families and priors; a and b switched on, their priors widened by kPairPriorWidening for the
+/// families and priors, without its thermal families: the plan's ideal IMU has no temperature;
+/// a and b switched on, their priors widened by kPairPriorWidening for the
 /// correlation and expected_gap, as they are for the held-out turns' figures), `size`
 /// a's coefficients (SI, catalog order of a's components); the held-out turns' figures only with
 /// `heldout` (four more runs of the filter). Throws std::invalid_argument for
