@@ -91,6 +91,8 @@ void print_diagnosis(const TableDiagnosis& d) {
         std::printf("; %s: %s", f.ambiguous_with[i].c_str(), f.separated_by[i + 1].c_str());
       std::printf("\n");
     }
+    if (!f.pick_note.empty()) std::printf("   Pick: %s\n", f.pick_note.c_str());
+    if (!f.separability.empty()) std::printf("   Plan: %s\n", f.separability.c_str());
   }
   for (const auto& c : r.not_separable) {
     bool turns_tested = false;

@@ -169,6 +169,26 @@ json combinations_json(const TableFinding& f) {
   return a;
 }
 
+json pair_separation_json(const PairSeparation& s) {
+  json j = {{"plan", s.plan},
+            {"families", {s.a, s.b}},
+            {"correlation", s.correlation},
+            {"correlations", s.correlations},
+            {"expected_chi2_difference", s.expected_gap}};
+  if (s.heldout()) j["expected_heldout_difference"] = s.heldout_gap();
+  return j;
+}
+
+// A turns' pick's separability (TableFinding::separability): the statement, this plan's figures
+// and the plan with its turns split in halves.
+json separability_json(const TableFinding& f) {
+  json j = {{"statement", f.separability}};
+  if (f.pick_gap) j["session_heldout_difference"] = *f.pick_gap;
+  if (f.separation) j["this_plan"] = pair_separation_json(*f.separation);
+  if (f.separating) j["separating_plan"] = pair_separation_json(*f.separating);
+  return j;
+}
+
 // The fields every finding of the story has, beside its method's own.
 void add_story_fields(json& j, const TableFinding& f) {
   j["round"] = f.round;
@@ -177,6 +197,7 @@ void add_story_fields(json& j, const TableFinding& f) {
   j["ambiguous_with"] = f.ambiguous_with;
   if (!f.picked_by.empty()) j["picked_by"] = f.picked_by;
   if (!f.pick_note.empty()) j["pick_note"] = f.pick_note;
+  if (!f.separability.empty()) j["separability"] = separability_json(f);
   j["separated_by"] = f.separated_by;
   j["coefficients"] = finding_coefficients_json(f);
   j["combinations"] = combinations_json(f);
@@ -309,6 +330,7 @@ void markdown_finding(std::ostringstream& m, const TableFinding& f, int number) 
                                        "held-out dwells and turns as well, the data cannot choose"
                                      : "the best fit; `--prefer FAMILY` picks another")
       << ")" << (f.pick_note.empty() ? "" : "; " + f.pick_note)
+      << (f.separability.empty() ? "" : ". " + f.separability)
       << "; later rounds test the rest against it. What separates them: " << f.family << ": "
       << f.separated_by.front();
     for (std::size_t i = 0; i < f.ambiguous_with.size(); ++i)

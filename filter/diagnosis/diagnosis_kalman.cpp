@@ -125,6 +125,13 @@ void check_candidates(const CalibratorOptions& base, const std::vector<std::stri
 }  // namespace
 
 HeldoutTurns heldout_turns(const Session& session, const CalibratorOptions& options) {
+  return heldout_turns(session, options, [&session](const CalibratorOptions& o) {
+    return run_checked(session, o, "with turns held out");
+  });
+}
+
+HeldoutTurns heldout_turns(const Session& session, const CalibratorOptions& options,
+                           const std::function<KalmanRun(const CalibratorOptions&)>& run) {
   const PlanTimeline timeline = PlanTimeline::of(session.plan, session.site);
   // The turns: from inside the end margin of a dwell to inside the start margin of the next.
   std::vector<std::pair<double, double>> turns;
@@ -142,7 +149,7 @@ HeldoutTurns heldout_turns(const Session& session, const CalibratorOptions& opti
     for (std::size_t k = fold; k < turns.size(); k += 2) o.holdout.push_back(turns[k]);
     KalmanRun r;
     try {
-      r = run_checked(session, o, "with turns held out");
+      r = run(o);
     } catch (const std::runtime_error& e) {
       HeldoutTurns failed;
       failed.failed = e.what();

@@ -4,6 +4,7 @@
 // absent (a Wald test). docs/methods/diagnosis.md "The turns' test".
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -66,6 +67,10 @@ struct HeldoutTurns {
 /// diverges (the turns' errors too large to predict without updates) leaves turns = 0 and the
 /// reason in `failed`.
 HeldoutTurns heldout_turns(const Session& session, const CalibratorOptions& options);
+/// The same with each run of the filter made by `run` (e.g. over an ideal IMU without noise,
+/// pair_separation.hpp); it throws std::runtime_error for a run that stops.
+HeldoutTurns heldout_turns(const Session& session, const CalibratorOptions& options,
+                           const std::function<KalmanRun(const CalibratorOptions&)>& run);
 
 /// The turns' side of a table diagnosis: the filter run with the current model, then with each
 /// candidate family added (filter/diagnosis/diagnosis_table.hpp runs the rounds).

@@ -10,6 +10,7 @@
 
 #include "filter/diagnosis/diagnosis.hpp"
 #include "filter/diagnosis/diagnosis_kalman.hpp"
+#include "filter/diagnosis/pair_separation.hpp"
 #include "filter/diagnosis/term_library.hpp"
 #include "filter/kalman/innovation_check.hpp"
 
@@ -97,6 +98,15 @@ struct TableFinding : TestVerdict {
   /// picked_by "turns" with the runner-up's held-out turns within the chi-square quantile of one
   /// dof at 1 - alpha: "close: ..." with both figures (the turns do not choose), else "".
   std::string pick_note;
+  /// picked_by "turns" (a pair): whether the plan can tell the pair apart at all, from its
+  /// information (pair_separation.hpp: the correlation of the two families' estimates on the
+  /// dwells and turns, the expected chi-square difference at the size found), and the plan with
+  /// the turns split in halves (tilted dwells) that separates it; the statement, else "".
+  std::string separability;
+  std::optional<double>
+      pick_gap;  // picked_by "turns": the runner-up's held-out chi2 minus the pick's
+  std::optional<PairSeparation> separation;  // on this session's plan
+  std::optional<PairSeparation> separating;  // on split_turns of it (a rotation plan)
   /// What separates each family of the set from the base coefficients (the family table):
   /// `family` first, then each of ambiguous_with.
   std::vector<std::string> separated_by;
