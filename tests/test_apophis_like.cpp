@@ -367,6 +367,24 @@ RateTableResult tumble_fit(const Session& s, bool gyro_drift) {
   const auto means = find_segments(read_rate_readings(s.log), segments, ro);
   return rate_table_calibrate(segments, means, s.site, 0.0, ro);
 }
+
+// The fit's gyro coefficients against the generated truth (biases and drifts; every other gyro
+// coefficient zero), each within 4 sigma; returns how many drifts it checked.
+int check_gyros(const RateTableResult& r, const test::ApophisLike& spec) {
+  int drifts = 0;
+  for (const auto& c : r.coefficients) {
+    if (c.name.rfind("gyro.", 0) != 0) continue;
+    const int axis = c.name.back() - 'x';
+    const bool drift = c.name.rfind("gyro.bias_drift.", 0) == 0;
+    const double truth = c.name.rfind("gyro.bias.", 0) == 0 ? spec.gyro_bias(axis)
+                         : drift                            ? spec.gyro_drift(axis)
+                                                            : 0.0;
+    CAPTURE(c.name, c.value, c.sigma, truth);
+    CHECK(std::abs(c.value - truth) < 4.0 * c.sigma);
+    drifts += drift ? 1 : 0;
+  }
+  return drifts;
+}
 }  // namespace
 
 TEST_CASE("Rate table: a tumble whose gyro biases drift over the log (--gyro-drift)",
@@ -394,18 +412,7 @@ TEST_CASE("Rate table: a tumble whose gyro biases drift over the log (--gyro-dri
   INFO(with.detail);
   CHECK(with.passed);
   REQUIRE(r.triad_fits.front().dof >= 6);
-  int checked = 0;
-  for (const auto& c : r.coefficients) {
-    if (c.name.rfind("gyro.", 0) != 0) continue;
-    const int axis = c.name.back() - 'x';
-    const double truth = c.name.rfind("gyro.bias.", 0) == 0         ? spec.gyro_bias(axis)
-                         : c.name.rfind("gyro.bias_drift.", 0) == 0 ? spec.gyro_drift(axis)
-                                                                    : 0.0;
-    CAPTURE(c.name, c.value, c.sigma, truth);
-    CHECK(std::abs(c.value - truth) < 4.0 * c.sigma);
-    checked += c.name.rfind("gyro.bias_drift.", 0) == 0 ? 1 : 0;
-  }
-  CHECK(checked == 3);
+  CHECK(check_gyros(r, spec) == 3);
   // The drift is resolved: x's at least 10 sigma from zero.
   for (const auto& c : r.coefficients)
     if (c.name == "gyro.bias_drift.x") CHECK(std::abs(c.value) > 10.0 * c.sigma);
@@ -517,15 +524,7 @@ TEST_CASE("Rate table: a rest whose gyro changes level within it is named and le
   const PlausibilityCheck with = check_rate_table_fit(r, limits, "log.csv");
   INFO(with.detail);
   CHECK(with.passed);
-  for (const auto& c : r.coefficients) {
-    if (c.name.rfind("gyro.", 0) != 0) continue;
-    const int axis = c.name.back() - 'x';
-    const double truth = c.name.rfind("gyro.bias.", 0) == 0         ? spec.gyro_bias(axis)
-                         : c.name.rfind("gyro.bias_drift.", 0) == 0 ? spec.gyro_drift(axis)
-                                                                    : 0.0;
-    CAPTURE(c.name, c.value, c.sigma, truth);
-    CHECK(std::abs(c.value - truth) < 4.0 * c.sigma);
-  }
+  check_gyros(r, spec);
   const RateTableResult kept =
       rate_table_calibrate_rests(f.readings, f.segments, f.means, s.site, 0.0, f.options, true);
   REQUIRE(kept.unsteady.size() == 1);
