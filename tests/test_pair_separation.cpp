@@ -54,12 +54,15 @@ TEST_CASE("Pair separation: rot19 and seed8 cannot tell K2 from the asymmetry, s
   for (double r : rot19.correlations) CHECK(std::abs(r) > 0.98);
   // The model with the true family predicts the noise-free held-out turns (chi2 near 0), the
   // other member does not, but by less than the pick needs (measured 2.06 against 6.63).
+  REQUIRE(rot19.heldout());
+  CHECK(rot19.heldout_gap() > 0.0);
   CHECK(rot19.heldout_a < 0.01 * rot19.heldout_b);
   CHECK(rot19.heldout_gap() < need);
   // Both differences are of the effect's size squared (a linear model): twice the size, four
   // times the gaps.
   const PairSeparation twice =
       pair_separation(c.session.plan, m, "accel.k2", "accel.scale_asym", k2_size(420.0));
+  REQUIRE(twice.heldout());
   CHECK(twice.expected_gap == Approx(4.0 * rot19.expected_gap).epsilon(0.02));
   CHECK(twice.heldout_gap() == Approx(4.0 * rot19.heldout_gap()).epsilon(0.05));
   // Dwells between the axes (every second dwell of the split plan at 45 deg): the correlation
@@ -75,6 +78,8 @@ TEST_CASE("Pair separation: rot19 and seed8 cannot tell K2 from the asymmetry, s
   const PairSeparation seed8 = pair_separation(s8.session.plan, mems_model(s8), "accel.k2",
                                                "accel.scale_asym", k2_size(435.0));
   CHECK(seed8.correlation > 0.98);
+  REQUIRE(seed8.heldout());
+  CHECK(seed8.heldout_gap() > 0.0);
   CHECK(seed8.heldout_gap() < need);
   CHECK(split_turns(s8.session.plan).steps.empty());
 }

@@ -192,13 +192,14 @@ PlausibilityCheck check_kf_linearization(const PassLinearization& last, int pass
 PlausibilityCheck check_stage2_fit(const ClosedFormReport& r, const PlausibilityLimits& limits,
                                    const std::string& input);
 
-/// The rate table's fit, triad by triad: each triad's chi2 against its chi-square quantile at
-/// the normal tail of `limits.stage2_fit_z` (the same tail as the closed form's stage 2); above
-/// it the segments' means do not fit the model (a segment not at its commanded rate, a gyro
 /// The triads ("gyro", "accel") whose rate-table fit is beyond its quantile (check_rate_table_fit's
 /// rule).
 std::vector<std::string> failed_rate_table_triads(const RateTableResult& r,
                                                   const PlausibilityLimits& limits);
+
+/// The rate table's fit, triad by triad: each triad's chi2 against its chi-square quantile at
+/// the normal tail of `limits.stage2_fit_z` (the same tail as the closed form's stage 2); above
+/// it the segments' means do not fit the model (a segment not at its commanded rate, a gyro
 /// offset while turning the model lacks, noise densities too small).
 PlausibilityCheck check_rate_table_fit(const RateTableResult& r, const PlausibilityLimits& limits,
                                        const std::string& input);

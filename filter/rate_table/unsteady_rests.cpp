@@ -236,6 +236,29 @@ void against_others(UnsteadyRest& u, const RateTableResult& full, const RateTabl
                            "coefficients: nothing checks its means";
 }
 
+// The rest `u`'s means in the noise a rest of this log has (its own scatter and autocorrelation
+// time grow with the level change and would hide it) against the fit of the other segments
+// (against_others). A refit the check alone needs that fails (RateTableError: e.g. a scale beyond
+// its bound without the rest) leaves the rest unchecked, said so, never the run's refusal.
+void judge_against_others(UnsteadyRest& u, const std::vector<RateSegment>& segments,
+                          const std::vector<SegmentMean>& means, const Site& site, double gravity,
+                          const RateTableOptions& options, double alpha) {
+  try {
+    std::vector<SegmentMean> judged = means;
+    in_rest_noise(segments, means, u.segment, judged[u.segment]);
+    const RateTableResult with = rate_table_calibrate(segments, judged, site, gravity, options);
+    const RateTableResult others =
+        fit_without({u.segment}, segments, means, site, gravity, options);
+    against_others(u, with, others, alpha);
+  } catch (const RateTableError& e) {
+    u.others_chi2 = 0.0;
+    u.others_quantile = 0.0;
+    u.others_dof = 0;
+    u.statement +=
+        std::string("; its means not checked against the other segments (") + e.what() + ")";
+  }
+}
+
 }  // namespace
 
 RateTableResult rate_table_calibrate_rests(const std::vector<RateReading>& readings,
@@ -248,14 +271,8 @@ RateTableResult rate_table_calibrate_rests(const std::vector<RateReading>& readi
   if (found.empty()) return full;
   std::set<std::size_t> drop;
   for (auto& u : found) {
-    // Its means judged in the noise a rest of this log has: its own scatter and autocorrelation
-    // time grow with the level change and would hide it.
-    std::vector<SegmentMean> judged = means;
-    in_rest_noise(segments, means, u.segment, judged[u.segment]);
-    const RateTableResult with = rate_table_calibrate(segments, judged, site, gravity, options);
-    const RateTableResult others =
-        fit_without({u.segment}, segments, means, site, gravity, options);
-    against_others(u, with, others, alpha / static_cast<double>(found.size()));
+    judge_against_others(u, segments, means, site, gravity, options,
+                         alpha / static_cast<double>(found.size()));
     const bool off = u.others_chi2 > u.others_quantile;
     u.excluded = off && !keep;
     if (u.excluded) drop.insert(u.segment);

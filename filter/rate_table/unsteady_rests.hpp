@@ -23,9 +23,11 @@ std::vector<UnsteadyRest> unsteady_rests(const std::vector<RateReading>& reading
                                          const std::vector<SegmentMean>& means,
                                          double alpha = 0.01);
 
-/// rate_table_calibrate with the rests that are not rests checked: a listed rest whose mean in
-/// the fit of all segments is beyond the normal quantile at 1 - alpha over the fit's rows is left
-/// out (unless `keep`) and the fit redone without it; the others are kept, said so. The result's
+/// rate_table_calibrate with the rests that are not rests checked: a listed rest whose means, in
+/// the log's rest noise, disagree with the fit of the other segments (the deleted-rest chi2 of
+/// its triad's coefficients beyond the chi-square quantile at 1 - alpha / listed rests) is left
+/// out (unless `keep`) and the fit redone without it; the others are kept, said so (a rest whose
+/// check's refits fail is kept unchecked, said so). The result's
 /// `unsteady` holds them all. Throws RateTableError naming the rest when leaving it out would
 /// leave a coefficient of the full fit undetermined.
 RateTableResult rate_table_calibrate_rests(const std::vector<RateReading>& readings,
