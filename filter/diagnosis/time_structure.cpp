@@ -64,6 +64,7 @@ std::vector<int> acted_inputs(const std::vector<Eigen::Matrix<double, 6, Eigen::
 Differences differences(const std::vector<EquivalentInputs>& inputs, const Site& site,
                         const Stage2Options& base, const std::vector<int>& components) {
   std::vector<Eigen::Matrix<double, 6, Eigen::Dynamic>> H;
+  H.reserve(inputs.size());
   for (const auto& in : inputs)
     H.push_back(equivalent_input_map(in, site, components, base.reference_temperature_c));
   const std::vector<int> acted = acted_inputs(H);
