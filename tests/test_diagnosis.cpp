@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <random>
 
+#include "catalog.hpp"
 #include "filter/diagnosis/diagnosis_table.hpp"
 #include "helpers.hpp"
 #include "models/coefficient_families.hpp"
@@ -44,14 +45,6 @@ struct SimSession {
   }
 };
 
-int catalog_index(const std::string& name) {
-  const auto& cat = coefficient_catalog();
-  for (std::size_t k = 0; k < cat.size(); ++k)
-    if (cat[k].name == name) return static_cast<int>(k);
-  FAIL("no coefficient " << name);
-  return -1;
-}
-
 // The sigma of one candidate component given the base coefficients (its detection sigma).
 double detection_sigma(const std::vector<EquivalentInputs>& in, const Site& site, int component) {
   Stage2Options o;
@@ -75,7 +68,7 @@ struct Outcome {
 Outcome hide_and_diagnose(const SimSession& s, std::uint64_t seed, const std::string& coefficient,
                           double magnitude) {
   ImuErrorModel hidden;
-  const int c = catalog_index(coefficient);
+  const int c = test::coefficient_index(coefficient);
   *hidden.coefficient_refs()[static_cast<std::size_t>(c)].second = magnitude;
   const auto in = s.stage1(seed, hidden);
   const DiagnosisReport rep = diagnose_static(in, s.plan.site, Stage2Options{});
@@ -156,7 +149,7 @@ TEST_CASE("Diagnosis: an effect hidden at 8 detection sigmas is named first, wit
   const auto clean = s.stage1(21, ImuErrorModel{});
   for (const std::string coefficient : {"gyro.g_sensitivity.zx", "accel.k2.x", "accel.scale_asym.z",
                                         "gyro.bias_drift.y", "accel.bias_drift.x"}) {
-    const double sigma = detection_sigma(clean, s.plan.site, catalog_index(coefficient));
+    const double sigma = detection_sigma(clean, s.plan.site, test::coefficient_index(coefficient));
     INFO(coefficient << ": detection sigma " << sigma);
     REQUIRE(std::isfinite(sigma));
     const Outcome o = hide_and_diagnose(s, 22, coefficient, 8.0 * sigma);
@@ -182,7 +175,7 @@ TEST_CASE("Diagnosis Monte Carlo: hidden effects named, clean sessions quiet (se
     for (std::size_t f = 0; f < families.size(); ++f)
       for (const auto& info : coefficient_catalog())
         if (info.family == families[f]) {
-          const double sg = detection_sigma(clean, s.plan.site, catalog_index(info.name));
+          const double sg = detection_sigma(clean, s.plan.site, test::coefficient_index(info.name));
           if (sg < coefficient_family_info(families[f]).default_prior / 3.0)
             separable[f].push_back(info.name);
         }
@@ -203,7 +196,7 @@ TEST_CASE("Diagnosis Monte Carlo: hidden effects named, clean sessions quiet (se
         const std::string& name = separable[f][rng() % separable[f].size()];
         const double m = std::uniform_real_distribution<double>(5.0, 10.0)(rng) *
                          (rng() % 2 ? 1.0 : -1.0) *
-                         detection_sigma(clean, s.plan.site, catalog_index(name));
+                         detection_sigma(clean, s.plan.site, test::coefficient_index(name));
         const Outcome o = hide_and_diagnose(s, 4000 + static_cast<std::uint64_t>(k), name, m);
         right += o.named_first ? 1 : 0;
         within += o.named_first && (o.within_3_sigma || o.axis_ambiguous) ? 1 : 0;

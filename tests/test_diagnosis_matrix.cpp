@@ -21,6 +21,7 @@
 #include <map>
 #include <sstream>
 
+#include "catalog.hpp"
 #include "diagnosis_cases.hpp"
 
 using namespace sinscal;
@@ -73,10 +74,7 @@ double detection_sigma(const std::string& plan, const std::string& profile,
   // takes accel.scale_asym's whole dwell signature on plans of axis-aligned dwells (|f| and f^2
   // at -g, 0, +g): the cell was sized at a sigma the diagnosis never has (issue 33).
   Stage2Options o = dwells_model(cal.stage2_options, &model);
-  const auto& cat = coefficient_catalog();
-  std::vector<int> components;
-  for (std::size_t k = 0; k < cat.size(); ++k)
-    if (cat[k].family == family) components.push_back(static_cast<int>(k));
+  const std::vector<int> components = family_coefficients(family);
   const auto first = static_cast<Eigen::Index>(o.parameters.size());
   o.parameters.insert(o.parameters.end(), components.begin(), components.end());
   const Stage2Result r = solve_stage2(cal.stage1, c.session.site, o);

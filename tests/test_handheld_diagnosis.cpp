@@ -11,6 +11,7 @@
 #include <map>
 #include <random>
 
+#include "catalog.hpp"
 #include "filter/diagnosis/handheld_diagnosis.hpp"
 #include "helpers.hpp"
 #include "models/coefficient_families.hpp"
@@ -41,14 +42,6 @@ Site site() {
   s.lat_rad = 45.0 * units::deg;
   s.h_m = 100.0;
   return s;
-}
-
-int catalog_index(const std::string& name) {
-  const auto& cat = coefficient_catalog();
-  for (std::size_t k = 0; k < cat.size(); ++k)
-    if (cat[k].name == name) return static_cast<int>(k);
-  FAIL("no coefficient " << name);
-  return -1;
 }
 
 struct Run {
@@ -216,7 +209,7 @@ TEST_CASE("Hand-held diagnosis: the turn columns are the integration's sensitivi
   // A gyro scale asymmetry hidden at some 40 of its sigmas: adding it to the calibrated model
   // must remove the turn residual it caused (the linearized refit predicts what re-integration
   // gives) and recover it.
-  const int c = catalog_index("gyro.scale_asym.z");
+  const int c = test::coefficient_index("gyro.scale_asym.z");
   const double hidden = 0.002;
   const Run r = simulate_and_diagnose(12, {{c, hidden}});
   const DiagnosisReport& rep = r.diagnosis.report;

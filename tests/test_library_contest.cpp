@@ -8,6 +8,7 @@
 // the two red.
 #include <catch2/catch.hpp>
 
+#include "catalog.hpp"
 #include "filter/diagnosis/term_library.hpp"
 #include "out_of_catalog.hpp"
 
@@ -52,10 +53,7 @@ HeldoutContest drift_contest(std::uint64_t seed, const TermAt& term_at) {
       c.session.time_offset + 0.5 * PlanTimeline::of(c.session.plan, c.session.site).duration;
   inject_into_log(c.session.dir + "/imu.csv", kContestRate, term_at(mid));
   c.session = Session::load(c.session.path);
-  std::vector<int> drift;
-  const auto& cat = coefficient_catalog();
-  for (std::size_t k = 0; k < cat.size(); ++k)
-    if (cat[k].family == "gyro.bias_drift") drift.push_back(static_cast<int>(k));
+  const std::vector<int> drift = family_coefficients("gyro.bias_drift");
   return with_library_inputs(
       c, false,
       [&](const DwellTests& dwells, const std::vector<int>& parameters, const LibraryTurns& lt) {

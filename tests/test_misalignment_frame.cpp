@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
+#include "catalog.hpp"
 #include "filter/design/prediction.hpp"
 #include "filter/kalman/misalignment_frame.hpp"
 #include "helpers.hpp"
@@ -42,14 +43,6 @@ ImuErrorModel model_of(const Eigen::VectorXd& v) {
   return m;
 }
 
-int index_of(const std::string& name) {
-  const auto& cat = coefficient_catalog();
-  for (std::size_t c = 0; c < cat.size(); ++c)
-    if (cat[c].name == name) return static_cast<int>(c);
-  FAIL("no coefficient " << name);
-  return -1;
-}
-
 }  // namespace
 
 TEST_CASE("Misalignment frame: the conversion's Jacobian is its derivative", "[frame]") {
@@ -75,12 +68,13 @@ TEST_CASE("Misalignment frame: the conversion's Jacobian is its derivative", "[f
   // The common rotation moves the gyro misalignments with the accelerometers' upper ones: the
   // part a table frame carries and the triad frame drops (first order: -1 for the antisymmetric
   // pair of gyro.misalignment.xy / accel.misalignment.xy).
-  const int gxy = index_of("gyro.misalignment.xy"), gyx = index_of("gyro.misalignment.yx");
-  const int axy = index_of("accel.misalignment.xy");
+  const int gxy = test::coefficient_index("gyro.misalignment.xy"),
+            gyx = test::coefficient_index("gyro.misalignment.yx");
+  const int axy = test::coefficient_index("accel.misalignment.xy");
   CHECK(J(gxy, axy) == Approx(-1.0).margin(0.01));
   CHECK(J(gyx, axy) == Approx(1.0).margin(0.01));
   // Coefficients of the sensor axes only (a bias) pass unchanged.
-  const int gbx = index_of("gyro.bias.x");
+  const int gbx = test::coefficient_index("gyro.bias.x");
   CHECK(J(gbx, gbx) == 1.0);
   CHECK(J.col(gbx).cwiseAbs().sum() == 1.0);
 }

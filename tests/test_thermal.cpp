@@ -8,6 +8,7 @@
 #include <map>
 #include <random>
 
+#include "catalog.hpp"
 #include "filter/thermal/soak_fit.hpp"
 #include "filter/thermal/soak_run.hpp"
 #include "helpers.hpp"
@@ -17,12 +18,6 @@
 #include "rig/thermal.hpp"
 
 using namespace sinscal;
-
-namespace {
-int catalog_index(const std::string& name) {
-  return static_cast<int>(&coefficient_info(name) - coefficient_catalog().data());
-}
-}  // namespace
 
 TEST_CASE("Thermal: the sensor lags the chamber's air as tau dT/dt = T_air - T", "[thermal]") {
   const ChamberAir air{{0.0, 100.0, 400.0}, {20.0, 20.0, 50.0}};  // hold, then 0.1 C/s
@@ -63,8 +58,9 @@ TEST_CASE("Thermal: the soak fit recovers polynomials, their degree chosen by te
   // soak's estimates with a correlated covariance; 200 draws.
   const double T0 = 20.0;
   const std::vector<double> temps = {-40, -20, 0, 20, 40, 60};
-  const std::vector<int> idx = {catalog_index("gyro.bias.x"), catalog_index("gyro.scale.z"),
-                                catalog_index("accel.scale.y")};
+  const std::vector<int> idx = {test::coefficient_index("gyro.bias.x"),
+                                test::coefficient_index("gyro.scale.z"),
+                                test::coefficient_index("accel.scale.y")};
   const double sb = 0.01 * units::deg_per_h, ss = 2 * units::ppm;
   Eigen::Matrix3d C;
   C << sb * sb, 0.5 * sb * ss, 0.0, 0.5 * sb * ss, ss * ss, 0.3 * ss * ss, 0.0, 0.3 * ss * ss,

@@ -12,6 +12,7 @@
 #include <random>
 #include <sstream>
 
+#include "catalog.hpp"
 #include "filter/diagnosis/diagnosis.hpp"
 #include "filter/diagnosis/diagnosis_table.hpp"
 #include "filter/diagnosis/thermal_diagnosis.hpp"
@@ -26,10 +27,6 @@ using namespace sinscal;
 
 namespace {
 
-int catalog_index(const std::string& name) {
-  return static_cast<int>(&coefficient_info(name) - coefficient_catalog().data());
-}
-
 // Synthetic soaks of gyro.bias.x/y/z and accel.scale.x/y/z at six temperatures: gyro bias
 // quadratic, accel scale linear plus `scale_quadratic` (SI per C^2) on each axis, with a
 // correlated covariance; `noise` false: the values exactly.
@@ -40,7 +37,7 @@ std::vector<SoakEstimate> synthetic_soaks(std::mt19937_64& rng, double scale_qua
   std::vector<int> idx;
   for (const char* n : {"gyro.bias.x", "gyro.bias.y", "gyro.bias.z", "accel.scale.x",
                         "accel.scale.y", "accel.scale.z"})
-    idx.push_back(catalog_index(n));
+    idx.push_back(test::coefficient_index(n));
   const double sb = 0.01 * units::deg_per_h, ss = 2 * units::ppm;
   Eigen::Matrix<double, 6, 6> C = Eigen::Matrix<double, 6, 6>::Zero();
   for (int i = 0; i < 3; ++i) {
@@ -602,13 +599,6 @@ bool has(const std::vector<int>& components, const std::string& family) {
   });
 }
 
-std::vector<int> components_of(const std::string& family) {
-  std::vector<int> out;
-  for (std::size_t k = 0; k < coefficient_catalog().size(); ++k)
-    if (coefficient_catalog()[k].family == family) out.push_back(static_cast<int>(k));
-  return out;
-}
-
 }  // namespace
 
 TEST_CASE("Thermal diagnosis: a ramp's dwells test degree by degree, time after temperature",
@@ -625,7 +615,8 @@ TEST_CASE("Thermal diagnosis: a ramp's dwells test degree by degree, time after 
   for (const char* f : {"accel.bias_temp2", "accel.bias_temp3", "gyro.bias_temp2",
                         "accel.bias_drift", "gyro.bias_drift"})
     CHECK_FALSE(has(none, f));
-  const std::vector<int> after = candidate_components({}, components_of("accel.bias_temp1"), true);
+  const std::vector<int> after =
+      candidate_components({}, test::family_coefficients("accel.bias_temp1"), true);
   CHECK(has(after, "accel.bias_temp2"));
   CHECK(has(after, "accel.bias_drift"));
   CHECK_FALSE(has(after, "accel.bias_temp3"));

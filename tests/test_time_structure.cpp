@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <random>
 
+#include "catalog.hpp"
 #include "filter/diagnosis/time_structure.hpp"
 #include "helpers.hpp"
 #include "models/coefficient_families.hpp"
@@ -17,14 +18,6 @@ using namespace sinscal;
 namespace {
 
 constexpr double kSigma = 2.0 * units::ug;  // each dwell's accelerometer input, 1 sigma
-
-int component(const std::string& name) {
-  const auto& cat = coefficient_catalog();
-  for (std::size_t k = 0; k < cat.size(); ++k)
-    if (cat[k].name == name) return static_cast<int>(k);
-  FAIL("no catalog component " << name);
-  return -1;
-}
 
 // The dwells of `plan` with inputs u = share(dwell) + white noise (kSigma on the accelerometer
 // rows, 1e-3 deg/h on the gyro rows); `excess` more white noise on the down accelerometer row,
@@ -74,9 +67,9 @@ Vector6d orientation_share(const EquivalentInputs& in, const Site& site) {
 // once.
 TEST_CASE("Time structure: revisits confirm a drift, not an effect of the orientation",
           "[diagnosis][time_structure]") {
-  const int drift_x = component("accel.bias_drift.x");
-  const std::vector<int> family = {drift_x, component("accel.bias_drift.y"),
-                                   component("accel.bias_drift.z")};
+  const int drift_x = test::coefficient_index("accel.bias_drift.x");
+  const std::vector<int> family = {drift_x, test::coefficient_index("accel.bias_drift.y"),
+                                   test::coefficient_index("accel.bias_drift.z")};
   const double alpha = 0.01, rate = 500.0 * units::ug / units::hour;
   const Eigen::Vector3d fitted(rate, 0.0, 0.0);
   const Stage2Options base;
