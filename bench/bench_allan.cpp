@@ -144,7 +144,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bench_allan: %s\n", e.what());
     return 2;
   }
-  const double hours = o.numbers.size() > 0 ? o.numbers[0] : 24.0;
+  const double hours = !o.numbers.empty() ? o.numbers[0] : 24.0;
   const double rate = o.numbers.size() > 1 ? o.numbers[1] : 1000.0;
   if (o.log) return write_log(o, hours, rate);
   const double tau0 = 1.0 / rate;
