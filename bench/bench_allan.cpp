@@ -1,18 +1,24 @@
 // Allan deviation of long records in bounded memory (not a test): a simulated static record of
 // white noise, flicker bias instability and random walk on all six channels, fed to the
 // streamed estimator without a file; prints samples/s, the estimators' memory, the peak RSS
-// (getrusage) and the fitted terms against the simulated truth.
+// (getrusage) and the fitted terms against the simulated truth, each with its z = (fit - truth)
+// / sigma.
 //
-// Usage: bench_allan [HOURS [RATE_HZ]]          (default 24 h at 1000 Hz: 8.64e7 samples)
-//        bench_allan --log HOURS RATE_HZ        writes the record as CSV (ax,ay,az,gx,gy,gz:
-//                                               m/s^2 and rad/s) to standard output, e.g. into
-//                                               a FIFO read by `sinscal allan --all`
+// Usage: bench_allan [OPTIONS] [HOURS [RATE_HZ]]   (default 24 h at 1000 Hz: 8.64e7 samples)
+//        bench_allan --log [OPTIONS] HOURS RATE_HZ  writes the record as CSV (ax,ay,az,gx,gy,gz:
+//                                                   m/s^2 and rad/s) to standard output, e.g.
+//                                                   into a FIFO read by `sinscal allan --all`
+// OPTIONS: --seed S      the channels' seeds S .. S + 5 (default 100)
+//          --truth NAME  tactical (default) or adis16405 (the ADIS16405 data sheet's terms)
+//          --fast        the quicker flicker generator, about 2 % low (allan_sim.hpp): the
+//                        bench's default before 2026-12-06
 #include <sys/resource.h>
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -24,20 +30,41 @@ using namespace sinscal;
 
 namespace {
 
-// A tactical gyro (ARW 0.05 deg/sqrt(h), bias instability 0.5 deg/h, RRW 0.05 deg/h/sqrt(h))
-// and accelerometer (VRW 50 ug/sqrt(Hz), 20 ug, 30 ug/sqrt(h)).
-AllanTruth gyro_truth() {
-  return {0.05 * units::deg_per_sqrt_h, 0.5 * units::deg_per_h, 0.05 * units::deg_per_h_per_sqrt_h,
-          0.0};
+// The simulated terms of one triad.
+struct Truths {
+  AllanTruth gyro, accel;
+};
+
+// A tactical gyro (ARW 0.05 deg/sqrt(h), bias instability 0.5 deg/h, RRW 0.5 deg/h/sqrt(h):
+// flicker and random walk cross at 4.8e3 s, well inside a 24 h record's longest cluster time of
+// 2.2e4 s) and accelerometer (VRW 50 ug/sqrt(Hz), 20 ug, 30 ug/sqrt(h): crossing at 2.1e3 s).
+// Before 2026-12-06 the gyro's RRW was 0.05 deg/h/sqrt(h), crossing at 4.8e5 s: beyond any
+// record's reach, so the fit could not identify it.
+Truths tactical() {
+  return {{0.05 * units::deg_per_sqrt_h, 0.5 * units::deg_per_h, 0.5 * units::deg_per_h_per_sqrt_h,
+           0.0},
+          {50.0 * units::ug_per_sqrt_hz, 20.0 * units::ug, 30.0 * units::ug_per_sqrt_h, 0.0}};
 }
-AllanTruth accel_truth() {
-  return {50.0 * units::ug_per_sqrt_hz, 20.0 * units::ug, 30.0 * units::ug_per_sqrt_h, 0.0};
+// ADIS16405 data sheet (Analog Devices, Rev. B): gyro ARW 2.0 deg/sqrt(h), in-run bias stability
+// 0.007 deg/s (25.2 deg/h); accelerometer VRW 0.2 m/s/sqrt(h), in-run bias stability 0.2 mg; no
+// random walk stated (0). The bias stability is taken as B (sinscal's reading: floor / 0.664).
+Truths adis16405() {
+  return {{2.0 * units::deg_per_sqrt_h, 0.007 * units::deg_per_s, 0.0, 0.0},
+          {0.2 / 60.0, 200.0 * units::ug, 0.0, 0.0}};
 }
 
-std::vector<AllanNoiseSource> sources(double tau0, double seconds) {
+struct Options {
+  std::uint64_t seed = 100;
+  bool fast = false;
+  Truths truth = tactical();
+  std::vector<double> numbers;  // HOURS, RATE_HZ
+  bool log = false;
+};
+
+std::vector<AllanNoiseSource> sources(const Options& o, double tau0, double seconds) {
   std::vector<AllanNoiseSource> s;
   for (std::uint64_t c = 0; c < 6; ++c)
-    s.emplace_back(c < 3 ? gyro_truth() : accel_truth(), tau0, 10.0 * seconds, 100 + c, true);
+    s.emplace_back(c < 3 ? o.truth.gyro : o.truth.accel, tau0, 10.0 * seconds, o.seed + c, o.fast);
   return s;
 }
 
@@ -47,10 +74,10 @@ long peak_rss_kb() {
   return u.ru_maxrss;
 }
 
-int write_log(double hours, double rate) {
+int write_log(const Options& o, double hours, double rate) {
   const double tau0 = 1.0 / rate;
   const auto n = static_cast<std::size_t>(hours * 3600.0 * rate);
-  auto src = sources(tau0, static_cast<double>(n) * tau0);
+  auto src = sources(o, tau0, static_cast<double>(n) * tau0);
   std::vector<char> buffer(1 << 20);
   std::setvbuf(stdout, buffer.data(), _IOFBF, buffer.size());
   for (std::size_t k = 0; k < n; ++k) {
@@ -62,26 +89,67 @@ int write_log(double hours, double rate) {
   return 0;
 }
 
+// "fit +- sigma (truth, z)"; a term the fit dropped (sigma 0) reads "0 (dropped)".
+void print_term(const char* name, double fit, double sigma, double truth, double unit) {
+  if (sigma > 0.0)
+    std::printf("  %s %.5g +- %.2g (truth %.4g, z %+.2f)", name, fit / unit, sigma / unit,
+                truth / unit, (fit - truth) / sigma);
+  else
+    std::printf("  %s %.5g (dropped; truth %.4g)", name, fit / unit, truth / unit);
+}
+
 void print_fit(const char* what, const AllanFit& f, const AllanTruth& t, double unit,
                const char* name) {
-  std::printf(
-      "  %-6s N %.4g +- %.2g (truth %.4g)  B %.4g +- %.2g (truth %.4g)  K %.4g +- %.2g "
-      "(truth %.4g)  [%s]\n",
-      what, f.white / unit, f.white_sigma / unit, t.white / unit, f.bias_instability / unit,
-      f.bias_instability_sigma / unit, t.bias_instability / unit, f.random_walk / unit,
-      f.random_walk_sigma / unit, t.random_walk / unit, name);
+  std::printf("  %-6s", what);
+  print_term("N", f.white, f.white_sigma, t.white, unit);
+  print_term("B", f.bias_instability, f.bias_instability_sigma, t.bias_instability, unit);
+  print_term("K", f.random_walk, f.random_walk_sigma, t.random_walk, unit);
+  print_term("floor/0.664", f.floor_bias_instability, f.floor_bias_instability_sigma,
+             t.bias_instability, unit);
+  std::printf("  [%s]\n", name);
+}
+
+Options parse(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--log") {
+      o.log = true;
+    } else if (a == "--fast") {
+      o.fast = true;
+    } else if (a == "--seed" && i + 1 < argc) {
+      o.seed = std::stoull(argv[++i]);
+    } else if (a == "--truth" && i + 1 < argc) {
+      const std::string t = argv[++i];
+      if (t == "tactical")
+        o.truth = tactical();
+      else if (t == "adis16405")
+        o.truth = adis16405();
+      else
+        throw std::invalid_argument("--truth: tactical or adis16405, not " + t);
+    } else {
+      o.numbers.push_back(std::stod(a));
+    }
+  }
+  return o;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc == 4 && std::strcmp(argv[1], "--log") == 0)
-    return write_log(std::stod(argv[2]), std::stod(argv[3]));
-  const double hours = argc > 1 ? std::stod(argv[1]) : 24.0;
-  const double rate = argc > 2 ? std::stod(argv[2]) : 1000.0;
+  Options o;
+  try {
+    o = parse(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_allan: %s\n", e.what());
+    return 2;
+  }
+  const double hours = !o.numbers.empty() ? o.numbers[0] : 24.0;
+  const double rate = o.numbers.size() > 1 ? o.numbers[1] : 1000.0;
+  if (o.log) return write_log(o, hours, rate);
   const double tau0 = 1.0 / rate;
   const auto n = static_cast<std::size_t>(hours * 3600.0 * rate);
-  auto src = sources(tau0, static_cast<double>(n) * tau0);
+  auto src = sources(o, tau0, static_cast<double>(n) * tau0);
   AllanStream stream;
   double generate = 0.0, estimate = 0.0;
   using Clock = std::chrono::steady_clock;
@@ -102,7 +170,9 @@ int main(int argc, char** argv) {
   const auto t2 = Clock::now();
   const AllanAnalysis a = stream.analysis(tau0);
   const double fit = std::chrono::duration<double>(Clock::now() - t2).count();
-  std::printf("allan, streamed: %.3g h at %g Hz = %zu samples x 6 channels\n", hours, rate, n);
+  std::printf(
+      "allan, streamed: %.3g h at %g Hz = %zu samples x 6 channels (seed %llu, %s flicker)\n",
+      hours, rate, n, static_cast<unsigned long long>(o.seed), o.fast ? "fast" : "exact");
   std::printf("  estimator: %.3g samples/s (%.1f s; simulation %.1f s, fit %.2f s)\n",
               static_cast<double>(n) / estimate, estimate, generate, fit);
   std::printf(
@@ -114,12 +184,12 @@ int main(int argc, char** argv) {
     print_fit(i == 0   ? "gyro x"
               : i == 1 ? "gyro y"
                        : "gyro z",
-              a.gyro_fit[i], gyro_truth(), units::deg_per_h, "deg/h; N deg/h*sqrt(s)");
+              a.gyro_fit[i], o.truth.gyro, units::deg_per_h, "deg/h; N deg/h*sqrt(s)");
   }
   for (std::size_t i = 0; i < 3; ++i)
     print_fit(i == 0   ? "acc x"
               : i == 1 ? "acc y"
                        : "acc z",
-              a.accel_fit[i], accel_truth(), units::ug, "ug; N ug*sqrt(s)");
+              a.accel_fit[i], o.truth.accel, units::ug, "ug; N ug*sqrt(s)");
   return 0;
 }
