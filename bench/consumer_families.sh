@@ -20,7 +20,8 @@ for profile in $profiles; do
     for seed in $(seq 1 "$seeds"); do
       d="$out/$profile-$plan-$seed"
       [ -f "$d/session.ini" ] || "$sinscal" simulate --plan "$src/config/plans/$plan.ini" \
-        --sensor "$src/bench/$profile.ini" --seed "$seed" --table-attitude-sigma "$table_sigma" --out "$d" > /dev/null
+        --sensor "$src/bench/$profile.ini" --seed "$seed" \
+        --table-attitude-sigma "$table_sigma" --out "$d" > /dev/null
       for method in $methods; do
         [ -f "$d.$method.rc" ] && continue
         case $method in
