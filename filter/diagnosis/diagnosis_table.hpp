@@ -132,6 +132,11 @@ struct TableFinding : TestVerdict {
   /// A bias drift in time against the same bias's degree-1 temperature term (a session whose
   /// temperature varies): the held-out dwells' verdict between them (CandidateTest), else "".
   std::string time_temperature;
+  /// A dwell finding the held-out data refused in an earlier round while a significant turns'
+  /// candidate was not yet in the model: that candidate was judged instead and this finding again
+  /// with it in the model, which the held-out data then confirmed. The first refusal and its
+  /// round ("round 1: the held-out turns' chi-square goes from ..."), else "".
+  std::string refused_before;
 };
 
 /// The final model's residual against its noise model: whether the findings leave the dwells and
@@ -183,7 +188,10 @@ struct ResidualCheck {
 constexpr double kResidualLevel = 0.99;
 
 /// A finding the in-sample test took but the held-out data contradict: not named, and the
-/// diagnosis stops there (its residual is "unexplained").
+/// diagnosis stops there (its residual is "unexplained"); but a dwell finding that the held-out
+/// data refuse while the round holds a significant turns' candidate is judged again after that
+/// candidate (TableFinding::refused_before), and is rejected only if refused again or never
+/// judged again.
 struct RejectedFinding {
   TableFinding finding;
   std::string reason;  // "the held-out dwells' chi-square gains 2.1 (11.3 needed)", ...
