@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <functional>
@@ -104,18 +105,28 @@ inline void append_unanticipated_effects(std::vector<OpenWorldEffect>& e, double
                "", 0, "", 0.0});
 }
 
+/// The jitter's random sequence for the session of `seed`: its own per seed (a cell of 30 seeds is
+/// 30 jitter realizations, not one under 30 noise draws), deterministic, and apart from the
+/// simulator's noise of the same seed (a second word in the seed sequence).
+inline std::mt19937_64 jitter_generator(std::uint64_t seed) {
+  std::seed_seq seq{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32U),
+                    0x6a177e5U};
+  return std::mt19937_64(seq);
+}
+
 /// More effects the library does not anticipate (issue 33, session 43): a gyro that saturates
 /// just below the table's turn rate (rot19's turns peak at 11.46 deg/s), sample-timing jitter (each
-/// increment spans dt (1 + e), e white, 100 ppm RMS: 5 us at 20 Hz), a gyro scale factor that
-/// depends on the specific force across it, and a gyro bias transient (30 s, no temperature)
-/// starting at two thirds of mid-session.
-inline void append_more_unanticipated_effects(std::vector<OpenWorldEffect>& e, double mid_s) {
+/// increment spans dt (1 + e), e white, 100 ppm RMS: 5 us at 20 Hz; drawn per session `seed`), a
+/// gyro scale factor that depends on the specific force across it, and a gyro bias transient (30
+/// s, no temperature) starting at two thirds of mid-session.
+inline void append_more_unanticipated_effects(std::vector<OpenWorldEffect>& e, double mid_s,
+                                              std::uint64_t seed) {
   const double dph = units::deg_per_h, dps = units::deg_per_s;
   e.push_back({"gyro y clipped at 11.4 deg/s",
                [dps](double, auto&, auto& w) { w(1) = std::clamp(w(1), -11.4 * dps, 11.4 * dps); },
                "", 0, "", 0.0});
   e.push_back({"sample timing jitter 100 ppm RMS",
-               [rng = std::mt19937(33), n = std::normal_distribution<double>(0.0, 100e-6)](
+               [rng = jitter_generator(seed), n = std::normal_distribution<double>(0.0, 100e-6)](
                    double, auto& f, auto& w) mutable {
                  const double k = 1.0 + n(rng);
                  f *= k;
@@ -133,8 +144,9 @@ inline void append_more_unanticipated_effects(std::vector<OpenWorldEffect>& e, d
                "", 0, "", 0.0});
 }
 
-/// The effects of the open-world matrix (issue 33); the bias step at log time mid_s (s).
-inline std::vector<OpenWorldEffect> open_world_effects(double mid_s) {
+/// The effects of the open-world matrix (issue 33); the bias step at log time mid_s (s), the random
+/// effects (the timing jitter) drawn for the session of `seed`.
+inline std::vector<OpenWorldEffect> open_world_effects(double mid_s, std::uint64_t seed = 0) {
   const double ug = units::ug, dph = units::deg_per_h, g2 = kG * kG;
   std::vector<OpenWorldEffect> e;
   e.push_back({"accel x += 100 ug/g^2 f_y f_z",
@@ -167,18 +179,18 @@ inline std::vector<OpenWorldEffect> open_world_effects(double mid_s) {
                [ug](double t, auto& f, auto&) { f(2) += 20.0 * ug * (t / 600.0) * (t / 600.0); },
                "accel", 2, "t^2", 20.0 * 36.0});
   append_unanticipated_effects(e, mid_s);
-  append_more_unanticipated_effects(e, mid_s);
+  append_more_unanticipated_effects(e, mid_s, seed);
   return e;
 }
 
 /// A clean simulated session with the effect `index` of open_world_effects injected, `scale` times
-/// its size (its mid-session: the plan's).
+/// its size (its mid-session: the plan's; a random effect drawn for `seed`, as the noise).
 inline HiddenCase open_world_case(const std::string& plan, const std::string& profile,
                                   std::size_t index, std::uint64_t seed, double rate_hz,
                                   double scale = 1.0) {
   HiddenCase c = hidden_case("open_world", plan, profile, {}, seed, rate_hz);
   const double duration = PlanTimeline::of(c.session.plan, c.session.site).duration;
-  const auto effects = open_world_effects(c.session.time_offset + 0.5 * duration);
+  const auto effects = open_world_effects(c.session.time_offset + 0.5 * duration, seed);
   const ExtraTerm term = effects.at(index).term;
   inject_into_log(c.session.dir + "/imu.csv", rate_hz,
                   [&term, scale](double t, Eigen::Vector3d& f, Eigen::Vector3d& w) {

@@ -8,7 +8,8 @@
 // SINSCAL_OPEN_WORLD_PLANS=rot19.ini,seed8.ini and SINSCAL_OPEN_WORLD_SCALE=S (every effect S
 // times its size; 0: clean sessions), SINSCAL_OPEN_WORLD_VERBOSE=1 (every seed's story, refusals,
 // where the residual shows, terms), SINSCAL_OPEN_WORLD_SEED0=N (the first seed, 9000);
-// results in docs/accuracy.md.
+// results in docs/accuracy.md (nav-fog) and docs/measured/open-world.md (MEMS, the effects the
+// library does not anticipate).
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cstdio>
