@@ -130,6 +130,38 @@ double AllanFit::adev(double tau) const {
   return std::sqrt(v);
 }
 
+namespace {
+
+// Each estimate is AVAR chi2(edf) / edf. Its logarithm has the mean log AVAR + psi(edf / 2) -
+// log(edf / 2) and the variance psi'(edf / 2) (2 / edf and -1 / edf for many degrees of freedom,
+// where the fit is the Gaussian one of the variances; at edf 2, the last octave of a random
+// walk, 1.64 instead of 1 and a mean 0.58 below log AVAR: the chi-square's skew). Pass 0 fits
+// the variances with weights from the data (a start); the passes after it fit the logarithms
+// by Gauss-Newton, each linearised at the previous model m:
+//   log(avar_i) - mean_i - log(m_i) ~ (A x - m)_i / m_i,  weight 1 / (m_i^2 psi'(edf_i / 2)).
+void pass_weights(const std::vector<AllanPoint>& pts, const Eigen::VectorXd& avar,
+                  const Eigen::VectorXd& model, bool gaussian, Eigen::VectorXd& sw,
+                  Eigen::VectorXd& target) {
+  for (Eigen::Index i = 0; i < avar.size(); ++i) {
+    const double edf = pts[static_cast<std::size_t>(i)].edf;
+    // A point without variance (an exact sequence) carries no weight.
+    const double v = model(i) > 0.0 ? model(i) : avar(i);
+    if (gaussian) {  // the Gaussian fit of the variances
+      sw(i) = v > 0.0 ? std::sqrt(edf / 2.0) / v : 0.0;
+      target(i) = avar(i);
+    } else if (!(v > 0.0) || !(avar(i) > 0.0)) {  // no logarithm
+      sw(i) = 0.0;
+      target(i) = 0.0;
+    } else {
+      const double log_mean = boost::math::digamma(edf / 2.0) - std::log(edf / 2.0);
+      sw(i) = 1.0 / (v * std::sqrt(boost::math::trigamma(edf / 2.0)));
+      target(i) = v * (1.0 + std::log(avar(i) / v) - log_mean);
+    }
+  }
+}
+
+}  // namespace
+
 AllanFit fit_allan(const std::vector<AllanPoint>& pts, bool fit_quantization, bool fit_rate_ramp,
                    bool log_fit) {
   const auto n = static_cast<Eigen::Index>(pts.size());
@@ -138,19 +170,6 @@ AllanFit fit_allan(const std::vector<AllanPoint>& pts, bool fit_quantization, bo
   for (Eigen::Index i = 0; i < n; ++i)
     avar(i) = pts[static_cast<std::size_t>(i)].adev * pts[static_cast<std::size_t>(i)].adev;
   if (!(avar.maxCoeff() > 0.0)) throw AllanError("Allan fit: the record has no variance");
-  // Each estimate is AVAR chi2(edf) / edf. Its logarithm has the mean log AVAR + psi(edf / 2) -
-  // log(edf / 2) and the variance psi'(edf / 2) (2 / edf and -1 / edf for many degrees of freedom,
-  // where the fit is the Gaussian one of the variances; at edf 2, the last octave of a random
-  // walk, 1.64 instead of 1 and a mean 0.58 below log AVAR: the chi-square's skew). Pass 0 fits
-  // the variances with weights from the data (a start); the passes after it fit the logarithms
-  // by Gauss-Newton, each linearised at the previous model m:
-  //   log(avar_i) - mean_i - log(m_i) ~ (A x - m)_i / m_i,  weight 1 / (m_i^2 psi'(edf_i / 2)).
-  Eigen::VectorXd log_mean(n), log_sd(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double half = pts[static_cast<std::size_t>(i)].edf / 2.0;
-    log_mean(i) = boost::math::digamma(half) - std::log(half);
-    log_sd(i) = std::sqrt(boost::math::trigamma(half));
-  }
   AllanFit best;
   const Eigen::MatrixXd W = whitening(pts);
   Eigen::VectorXd model = avar;  // pass 0 from the data, the later passes from the model
@@ -158,20 +177,7 @@ AllanFit fit_allan(const std::vector<AllanPoint>& pts, bool fit_quantization, bo
   for (int pass = 0; pass < passes; ++pass) {
     Eigen::VectorXd sw(n);      // sqrt of the weights
     Eigen::VectorXd target(n);  // in variance units: the data (pass 0) or the linearised log
-    for (Eigen::Index i = 0; i < n; ++i) {
-      // A point without variance (an exact sequence) carries no weight.
-      const double v = model(i) > 0.0 ? model(i) : avar(i);
-      if (pass == 0 || !log_fit) {  // the Gaussian fit of the variances
-        sw(i) = v > 0.0 ? std::sqrt(pts[static_cast<std::size_t>(i)].edf / 2.0) / v : 0.0;
-        target(i) = avar(i);
-      } else if (!(v > 0.0) || !(avar(i) > 0.0)) {  // no logarithm
-        sw(i) = 0.0;
-        target(i) = 0.0;
-      } else {
-        sw(i) = 1.0 / (v * log_sd(i));
-        target(i) = v * (1.0 + std::log(avar(i) / v) - log_mean(i));
-      }
-    }
+    pass_weights(pts, avar, model, pass == 0 || !log_fit, sw, target);
     double best_cost = std::numeric_limits<double>::infinity();
     AllanFit pass_best;
     for (int subset = 1; subset < (1 << kTerms); ++subset) {
