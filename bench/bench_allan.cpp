@@ -8,7 +8,9 @@
 //        bench_allan --log [OPTIONS] HOURS RATE_HZ  writes the record as CSV (ax,ay,az,gx,gy,gz:
 //                                                   m/s^2 and rad/s) to standard output, e.g.
 //                                                   into a FIFO read by `sinscal allan --all`
-// OPTIONS: --seed S      the channels' seeds S .. S + 5 (default 100)
+// OPTIONS: --compare    also fit the same record with the Gaussian fit of the variances (the
+//                        fit before 2026-12-06) and print it ("old")
+//          --seed S      the channels' seeds S .. S + 5 (default 100)
 //          --truth NAME  tactical (default) or adis16405 (the ADIS16405 data sheet's terms)
 //          --fast        the quicker flicker generator, about 2 % low (allan_sim.hpp): the
 //                        bench's default before 2026-12-06
@@ -59,6 +61,7 @@ struct Options {
   Truths truth = tactical();
   std::vector<double> numbers;  // HOURS, RATE_HZ
   bool log = false;
+  bool compare = false;
 };
 
 std::vector<AllanNoiseSource> sources(const Options& o, double tau0, double seconds) {
@@ -115,6 +118,8 @@ Options parse(int argc, char** argv) {
     const std::string a = argv[i];
     if (a == "--log") {
       o.log = true;
+    } else if (a == "--compare") {
+      o.compare = true;
     } else if (a == "--fast") {
       o.fast = true;
     } else if (a == "--seed" && i + 1 < argc) {
@@ -151,6 +156,9 @@ int main(int argc, char** argv) {
   const auto n = static_cast<std::size_t>(hours * 3600.0 * rate);
   auto src = sources(o, tau0, static_cast<double>(n) * tau0);
   AllanStream stream;
+  AllanOptions gaussian;
+  gaussian.log_fit = false;
+  AllanStream old_stream(gaussian);  // --compare: the fit before 2026-12-06
   double generate = 0.0, estimate = 0.0;
   using Clock = std::chrono::steady_clock;
   constexpr std::size_t kBlock = 4096;
@@ -161,9 +169,12 @@ int main(int argc, char** argv) {
     for (std::size_t j = 0; j < m; ++j)
       for (std::size_t c = 0; c < 6; ++c) v[6 * j + c] = src[c].next();
     const auto t1 = Clock::now();
-    for (std::size_t j = 0; j < m; ++j)
-      stream.add_rates(Eigen::Vector3d(v[6 * j], v[6 * j + 1], v[6 * j + 2]),
-                       Eigen::Vector3d(v[6 * j + 3], v[6 * j + 4], v[6 * j + 5]));
+    for (std::size_t j = 0; j < m; ++j) {
+      const Eigen::Vector3d w(v[6 * j], v[6 * j + 1], v[6 * j + 2]);
+      const Eigen::Vector3d f(v[6 * j + 3], v[6 * j + 4], v[6 * j + 5]);
+      stream.add_rates(w, f);
+      if (o.compare) old_stream.add_rates(w, f);
+    }
     generate += std::chrono::duration<double>(t1 - t0).count();
     estimate += std::chrono::duration<double>(Clock::now() - t1).count();
   }
@@ -191,5 +202,18 @@ int main(int argc, char** argv) {
               : i == 1 ? "acc y"
                        : "acc z",
               a.accel_fit[i], o.truth.accel, units::ug, "ug; N ug*sqrt(s)");
+  if (!o.compare) return 0;
+  const AllanAnalysis b = old_stream.analysis(tau0);
+  std::printf("  the Gaussian fit of the variances (before 2026-12-06), same record:\n");
+  for (std::size_t i = 0; i < 3; ++i)
+    print_fit(i == 0   ? "old gx"
+              : i == 1 ? "old gy"
+                       : "old gz",
+              b.gyro_fit[i], o.truth.gyro, units::deg_per_h, "deg/h; N deg/h*sqrt(s)");
+  for (std::size_t i = 0; i < 3; ++i)
+    print_fit(i == 0   ? "old ax"
+              : i == 1 ? "old ay"
+                       : "old az",
+              b.accel_fit[i], o.truth.accel, units::ug, "ug; N ug*sqrt(s)");
   return 0;
 }

@@ -4,6 +4,8 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
+#include <boost/math/special_functions/digamma.hpp>
+#include <boost/math/special_functions/trigamma.hpp>
 #include <cmath>
 #include <iomanip>
 #include <limits>
@@ -18,7 +20,8 @@ constexpr std::array<AllanTerm, 5> kAllTerms = {AllanTerm::Quantization, AllanTe
                                                 AllanTerm::BiasInstability, AllanTerm::RandomWalk,
                                                 AllanTerm::RateRamp};
 
-constexpr int kTerms = 5;  // quantization, white, bias instability, random walk, rate ramp
+constexpr int kLogPasses = 6;  // Gauss-Newton passes of the log fit (converged in 3-4)
+constexpr int kTerms = 5;      // quantization, white, bias instability, random walk, rate ramp
 const double kFlicker = 2.0 * std::log(2.0) / units::pi;  // AVAR of the flicker floor per B^2
 
 double basis(int term, double tau) {
@@ -127,7 +130,40 @@ double AllanFit::adev(double tau) const {
   return std::sqrt(v);
 }
 
-AllanFit fit_allan(const std::vector<AllanPoint>& pts, bool fit_quantization, bool fit_rate_ramp) {
+namespace {
+
+// Each estimate is AVAR chi2(edf) / edf. Its logarithm has the mean log AVAR + psi(edf / 2) -
+// log(edf / 2) and the variance psi'(edf / 2) (2 / edf and -1 / edf for many degrees of freedom,
+// where the fit is the Gaussian one of the variances; at edf 2, the last octave of a random
+// walk, 1.64 instead of 1 and a mean 0.58 below log AVAR: the chi-square's skew). Pass 0 fits
+// the variances with weights from the data (a start); the passes after it fit the logarithms
+// by Gauss-Newton, each linearised at the previous model m:
+//   log(avar_i) - mean_i - log(m_i) ~ (A x - m)_i / m_i,  weight 1 / (m_i^2 psi'(edf_i / 2)).
+void pass_weights(const std::vector<AllanPoint>& pts, const Eigen::VectorXd& avar,
+                  const Eigen::VectorXd& model, bool gaussian, Eigen::VectorXd& sw,
+                  Eigen::VectorXd& target) {
+  for (Eigen::Index i = 0; i < avar.size(); ++i) {
+    const double edf = pts[static_cast<std::size_t>(i)].edf;
+    // A point without variance (an exact sequence) carries no weight.
+    const double v = model(i) > 0.0 ? model(i) : avar(i);
+    if (gaussian) {  // the Gaussian fit of the variances
+      sw(i) = v > 0.0 ? std::sqrt(edf / 2.0) / v : 0.0;
+      target(i) = avar(i);
+    } else if (!(v > 0.0) || !(avar(i) > 0.0)) {  // no logarithm
+      sw(i) = 0.0;
+      target(i) = 0.0;
+    } else {
+      const double log_mean = boost::math::digamma(edf / 2.0) - std::log(edf / 2.0);
+      sw(i) = 1.0 / (v * std::sqrt(boost::math::trigamma(edf / 2.0)));
+      target(i) = v * (1.0 + std::log(avar(i) / v) - log_mean);
+    }
+  }
+}
+
+}  // namespace
+
+AllanFit fit_allan(const std::vector<AllanPoint>& pts, bool fit_quantization, bool fit_rate_ramp,
+                   bool log_fit) {
   const auto n = static_cast<Eigen::Index>(pts.size());
   if (n < 2) throw AllanError("Allan fit: fewer than two cluster times");
   Eigen::VectorXd avar(n);
@@ -136,14 +172,12 @@ AllanFit fit_allan(const std::vector<AllanPoint>& pts, bool fit_quantization, bo
   if (!(avar.maxCoeff() > 0.0)) throw AllanError("Allan fit: the record has no variance");
   AllanFit best;
   const Eigen::MatrixXd W = whitening(pts);
-  Eigen::VectorXd model = avar;  // weights of pass 1 from the data, pass 2 from the model
-  for (int pass = 0; pass < 2; ++pass) {
-    Eigen::VectorXd sw(n);  // sqrt of the weights edf / (2 v^2)
-    for (Eigen::Index i = 0; i < n; ++i) {
-      // A point without variance (an exact sequence) carries no weight.
-      const double v = model(i) > 0.0 ? model(i) : avar(i);
-      sw(i) = v > 0.0 ? std::sqrt(pts[static_cast<std::size_t>(i)].edf / 2.0) / v : 0.0;
-    }
+  Eigen::VectorXd model = avar;  // pass 0 from the data, the later passes from the model
+  const int passes = log_fit ? kLogPasses + 1 : 2;
+  for (int pass = 0; pass < passes; ++pass) {
+    Eigen::VectorXd sw(n);      // sqrt of the weights
+    Eigen::VectorXd target(n);  // in variance units: the data (pass 0) or the linearised log
+    pass_weights(pts, avar, model, pass == 0 || !log_fit, sw, target);
     double best_cost = std::numeric_limits<double>::infinity();
     AllanFit pass_best;
     for (int subset = 1; subset < (1 << kTerms); ++subset) {
@@ -162,7 +196,7 @@ AllanFit fit_allan(const std::vector<AllanPoint>& pts, bool fit_quantization, bo
       A = W * A;
       const Eigen::VectorXd scale = A.colwise().norm().transpose();
       const Eigen::MatrixXd As = A * scale.cwiseInverse().asDiagonal();
-      const Eigen::VectorXd b = W * sw.cwiseProduct(avar);
+      const Eigen::VectorXd b = W * sw.cwiseProduct(target);
       const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(As);
       if (qr.rank() < k) continue;
       const Eigen::VectorXd x = qr.solve(b).cwiseQuotient(scale);
@@ -247,13 +281,13 @@ AllanTerm dominant_term(const AllanFit& fit, double tau) {
 // record the model does not describe (a drift, an exact sequence) keeps white-noise edf.
 AllanFit fit_with_dominant_edf(std::vector<AllanPoint>& pts, double N, const AllanOptions& o) {
   try {
-    AllanFit fit = fit_allan(pts, o.fit_quantization, o.fit_rate_ramp);
+    AllanFit fit = fit_allan(pts, o.fit_quantization, o.fit_rate_ramp, o.log_fit);
     for (int pass = 0; pass < 2; ++pass) {
       for (auto& p : pts) {
         p.dominant = dominant_term(fit, p.tau);
         p.edf = edf(p.dominant, N, static_cast<double>(p.m));
       }
-      fit = fit_allan(pts, o.fit_quantization, o.fit_rate_ramp);
+      fit = fit_allan(pts, o.fit_quantization, o.fit_rate_ramp, o.log_fit);
     }
     return fit;
   } catch (const AllanError&) {

@@ -17,8 +17,9 @@
 //             + (2 ln 2 / pi) B^2        bias instability B (flicker floor: ADEV = 0.664 B)
 //             + K^2 tau / 3              rate / acceleration random walk K, slope +1/2
 //             + R^2 tau^2 / 2            rate ramp R, slope +1 (opt-in, as quantization)
-// fitted by generalised least squares of the Allan variances (variances 2 AVAR_model^2 / edf,
-// the estimator's, iterated once with the model; neighbouring octaves correlated as measured)
+// fitted by generalised least squares of the log Allan variances (each estimate's log of a
+// chi-square: mean psi(edf/2) - log(edf/2), variance psi'(edf/2); Gauss-Newton from a Gaussian
+// fit of the variances; neighbouring octaves correlated as measured)
 // with every term's variance non-negative
 // (exact: the best of all subsets of terms). The dominant term at each cluster time then sets
 // its degrees of freedom and the fit is repeated.
@@ -64,6 +65,11 @@ struct AllanOptions {
   /// default: with few degrees of freedom at the longest cluster times it takes part of the
   /// random walk).
   bool fit_rate_ramp = false;
+  /// Fit the logarithms of the Allan variances with their chi-square's mean and variance
+  /// (docs/methods/allan.md); false: the Gaussian fit of the variances (the fit before
+  /// 2026-12-06, whose random-walk sigma is too small where the last octaves have few degrees of
+  /// freedom; kept for comparison).
+  bool log_fit = true;
 };
 
 struct AllanPoint {
@@ -115,7 +121,7 @@ std::vector<AllanPoint> allan_deviation(const std::vector<double>& rates, double
 /// Fits the noise model to points (their edf and dominant noise types as given). Throws
 /// AllanError when no combination of non-negative terms fits.
 AllanFit fit_allan(const std::vector<AllanPoint>& points, bool fit_quantization = false,
-                   bool fit_rate_ramp = false);
+                   bool fit_rate_ramp = false, bool log_fit = true);
 
 /// The overlapping Allan variance of one channel, fed one rate at a time in memory independent
 /// of the record's length (see the header's comment: exact below kExactClusters samples, at a
