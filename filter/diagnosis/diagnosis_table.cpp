@@ -502,9 +502,8 @@ bool turns_confirm(const TableFinding& f, double q) {
 // the filter's log-likelihood (by more than half that quantile), and must not worsen the
 // held-out turns (a turn finding: must improve them by the same quantile, turns_confirm; a gain of
 // any size let MEMS turns' families be named on a few hundredths of a sigma while the held-out
-// velocity got worse, issue 33). `before` and `after` (a dwell finding): the dwells' fits of the
-// models the final checks judge before and with the finding, each finding's whole family
-// (with_whole_families), so that a round and the final checks judge one model.
+// velocity got worse, issue 33). `before` and `after` (a dwell finding): the dwells' fits before
+// and with the finding.
 std::string refusal_of(const TableFinding& f, double alpha, const FitFigures* before = nullptr,
                        const FitFigures* after = nullptr) {
   const double q = boost::math::quantile(boost::math::chi_squared(std::max(1, f.dof)), 1.0 - alpha);
@@ -703,22 +702,14 @@ class TableRounds {
     for (const auto& a : f.ambiguous_with)
       f.separated_by.push_back(coefficient_family_info(a).separated_by);
     extend_filter(f);
-    std::string refused;
-    if (f.source == TableFinding::Source::Dwells && f.dwells_before && f.dwells_after) {
-      // The models the final checks judge, before and with the finding (whole families).
-      std::vector<int> previous = current_;
-      previous.resize(previous.size() - std::min(previous.size(), f.components.size()));
-      const std::vector<int> judged_before = with_whole_families(previous, d_.findings);
-      const std::vector<int> judged_after =
-          with_whole_family(with_whole_families(current_, d_.findings), f.family);
-      const FitFigures before =
-          judged_before == previous ? *f.dwells_before : dwells_.fit(judged_before);
-      const FitFigures after =
-          judged_after == current_ ? *f.dwells_after : dwells_.fit(judged_after);
-      refused = refusal_of(f, o_.dwells.alpha, &before, &after);
-    } else {
-      refused = refusal_of(f, o_.dwells.alpha);
-    }
+    // The round judges a dwell finding's fits of this round (its separable components); the final
+    // checks judge whole families. Judging whole families here too refused a hidden seed8
+    // g-sensitivity in the dwells-only diagnosis, where no turns confirm it (the Monte Carlo of
+    // tests/test_diagnosis.cpp: named first 29 -> 26 of 30), and did not change the table
+    // diagnosis's one seed8 MEMS miss (seed 21009, refused by the final check).
+    std::string refused =
+        refusal_of(f, o_.dwells.alpha, f.dwells_before ? &*f.dwells_before : nullptr,
+                   f.dwells_after ? &*f.dwells_after : nullptr);
     heldout = !refused.empty();
     if (refused.empty()) refused = time_or_orientation_checked(f);
     if (refused.empty()) refused = library_contest(f);
